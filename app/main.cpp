@@ -1,0 +1,109 @@
+// The stepwise command line: methods, scenes, run, study, report (DESIGN.md's contract).
+#include "run_command.hpp"
+#include "scene.hpp"
+
+#include "models/model.hpp"
+#include "report/report.hpp"
+#include "solvers/integrator.hpp"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <iostream>
+
+namespace {
+
+int list_methods(bool json) {
+  if (json) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& m : stepwise::methods())
+      j.push_back({{"name", m.name}, {"kind", m.kind}, {"order", m.order}, {"source", m.source},
+                   {"fixed_step", m.fixed_step}, {"adaptive", m.adaptive}});
+    std::cout << j.dump(2) << '\n';
+    return 0;
+  }
+  fmt::print("{:<18} {:<8} {:<16} {}\n", "name", "order", "source", "kind");
+  for (const auto& m : stepwise::methods()) fmt::print("{:<18} {:<8} {:<16} {}\n", m.name, m.order, m.source, m.kind);
+  return 0;
+}
+
+int list_scenes() {
+  const auto dir = stepwise::scenes_directory();
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    if (entry.path().extension() == ".toml") files.push_back(entry.path());
+  std::sort(files.begin(), files.end());
+  for (const auto& file : files) {
+    const auto scene = stepwise::load_scene(file.string());
+    const auto* model = stepwise::find_model(scene.model);
+    std::string keys;
+    if (model)
+      for (const auto& p : model->params) keys += fmt::format("{}{} [{}]", keys.empty() ? "" : ", ", p.key, p.unit);
+    fmt::print("{:<24} {:<22} {}\n", file.filename().string(), scene.model, model ? std::string(model->description) : "unknown model");
+    if (model) fmt::print("{:<24} parameters: {}\n", "", keys);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"stepwise: the numerics behind physically based animation"};
+  app.require_subcommand(1);
+
+  bool json = false;
+  auto* methods = app.add_subcommand("methods", "list the integration methods");
+  methods->add_flag("--json", json, "machine-readable");
+
+  auto* scenes = app.add_subcommand("scenes", "list the scenes in scenes/");
+
+  stepwise::RunOptions run;
+  auto* run_cmd = app.add_subcommand("run", "run a scene through one method");
+  run_cmd->add_option("scene", run.scene_file, "scene file (TOML)")->required();
+  run_cmd->add_option("--set", run.sets, "override a scene parameter, key=value");
+  run_cmd->add_option("--method", run.method, "method name (see `stepwise methods`)");
+  run_cmd->add_option("--dt", run.dt, "fixed step (s)");
+  run_cmd->add_option("--rtol", run.rtol, "relative tolerance (adaptive)");
+  run_cmd->add_option("--atol", run.atol, "absolute tolerance (adaptive)");
+  run_cmd->add_option("--t-end", run.t_end, "end time (s)");
+  run_cmd->add_option("--output-dt", run.output_dt, "trajectory sampling interval (s), default t_end/1000");
+  run_cmd->add_option("--out", run.out, "output directory")->required();
+
+  std::string study_name, study_out;
+  bool study_quick = false;
+  auto* study = app.add_subcommand("study", "run one study: " + stepwise::study_names());
+  study->add_option("name", study_name, "study name")->required();
+  study->add_flag("--quick", study_quick, "reduced sweep");
+  study->add_option("--out", study_out, "output directory")->required();
+
+  std::string report_out;
+  bool report_quick = false;
+  auto* report = app.add_subcommand("report", "run every study and write the report");
+  report->add_flag("--quick", report_quick, "reduced sweeps");
+  report->add_option("--out", report_out, "output directory")->required();
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "stepwise: " << e.what() << '\n';
+    return 2;
+  }
+
+  try {
+    if (*methods) return list_methods(json);
+    if (*scenes) return list_scenes();
+    if (*run_cmd) return stepwise::run_command(run);
+    if (*study) return stepwise::study_command(study_name, study_quick, study_out);
+    if (*report) return stepwise::report_command(report_quick, report_out);
+  } catch (const stepwise::InputError& e) {
+    std::cerr << "stepwise: " << e.what() << '\n';
+    return 2;
+  }
+  return 2;
+}

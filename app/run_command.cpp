@@ -1,0 +1,192 @@
+#include "run_command.hpp"
+
+#include "report/atomic_write.hpp"
+#include "report/csv.hpp"
+#include "scene.hpp"
+#include "verification/measure.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+namespace stepwise {
+namespace {
+
+// a whole string as a finite double, or nothing
+std::optional<double> parse_number(std::string_view text) {
+  double value = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
+void require_positive(std::optional<double> value, const std::string& where) {
+  if (value && !(std::isfinite(*value) && *value > 0))
+    throw InputError(fmt::format("{}: must be a positive finite number, got {}", where, *value));
+}
+
+struct Prepared {
+  Scene scene;
+  std::unique_ptr<Model> model;
+  Params params;  // resolved: defaults overlaid by the scene and --set
+  std::string method;
+  StepControl control;
+  double t_end = 0;
+  double output_dt = 0;
+};
+
+Prepared prepare(const RunOptions& o) {
+  Prepared p;
+  p.scene = load_scene(o.scene_file);
+  Scene& s = p.scene;
+
+  // parameters: the scene's, then --set overrides
+  Params values = s.parameters;
+  std::map<std::string, std::string, std::less<>> set_origin;
+  for (const auto& set : o.sets) {
+    const auto eq = set.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError(fmt::format("--set {}: expected key=value", set));
+    const std::string key = set.substr(0, eq);
+    const auto value = parse_number(set.substr(eq + 1));
+    if (!value) throw InputError(fmt::format("--set {}: value '{}' is not a number", key, set.substr(eq + 1)));
+    values[key] = *value;
+    set_origin[key] = "--set " + key;
+  }
+  const ModelInfo* info = find_model(s.model);
+  if (!info) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
+  try {
+    p.params = resolve_params(*info, values);
+    p.model = info->make(p.params);
+  } catch (const BadParameter& e) {
+    const auto origin = set_origin.find(e.key);
+    throw InputError(fmt::format("{}: {}", origin != set_origin.end() ? origin->second : s.where("parameters." + e.key), e.what()));
+  }
+
+  // method and step control: the command line wins over the scene; --dt and --rtol exclude each other
+  p.method = o.method.value_or(s.method.value_or("rk4"));
+  const MethodInfo* method = find_method(p.method);
+  if (!method) throw InputError(fmt::format("{}: unknown method '{}' (see `stepwise methods`)", o.method ? "--method" : s.where("run.method"), p.method));
+  if (o.dt && (o.rtol || o.atol)) throw InputError("--dt: give either --dt or --rtol/--atol, not both");
+  require_positive(o.dt, "--dt");
+  require_positive(o.rtol, "--rtol");
+  require_positive(o.atol, "--atol");
+  require_positive(o.t_end, "--t-end");
+  require_positive(o.output_dt, "--output-dt");
+  require_positive(s.dt, s.where("run.dt"));
+  require_positive(s.rtol, s.where("run.rtol"));
+  require_positive(s.atol, s.where("run.atol"));
+  require_positive(s.t_end, s.where("run.t_end"));
+  require_positive(s.output_dt, s.where("run.output_dt"));
+
+  const bool adaptive = o.rtol || o.atol || (!o.dt && (!s.dt || !method->fixed_step) && method->adaptive);
+  if (adaptive) {
+    if (!method->adaptive) throw InputError(fmt::format("--rtol: {} is a fixed-step method: give --dt", p.method));
+    p.control.rtol = o.rtol.value_or(s.rtol.value_or(p.control.rtol));
+    p.control.atol = o.atol.value_or(s.atol.value_or(p.control.atol));
+  } else {
+    p.control.dt = o.dt ? o.dt : s.dt;
+    if (!p.control.dt) throw InputError(fmt::format("{}: {} is a fixed-step method and neither --dt nor run.dt is given", s.file, p.method));
+    if (!method->fixed_step) throw InputError(fmt::format("--dt: {} is adaptive only: give --rtol/--atol", p.method));
+  }
+  if (method->needs_second_order && !p.model->second_order())
+    throw InputError(fmt::format("--method: {} needs a second-order model y = (x, v); {} is first order", p.method, s.model));
+
+  p.t_end = o.t_end.value_or(s.t_end.value_or(10.0));
+  if (p.control.dt && *p.control.dt > p.t_end)
+    throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.t_end));
+  p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
+  return p;
+}
+
+std::string trajectory_csv(const Model& model, const Measured& m) {
+  Table table;
+  table.columns.push_back("t");
+  for (const auto& name : model.state_names()) table.columns.push_back(name);
+  const bool with_energy = model.energy(model.initial_state()).has_value();
+  if (with_energy) table.columns.push_back("energy");
+  auto add_row = [&](double t, const Eigen::VectorXd& y) {
+    std::vector<Cell> row{t};
+    for (const double v : y) row.emplace_back(v);
+    if (with_energy) row.emplace_back(*model.energy(y));
+    table.rows.push_back(std::move(row));
+  };
+  add_row(0.0, model.initial_state());
+  for (size_t i = 0; i < m.result.trajectory.t.size(); ++i) add_row(m.result.trajectory.t[i], m.result.trajectory.y[i]);
+  if (m.result.status != Status::ok) add_row(m.result.t_stop, m.result.y_stop);
+  return to_csv(table);
+}
+
+nlohmann::json summary_json(const Prepared& p, const Measured& m) {
+  const RunResult& r = m.result;
+  nlohmann::json j;
+  j["scene"] = p.scene.name;
+  j["scene_file"] = p.scene.file;
+  j["model"] = std::string(p.model->name());
+  j["method"] = p.method;
+  j["status"] = std::string(to_string(r.status));
+  j["message"] = r.message.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.message);
+  j["t_end"] = p.t_end;
+  j["t_stop"] = r.status == Status::ok ? p.t_end : r.t_stop;
+  if (p.control.dt) j["dt"] = *p.control.dt;
+  else { j["rtol"] = p.control.rtol; j["atol"] = p.control.atol; }
+  j["steps"] = r.stats.steps;
+  j["rejected"] = r.stats.rejected;
+  j["rhs_evals"] = r.stats.rhs_evals;
+  j["jac_evals"] = r.stats.jac_evals;
+  j["linear_solves"] = r.stats.linear_solves;
+  j["factorizations"] = r.stats.factorizations;
+  j["cpu_seconds"] = r.stats.cpu_seconds;
+  const auto names = p.model->state_names();
+  j["final_state"] = nlohmann::json::object();
+  for (size_t i = 0; i < names.size(); ++i) j["final_state"][names[i]] = r.y_stop[static_cast<Eigen::Index>(i)];
+  j["error"] = m.error ? nlohmann::json(*m.error) : nlohmann::json(nullptr);
+  if (const auto e0 = p.model->energy(p.model->initial_state())) {
+    j["energy_initial"] = *e0;
+    j["energy_final"] = *p.model->energy(r.y_stop);
+  }
+  j["events"] = nlohmann::json::array();
+  for (const auto& e : r.events) j["events"].push_back({{"t", e.t}, {"kind", e.kind}});
+  j["parameters"] = nlohmann::json::object();
+  for (const auto& [key, value] : p.params) j["parameters"][key] = value;
+  return j;
+}
+
+}  // namespace
+
+int run_command(const RunOptions& options) {
+  Prepared p;
+  try {
+    p = prepare(options);
+    ensure_writable_directory(options.out);
+  } catch (const InputError& e) {
+    std::cerr << "stepwise run: " << e.what() << '\n';
+    return 2;
+  } catch (const BadMethod& e) {
+    std::cerr << "stepwise run: --method: " << e.what() << '\n';
+    return 2;
+  } catch (const std::runtime_error& e) {
+    std::cerr << "stepwise run: --out: " << e.what() << '\n';
+    return 2;
+  }
+
+  Measured m = run_and_measure(*p.model, p.method, p.control, p.t_end, p.output_dt);
+  const std::filesystem::path out(options.out);
+  try {
+    write_file_atomic(out / "trajectory.csv", trajectory_csv(*p.model, m));
+    write_file_atomic(out / "summary.json", summary_json(p, m).dump(2) + "\n");
+  } catch (const std::runtime_error& e) {
+    std::cerr << "stepwise run: " << e.what() << '\n';
+    return 2;
+  }
+  if (m.result.status != Status::ok) {
+    std::cerr << "stepwise run: " << p.method << ": " << m.result.message << '\n';
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace stepwise

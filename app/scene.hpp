@@ -1,0 +1,44 @@
+// A scene file (TOML): which model, its parameters, and how to run it.
+//
+//   model = "pendulum"
+//   [parameters]   # the model's keys (see `stepwise scenes`), numbers only
+//   theta0 = 1.0
+//   [run]          # t_end (s), method, dt (s) or rtol/atol, output_dt (s)
+//   t_end = 10.0
+//   method = "rk4"
+//   dt = 1e-3
+#pragma once
+
+#include "models/model.hpp"
+
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+namespace stepwise {
+
+// bad input: the message names the file, line and key; the command exits 2
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Scene {
+  std::string file;                       // path as given
+  std::string name;                       // file stem
+  std::string model;
+  Params parameters;                      // as written; validated against the model later
+  std::map<std::string, int, std::less<>> lines;  // line of each key ("model", "parameters.g", "run.dt")
+  std::optional<double> t_end, dt, rtol, atol, output_dt;
+  std::optional<std::string> method;
+
+  // "file:line: key" where the key was written, "file: key" otherwise
+  std::string where(const std::string& key) const;
+};
+
+Scene load_scene(const std::string& file);
+
+// where the scene files are: $STEPWISE_SCENES, else ./scenes, else the source tree's scenes/
+std::string scenes_directory();
+
+}  // namespace stepwise

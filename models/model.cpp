@@ -1,0 +1,69 @@
+#include "model.hpp"
+
+#include "flow_particle.hpp"
+#include "pendulum.hpp"
+#include "projectile.hpp"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <cmath>
+
+namespace stepwise {
+
+Eigen::VectorXd Model::exact(double) const {
+  throw std::logic_error(fmt::format("model {} has no exact solution for these parameters", name()));
+}
+
+namespace {
+
+const std::array model_table{
+    ModelInfo{"pendulum", "nonlinear pendulum theta'' + (g/L) sin theta = 0; exact by Jacobi elliptic functions",
+              pendulum_params(), [](const Params& p) { return make_pendulum(p, false); }},
+    ModelInfo{"pendulum-small-angle", "linearised pendulum theta'' + (g/L) theta = 0 (sin theta ~ theta)",
+              pendulum_params(), [](const Params& p) { return make_pendulum(p, true); }},
+    ModelInfo{"flow-particle", "particle carried by the velocity field (x, sin y); exact solution",
+              flow_particle_params(), [](const Params& p) { return make_flow_particle(p); }},
+    ModelInfo{"flow-particle-3d", "particle carried by the velocity field (x, y, sin x); exact solution via Si",
+              flow_particle_3d_params(), [](const Params& p) { return make_flow_particle_3d(p); }},
+    ModelInfo{"projectile", "particle under gravity with optional linear drag; exact solution",
+              projectile_params(), [](const Params& p) { return make_projectile(p); }},
+};
+
+}  // namespace
+
+std::span<const ModelInfo> models() { return model_table; }
+
+const ModelInfo* find_model(std::string_view name) {
+  for (const auto& m : model_table)
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
+Params resolve_params(const ModelInfo& model, const Params& values) {
+  Params resolved;
+  for (const auto& spec : model.params) resolved[std::string(spec.key)] = spec.default_value;
+  for (const auto& [key, value] : values) {
+    const auto spec = std::find_if(model.params.begin(), model.params.end(), [&](const ParamSpec& s) { return s.key == key; });
+    if (spec == model.params.end()) {
+      std::string known;
+      for (const auto& s : model.params) known += (known.empty() ? "" : ", ") + std::string(s.key);
+      throw BadParameter(key, fmt::format("unknown parameter '{}' of model {} (known: {})", key, model.name, known));
+    }
+    if (!std::isfinite(value)) throw BadParameter(key, fmt::format("parameter '{}' must be a finite number, got {}", key, value));
+    if (spec->bound == Bound::positive && !(value > 0))
+      throw BadParameter(key, fmt::format("parameter '{}' must be positive, got {}", key, value));
+    if (spec->bound == Bound::nonnegative && !(value >= 0))
+      throw BadParameter(key, fmt::format("parameter '{}' must be non-negative, got {}", key, value));
+    resolved[key] = value;
+  }
+  return resolved;
+}
+
+std::unique_ptr<Model> make_model(std::string_view name, const Params& values) {
+  const ModelInfo* info = find_model(name);
+  if (!info) throw BadParameter("model", fmt::format("unknown model '{}'", name));
+  return info->make(resolve_params(*info, values));
+}
+
+}  // namespace stepwise

@@ -1,0 +1,68 @@
+// A model: a pure description of one physical system. Parameters (constant), a named state layout,
+// the right-hand side and Jacobian, an invariant, and the exact solution where one exists.
+// It never steps, prints or draws.
+#pragma once
+
+#include "solvers/ode_system.hpp"
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace stepwise {
+
+// what values a parameter may take
+enum class Bound { finite, positive, nonnegative };
+
+struct ParamSpec {
+  std::string_view key;
+  double default_value;
+  std::string_view unit;
+  std::string_view meaning;
+  Bound bound = Bound::finite;
+};
+
+using Params = std::map<std::string, double, std::less<>>;
+
+// a parameter that is unknown or out of range; key names it
+struct BadParameter : std::invalid_argument {
+  BadParameter(std::string key_, const std::string& message) : std::invalid_argument(message), key(std::move(key_)) {}
+  std::string key;
+};
+
+class Model : public OdeSystem {
+ public:
+  virtual std::string_view name() const = 0;
+  // one name per state entry, as trajectory.csv and summary.json write them
+  virtual std::vector<std::string> state_names() const = 0;
+  virtual Eigen::VectorXd initial_state() const = 0;
+  // the quantity the physics conserves (or dissipates), where there is one
+  virtual std::optional<double> energy(const Eigen::VectorXd& y) const { (void)y; return std::nullopt; }
+  // exact solution y(t) where one is known for these parameters
+  virtual bool has_exact() const { return false; }
+  virtual Eigen::VectorXd exact(double t) const;
+};
+
+struct ModelInfo {
+  std::string_view name;
+  std::string_view description;
+  std::span<const ParamSpec> params;
+  std::function<std::unique_ptr<Model>(const Params&)> make;
+};
+
+std::span<const ModelInfo> models();
+const ModelInfo* find_model(std::string_view name);
+
+// defaults overlaid by `values`; throws BadParameter for an unknown key or a value out of its bound
+Params resolve_params(const ModelInfo& model, const Params& values);
+
+// resolve_params then make
+std::unique_ptr<Model> make_model(std::string_view name, const Params& values = {});
+
+}  // namespace stepwise

@@ -1,0 +1,45 @@
+#include "atomic_write.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <unistd.h>
+
+namespace stepwise {
+
+void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+  std::string tmp = (path.parent_path() / ("." + path.filename().string() + ".XXXXXX")).string();
+  const int fd = mkstemp(tmp.data());
+  if (fd < 0) throw std::runtime_error(fmt::format("{}: cannot create a temporary file: {}", path.string(), std::strerror(errno)));
+  const char* p = content.data();
+  size_t left = content.size();
+  bool ok = true;
+  while (left > 0 && ok) {
+    const ssize_t n = ::write(fd, p, left);
+    if (n < 0 && errno == EINTR) continue;
+    ok = n > 0;
+    if (ok) { p += n; left -= static_cast<size_t>(n); }
+  }
+  ok = ok && ::fsync(fd) == 0;
+  const int saved = errno;
+  ok = (::close(fd) == 0) && ok;
+  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = ok ? errno : saved;
+    std::remove(tmp.c_str());
+    throw std::runtime_error(fmt::format("{}: cannot write: {}", path.string(), std::strerror(err)));
+  }
+}
+
+void ensure_writable_directory(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir))
+    throw std::runtime_error(fmt::format("{}: cannot create output directory: {}", dir.string(), ec ? ec.message() : "not a directory"));
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    throw std::runtime_error(fmt::format("{}: output directory is not writable: {}", dir.string(), std::strerror(errno)));
+}
+
+}  // namespace stepwise

@@ -1,0 +1,30 @@
+#include "csv.hpp"
+
+#include <fmt/format.h>
+
+namespace stepwise {
+
+namespace {
+std::string cell_text(const Cell& cell) {
+  if (const auto* d = std::get_if<double>(&cell)) return fmt::format("{:.17g}", *d);
+  if (const auto* l = std::get_if<long>(&cell)) return std::to_string(*l);
+  const auto& s = std::get<std::string>(cell);
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string quoted = "\"";
+  for (char c : s) quoted += (c == '"') ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+}  // namespace
+
+std::string to_csv(const Table& table) {
+  std::string out;
+  for (size_t i = 0; i < table.columns.size(); ++i) out += (i ? "," : "") + cell_text(table.columns[i]);
+  out += '\n';
+  for (const auto& row : table.rows) {
+    for (size_t i = 0; i < row.size(); ++i) out += (i ? "," : "") + cell_text(row[i]);
+    out += '\n';
+  }
+  return out;
+}
+
+}  // namespace stepwise

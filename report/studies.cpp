@@ -1,0 +1,218 @@
+#include "studies.hpp"
+
+#include "models/model.hpp"
+#include "models/pendulum.hpp"
+#include "verification/adequacy.hpp"
+#include "verification/measure.hpp"
+#include "verification/order_fit.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+
+namespace stepwise {
+namespace {
+
+// a scene of the studies: a model with parameters, integrated from t = 0 to t_end
+struct StudyScene {
+  std::string label;
+  std::string model;
+  Params params;
+  double t_end;
+};
+
+std::vector<StudyScene> ode_scenes() {
+  return {{"pendulum", "pendulum", {{"theta0", 1.0}}, 10.0},
+          {"flow-particle", "flow-particle", {}, 1.0},
+          {"projectile", "projectile", {{"drag", 0.5}}, 2.0}};
+}
+
+// the coarsest step of a fixed-step sweep: large enough that the error stays far above round-off after
+// the halvings, small enough to be in the asymptotic range (measured, then rounded to a power of two of t_end)
+double coarse_dt(const MethodInfo& method, double t_end) {
+  const int p = method.order_max;
+  const double fraction = p <= 1 ? 1.0 / 256 : p == 2 ? 1.0 / 64 : p <= 5 ? 1.0 / 16 : 1.0 / 8;
+  return t_end * fraction;
+}
+
+bool applies(const MethodInfo& method, const Model& model) { return !method.needs_second_order || model.second_order(); }
+
+std::string sci(double v) { return std::isfinite(v) ? fmt::format("{:.2e}", v) : "—"; }
+
+// ---- convergence: error against dt for every fixed-step method, with the fitted order
+
+StudyOutput convergence(bool quick) {
+  const int halvings = quick ? 4 : 6;
+  Table points{{"scene", "method", "dt", "steps", "rhs_evals", "error", "status"}, {}};
+  Table orders{{"scene", "method", "documented_order", "observed_order"}, {}};
+  std::string md = "Observed order: least-squares slope of log(error at t_end) against log(dt) over the halvings below, "
+                   "against the order the method documents. GSL's multistep and extrapolation steppers (bsimp, msadams, "
+                   "msbdf) vary their order, so their slope is only reported.\n\n";
+  for (const auto& scene : ode_scenes()) {
+    const auto model = make_model(scene.model, scene.params);
+    md += fmt::format("### {}\n\n| method | documented order | observed order | error at coarsest dt | error at finest dt |\n|---|---|---|---|---|\n", scene.label);
+    for (const auto& method : methods()) {
+      if (!method.fixed_step || !applies(method, *model)) continue;
+      std::vector<double> dts, errors;
+      for (int k = 0; k <= halvings; ++k) {
+        StepControl control;
+        control.dt = coarse_dt(method, scene.t_end) / std::pow(2.0, k);
+        const Measured m = run_and_measure(*model, method.name, control, scene.t_end, scene.t_end);
+        points.rows.push_back({scene.label, std::string(method.name), *control.dt, m.result.stats.steps,
+                               m.result.stats.rhs_evals, m.error.value_or(std::numeric_limits<double>::quiet_NaN()),
+                               std::string(to_string(m.result.status))});
+        if (m.error && *m.error > 0) {
+          dts.push_back(*control.dt);
+          errors.push_back(*m.error);
+        }
+      }
+      const double slope = dts.size() >= 2 ? loglog_slope(dts, errors) : std::numeric_limits<double>::quiet_NaN();
+      orders.rows.push_back({scene.label, std::string(method.name), std::string(method.order), slope});
+      md += fmt::format("| {} | {} | {:.2f} | {} | {} |\n", method.name, method.order, slope,
+                        sci(errors.empty() ? NAN : errors.front()), sci(errors.empty() ? NAN : errors.back()));
+    }
+    md += "\n";
+  }
+  return {{{"convergence", std::move(points)}, {"convergence_orders", std::move(orders)}}, md};
+}
+
+// ---- work-precision: error against cost for every method
+
+// minimum thread CPU time over `repeats` runs after one discarded warm-up run
+Measured timed_run(const Model& model, std::string_view method, const StepControl& control, double t_end, int repeats) {
+  Measured best = run_and_measure(model, method, control, t_end, t_end);
+  for (int r = 0; r < repeats; ++r) {
+    Measured m = run_and_measure(model, method, control, t_end, t_end);
+    if (m.result.stats.cpu_seconds < best.result.stats.cpu_seconds || r == 0) best = std::move(m);
+  }
+  return best;
+}
+
+StudyOutput work_precision(bool quick) {
+  const int repeats = quick ? 1 : 3;
+  const int halvings = quick ? 4 : 7;
+  std::vector<double> rtols;
+  for (int e = 2; e <= 12; e += quick ? 2 : 1) rtols.push_back(std::pow(10.0, -e));
+  const std::vector<double> targets{1e-3, 1e-6, 1e-9};
+
+  Table points{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}};
+  std::string md = "Error at t_end (max norm against the exact solution) against cost. Fixed-step methods are swept over "
+                   "dt halvings, adaptive ones over rtol (atol = 1e-3 rtol). CPU time is the minimum over repeated runs "
+                   "after a discarded warm-up. Failed or diverged points stay in the CSV with their status.\n\n";
+  for (const auto& scene : ode_scenes()) {
+    const auto model = make_model(scene.model, scene.params);
+    // cheapest (by RHS evaluations and by CPU time) method reaching each target
+    std::map<double, std::pair<std::string, double>> by_rhs, by_cpu;
+    auto consider = [&](const std::string& label, const Measured& m) {
+      if (!m.error) return;
+      for (const double target : targets) {
+        if (*m.error > target) continue;
+        const double rhs = static_cast<double>(m.result.stats.rhs_evals);
+        if (!by_rhs.contains(target) || rhs < by_rhs[target].second) by_rhs[target] = {label, rhs};
+        if (!by_cpu.contains(target) || m.result.stats.cpu_seconds < by_cpu[target].second) by_cpu[target] = {label, m.result.stats.cpu_seconds};
+      }
+    };
+    for (const auto& method : methods()) {
+      if (!applies(method, *model)) continue;
+      if (method.fixed_step) {
+        for (int k = 0; k <= halvings; ++k) {
+          StepControl control;
+          control.dt = coarse_dt(method, scene.t_end) / std::pow(2.0, k);
+          const Measured m = timed_run(*model, method.name, control, scene.t_end, repeats);
+          points.rows.push_back({scene.label, std::string(method.name), std::string("fixed"), *control.dt, NAN,
+                                 m.error.value_or(NAN), m.result.stats.rhs_evals, m.result.stats.steps,
+                                 m.result.stats.cpu_seconds, std::string(to_string(m.result.status))});
+          consider(fmt::format("{} (dt {:.3g})", method.name, *control.dt), m);
+        }
+      }
+      if (method.adaptive) {
+        for (const double rtol : rtols) {
+          StepControl control;
+          control.rtol = rtol;
+          control.atol = 1e-3 * rtol;
+          const Measured m = timed_run(*model, method.name, control, scene.t_end, repeats);
+          points.rows.push_back({scene.label, std::string(method.name), std::string("adaptive"), NAN, rtol,
+                                 m.error.value_or(NAN), m.result.stats.rhs_evals, m.result.stats.steps,
+                                 m.result.stats.cpu_seconds, std::string(to_string(m.result.status))});
+          consider(fmt::format("{} (rtol {:.0e})", method.name, rtol), m);
+        }
+      }
+    }
+    md += fmt::format("### {}\n\n| error target | cheapest in RHS evaluations | RHS evals | cheapest in CPU time | CPU s |\n|---|---|---|---|---|\n", scene.label);
+    for (const double target : targets) {
+      if (!by_rhs.contains(target)) {
+        md += fmt::format("| {:.0e} | none reached it | | | |\n", target);
+        continue;
+      }
+      md += fmt::format("| {:.0e} | {} | {:.0f} | {} | {:.2e} |\n", target, by_rhs[target].first, by_rhs[target].second,
+                        by_cpu[target].first, by_cpu[target].second);
+    }
+    md += "\n";
+  }
+  return {{{"work_precision", std::move(points)}}, md};
+}
+
+// ---- energy: the pendulum over many periods
+
+StudyOutput energy(bool quick) {
+  const int periods = quick ? 100 : 1000;
+  const double theta0 = 0.5;
+  const auto model = make_model("pendulum", {{"theta0", theta0}});
+  const double period = pendulum_period(theta0, 9.81, 1.0);
+  const double e0 = *model->energy(model->initial_state());
+  Table table{{"method", "period", "relative_energy_error"}, {}};
+  std::string md = fmt::format("Pendulum at theta0 = {} rad over {} periods, dt = T/100: relative energy error "
+                               "(E - E0)/E0 at the end of each period.\n\n| method | after 1 period | after {} periods | behaviour |\n|---|---|---|---|\n",
+                               theta0, periods, periods);
+  for (const std::string method : {"euler", "symplectic-euler", "implicit-euler", "rk4"}) {
+    StepControl control;
+    control.dt = period / 100;
+    const Measured m = run_and_measure(*model, method, control, periods * period, period);
+    const auto& ys = m.result.trajectory.y;
+    for (size_t i = 0; i < ys.size(); ++i)
+      table.rows.push_back({method, static_cast<long>(i + 1), (*model->energy(ys[i]) - e0) / e0});
+    const double first = ys.empty() ? NAN : (*model->energy(ys.front()) - e0) / e0;
+    const double last = ys.empty() ? NAN : (*model->energy(ys.back()) - e0) / e0;
+    const char* behaviour = std::abs(last) < 1e-6 ? "conserved to the order of the method"
+                            : last > 10 * std::abs(first) ? "grows"
+                            : last < -std::abs(first) * 10 ? "decays"
+                                                           : "bounded";
+    md += fmt::format("| {} | {:.3e} | {:.3e} | {} |\n", method, first, last, behaviour);
+  }
+  return {{{"energy", std::move(table)}}, md + "\n"};
+}
+
+// ---- adequacy: where the small-angle model stops being enough
+
+StudyOutput adequacy(bool) {
+  Table table{{"phase_tolerance_rad", "periods", "max_amplitude_rad", "max_amplitude_deg"}, {}};
+  std::string md = "Largest amplitude at which the small-angle pendulum (theta'' = -(g/L) theta) stays within a phase "
+                   "error of the exact (elliptic) solution after N periods. Below it the linear model, which costs one "
+                   "cosine per sample and no integration at all, is all a scene needs.\n\n"
+                   "| phase tolerance (rad) | periods | max amplitude (deg) |\n|---|---|---|\n";
+  for (const double tolerance : {0.01, 0.1, 1.0})
+    for (const double periods : {1.0, 10.0, 100.0}) {
+      const double amplitude = small_angle_max_amplitude(tolerance, periods);
+      table.rows.push_back({tolerance, periods, amplitude, amplitude * 180 / std::numbers::pi});
+      md += fmt::format("| {} | {:.0f} | {:.2f} |\n", tolerance, periods, amplitude * 180 / std::numbers::pi);
+    }
+  return {{{"adequacy", std::move(table)}}, md + "\n"};
+}
+
+}  // namespace
+
+const std::vector<Study>& studies() {
+  static const std::vector<Study> all{
+      {"convergence", "Convergence", convergence},
+      {"work-precision", "Accuracy against cost", work_precision},
+      {"energy", "Energy over long runs", energy},
+      {"adequacy", "Model adequacy: small-angle pendulum", adequacy},
+  };
+  return all;
+}
+
+}  // namespace stepwise

@@ -1,0 +1,42 @@
+// Fixed-step integration: one loop over the step grid, shared by hand-written and GSL steppers.
+#pragma once
+
+#include "integrator.hpp"
+
+#include <functional>
+
+namespace stepwise {
+
+class CountedSystem;
+
+// one method's step y(t) -> y(t + h); made once per run, so it may keep state (multistep history)
+class FixedStepper {
+ public:
+  virtual ~FixedStepper() = default;
+  // advance y in place; on failure return false and say which call failed in `failure`
+  virtual bool step(double t, double h, Eigen::VectorXd& y, std::string& failure) = 0;
+};
+
+using FixedStepperFactory = std::function<std::unique_ptr<FixedStepper>(const CountedSystem& system)>;
+
+// steps of exactly dt, the last one before each output time shortened to land on it
+class FixedStepIntegrator final : public Integrator {
+ public:
+  FixedStepIntegrator(std::string method, StepControl control, FixedStepperFactory make_stepper)
+      : method_(std::move(method)), control_(control), make_stepper_(std::move(make_stepper)) {}
+  RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
+                      std::span<const double> t_out) const override;
+
+ private:
+  std::string method_;
+  StepControl control_;
+  FixedStepperFactory make_stepper_;
+};
+
+// the hand-written steppers of DESIGN.md's table
+std::unique_ptr<FixedStepper> make_euler(const CountedSystem& system);
+std::unique_ptr<FixedStepper> make_symplectic_euler(const CountedSystem& system);
+std::unique_ptr<FixedStepper> make_rk4(const CountedSystem& system);
+std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system);
+
+}  // namespace stepwise

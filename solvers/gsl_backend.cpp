@@ -1,0 +1,195 @@
+// GSL odeiv2 adapter.
+//
+// Pitfalls with GSL 2.7 handled here:
+// - rk1imp, rk2imp, rk4imp, bsimp and msbdf dereference the Jacobian: a NULL one segfaults, so the
+//   system's analytic Jacobian or a central finite-difference one is always supplied;
+// - gsl_odeiv2_driver_apply_fixed_step still runs the error control and can reject a step: fixed-step
+//   runs call gsl_odeiv2_step_apply directly, through the shared fixed-step loop;
+// - msadams and msbdf need their driver (they read the control's error level), so a driver is always allocated;
+// - GSL's default error handler aborts the process: it is switched off once, and return codes are reported.
+#include "gsl_backend.hpp"
+
+#include "fd_jacobian.hpp"
+#include "fixed_step.hpp"
+#include "run_support.hpp"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+
+#include <map>
+#include <mutex>
+
+namespace stepwise {
+namespace {
+
+const gsl_odeiv2_step_type* step_type(std::string_view method) {
+  static const std::map<std::string_view, const gsl_odeiv2_step_type*> types = {
+      {"gsl-rk2", gsl_odeiv2_step_rk2},       {"gsl-rk4", gsl_odeiv2_step_rk4},
+      {"gsl-rkf45", gsl_odeiv2_step_rkf45},   {"gsl-rkck", gsl_odeiv2_step_rkck},
+      {"gsl-rk8pd", gsl_odeiv2_step_rk8pd},   {"gsl-rk1imp", gsl_odeiv2_step_rk1imp},
+      {"gsl-rk2imp", gsl_odeiv2_step_rk2imp}, {"gsl-rk4imp", gsl_odeiv2_step_rk4imp},
+      {"gsl-bsimp", gsl_odeiv2_step_bsimp},   {"gsl-msadams", gsl_odeiv2_step_msadams},
+      {"gsl-msbdf", gsl_odeiv2_step_msbdf}};
+  const auto it = types.find(method);
+  return it == types.end() ? nullptr : it->second;
+}
+
+void switch_off_abort_handler() {
+  static std::once_flag once;
+  std::call_once(once, [] { gsl_set_error_handler_off(); });
+}
+
+// what GSL's C callbacks reach through their void* parameter
+struct Callbacks {
+  const CountedSystem* system;
+  Eigen::MatrixXd jac;         // df/dy (n x n), column-major scratch
+  Eigen::VectorXd fp, fm;      // scratch for df/dt
+};
+
+int gsl_rhs(double t, const double y[], double dydt[], void* params) {
+  const auto& c = *static_cast<Callbacks*>(params);
+  const int n = c.system->size();
+  Eigen::Map<Eigen::VectorXd> out(dydt, n);
+  c.system->rhs(t, Eigen::Map<const Eigen::VectorXd>(y, n), out);
+  return out.allFinite() ? GSL_SUCCESS : GSL_EBADFUNC;
+}
+
+// dfdy is row-major n x n; dfdt by central differences in t unless the system is autonomous
+int gsl_jacobian(double t, const double y[], double* dfdy, double dfdt[], void* params) {
+  auto& c = *static_cast<Callbacks*>(params);
+  const int n = c.system->size();
+  Eigen::Map<const Eigen::VectorXd> ym(y, n);
+  jacobian_or_fd(*c.system, t, ym, c.jac);
+  ++c.system->stats().jac_evals;
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(dfdy, n, n) = c.jac;
+  Eigen::Map<Eigen::VectorXd> ft(dfdt, n);
+  if (c.system->autonomous()) {
+    ft.setZero();
+  } else {
+    const double d = std::cbrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(t));
+    c.system->rhs(t + d, ym, c.fp);
+    c.system->rhs(t - d, ym, c.fm);
+    ft = (c.fp - c.fm) / (2 * d);
+  }
+  return c.jac.allFinite() ? GSL_SUCCESS : GSL_EBADFUNC;
+}
+
+// owns the GSL system, its callbacks and a driver (which owns stepper, control and evolve)
+class GslSession {
+ public:
+  GslSession(const CountedSystem& system, const gsl_odeiv2_step_type* type, double h0, const StepControl& control)
+      : callbacks_{&system, Eigen::MatrixXd(system.size(), system.size()), Eigen::VectorXd(system.size()),
+                   Eigen::VectorXd(system.size())},
+        sys_{gsl_rhs, gsl_jacobian, static_cast<size_t>(system.size()), &callbacks_},
+        driver_(gsl_odeiv2_driver_alloc_y_new(&sys_, type, h0, control.atol, control.rtol)),
+        yerr_(system.size()) {
+    if (!driver_) throw std::runtime_error("gsl_odeiv2_driver_alloc_y_new returned NULL");
+  }
+  GslSession(const GslSession&) = delete;
+  GslSession& operator=(const GslSession&) = delete;
+  ~GslSession() { gsl_odeiv2_driver_free(driver_); }
+
+  gsl_odeiv2_driver* driver() { return driver_; }
+  const gsl_odeiv2_system* sys() const { return &sys_; }
+  double* yerr() { return yerr_.data(); }
+
+ private:
+  Callbacks callbacks_;
+  gsl_odeiv2_system sys_;
+  gsl_odeiv2_driver* driver_;
+  Eigen::VectorXd yerr_;
+};
+
+// one gsl_odeiv2_step_apply per step: no error control, so a fixed step is never rejected
+class GslFixedStepper final : public FixedStepper {
+ public:
+  GslFixedStepper(const CountedSystem& system, std::string method, const gsl_odeiv2_step_type* type,
+                  const StepControl& control)
+      : session_(system, type, *control.dt, control), method_(std::move(method)) {}
+  bool step(double t, double h, Eigen::VectorXd& y, std::string& failure) override {
+    const int code = gsl_odeiv2_step_apply(session_.driver()->s, t, h, y.data(), session_.yerr(), nullptr, nullptr,
+                                           session_.sys());
+    if (code == GSL_SUCCESS) return true;
+    failure = fmt::format("{}: gsl_odeiv2_step_apply returned {} ({}) at t = {:.9g}", method_, code, gsl_strerror(code), t);
+    return false;
+  }
+
+ private:
+  GslSession session_;
+  std::string method_;
+};
+
+// gsl_odeiv2_evolve_apply step by step, so every accepted step is counted and checked for divergence
+class GslAdaptiveIntegrator final : public Integrator {
+ public:
+  GslAdaptiveIntegrator(std::string method, const gsl_odeiv2_step_type* type, StepControl control)
+      : method_(std::move(method)), type_(type), control_(control) {}
+
+  RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
+                      std::span<const double> t_out) const override {
+    RunResult result;
+    result.t_stop = t0;
+    result.y_stop = y0;
+    if (refuse_events(system, method_, result, t0)) return result;
+    const double start = thread_cpu_seconds();
+    CountedSystem counted(system, result.stats);
+    // first trial step: a small fraction of the first output interval; the control adapts it
+    double h = std::min(control_.max_step, 1e-3 * (t_out.front() - t0));
+    GslSession session(counted, type_, h, control_);
+    gsl_odeiv2_driver* d = session.driver();
+    const double bound = divergence_bound(control_, y0);
+
+    Eigen::VectorXd y = y0;
+    double t = t0;
+    for (const double target : t_out) {
+      while (t < target) {
+        if (result.stats.steps >= control_.max_steps) {
+          mark_failed(result, t, fmt::format("{}: more than {} steps before t = {:.9g}", method_, control_.max_steps, target));
+          break;
+        }
+        const unsigned long failed_before = d->e->failed_steps;
+        const int code = gsl_odeiv2_evolve_apply(d->e, d->c, d->s, session.sys(), &t, target, &h, y.data());
+        result.stats.rejected += static_cast<long>(d->e->failed_steps - failed_before);
+        if (code != GSL_SUCCESS) {
+          if (has_diverged(y, bound) || code == GSL_EBADFUNC) mark_diverged(result, t);
+          else mark_failed(result, t, fmt::format("{}: gsl_odeiv2_evolve_apply returned {} ({}) at t = {:.9g}", method_,
+                                                  code, gsl_strerror(code), t));
+          break;
+        }
+        ++result.stats.steps;
+        if (has_diverged(y, bound)) {
+          mark_diverged(result, t);
+          break;
+        }
+        h = std::min(h, control_.max_step);
+        result.y_stop = y;
+      }
+      if (result.status != Status::ok) break;
+      result.trajectory.t.push_back(t);
+      result.trajectory.y.push_back(y);
+      result.t_stop = t;
+    }
+    result.stats.cpu_seconds = thread_cpu_seconds() - start;
+    return result;
+  }
+
+ private:
+  std::string method_;
+  const gsl_odeiv2_step_type* type_;
+  StepControl control_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> make_gsl_integrator(std::string_view method, const StepControl& control) {
+  switch_off_abort_handler();
+  const gsl_odeiv2_step_type* type = step_type(method);
+  if (!type) throw BadMethod(fmt::format("unknown GSL method '{}'", method));
+  if (!control.dt) return std::make_unique<GslAdaptiveIntegrator>(std::string(method), type, control);
+  return std::make_unique<FixedStepIntegrator>(
+      std::string(method), control, [name = std::string(method), type, control](const CountedSystem& system) {
+        return std::make_unique<GslFixedStepper>(system, name, type, control);
+      });
+}
+
+}  // namespace stepwise

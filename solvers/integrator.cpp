@@ -1,0 +1,76 @@
+#include "integrator.hpp"
+
+#include "cvode_backend.hpp"
+#include "fixed_step.hpp"
+#include "gsl_backend.hpp"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <cmath>
+
+namespace stepwise {
+
+std::string_view to_string(Status status) {
+  switch (status) {
+    case Status::ok: return "ok";
+    case Status::diverged: return "diverged";
+    case Status::failed: return "failed";
+  }
+  return "failed";
+}
+
+namespace {
+
+// DESIGN.md's method table; GSL orders as its manual documents them
+constexpr std::array method_table{
+    MethodInfo{"euler", "explicit, fixed step", "1", "hand-written", 1, 1, true, false, false},
+    MethodInfo{"symplectic-euler", "semi-implicit, fixed step", "1", "hand-written", 1, 1, true, false, true},
+    MethodInfo{"rk4", "explicit, fixed step", "4", "hand-written", 4, 4, true, false, false},
+    MethodInfo{"implicit-euler", "implicit, fixed step, Newton + dense LU", "1", "hand-written", 1, 1, true, false, false},
+    MethodInfo{"cvode-adams", "adaptive, variable order Adams-Moulton, fixed-point iteration", "1-12", "SUNDIALS CVODE", 1, 12, false, true, false},
+    MethodInfo{"cvode-bdf", "adaptive, variable order BDF, Newton + dense LU or KLU", "1-5", "SUNDIALS CVODE", 1, 5, false, true, false},
+    MethodInfo{"gsl-rk2", "explicit Runge-Kutta (2,3)", "2", "GSL odeiv2", 2, 2, true, true, false},
+    MethodInfo{"gsl-rk4", "explicit classical Runge-Kutta, error by step doubling", "4", "GSL odeiv2", 4, 4, true, true, false},
+    MethodInfo{"gsl-rkf45", "explicit embedded Runge-Kutta-Fehlberg (4,5)", "5", "GSL odeiv2", 5, 5, true, true, false},
+    MethodInfo{"gsl-rkck", "explicit embedded Runge-Kutta Cash-Karp (4,5)", "5", "GSL odeiv2", 5, 5, true, true, false},
+    MethodInfo{"gsl-rk8pd", "explicit embedded Runge-Kutta Prince-Dormand (8,9)", "8", "GSL odeiv2", 8, 8, true, true, false},
+    MethodInfo{"gsl-rk1imp", "implicit Gaussian first order Runge-Kutta (backward Euler)", "1", "GSL odeiv2", 1, 1, true, true, false},
+    MethodInfo{"gsl-rk2imp", "implicit Gaussian second order Runge-Kutta (midpoint)", "2", "GSL odeiv2", 2, 2, true, true, false},
+    MethodInfo{"gsl-rk4imp", "implicit Gaussian fourth order Runge-Kutta", "4", "GSL odeiv2", 4, 4, true, true, false},
+    MethodInfo{"gsl-bsimp", "implicit Bulirsch-Stoer (Bader-Deuflhard)", "variable", "GSL odeiv2", 1, 12, true, true, false},
+    MethodInfo{"gsl-msadams", "variable order Adams, functional iteration", "1-12", "GSL odeiv2", 1, 12, true, true, false},
+    MethodInfo{"gsl-msbdf", "variable order BDF, Newton iteration", "1-5", "GSL odeiv2", 1, 5, true, true, false},
+};
+
+}  // namespace
+
+std::span<const MethodInfo> methods() { return method_table; }
+
+const MethodInfo* find_method(std::string_view name) {
+  for (const auto& m : method_table)
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
+std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control) {
+  const MethodInfo* info = find_method(method);
+  if (!info) throw BadMethod(fmt::format("unknown method '{}' (see `stepwise methods`)", method));
+  if (control.dt && !info->fixed_step)
+    throw BadMethod(fmt::format("{} is adaptive only: give --rtol/--atol, not --dt", method));
+  if (!control.dt && !info->adaptive) throw BadMethod(fmt::format("{} is a fixed-step method: give --dt", method));
+  if (control.dt && !(std::isfinite(*control.dt) && *control.dt > 0))
+    throw BadMethod(fmt::format("dt must be a positive finite number, got {}", *control.dt));
+  if (!control.dt && !(control.rtol > 0 && control.atol > 0 && std::isfinite(control.rtol) && std::isfinite(control.atol)))
+    throw BadMethod(fmt::format("rtol and atol must be positive finite numbers, got {} and {}", control.rtol, control.atol));
+
+  const std::string name(method);
+  if (method == "euler") return std::make_unique<FixedStepIntegrator>(name, control, make_euler);
+  if (method == "symplectic-euler") return std::make_unique<FixedStepIntegrator>(name, control, make_symplectic_euler);
+  if (method == "rk4") return std::make_unique<FixedStepIntegrator>(name, control, make_rk4);
+  if (method == "implicit-euler") return std::make_unique<FixedStepIntegrator>(name, control, make_implicit_euler);
+  if (info->source == "SUNDIALS CVODE") return make_cvode_integrator(method, control);
+  return make_gsl_integrator(method, control);
+}
+
+}  // namespace stepwise

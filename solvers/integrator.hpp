@@ -1,0 +1,92 @@
+// Time integration by method name: one interface over hand-written steppers, CVODE and GSL odeiv2.
+#pragma once
+
+#include "ode_system.hpp"
+
+#include <limits>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace stepwise {
+
+// how a run is stepped: a fixed dt, or adaptively to rtol/atol
+struct StepControl {
+  std::optional<double> dt;                                   // fixed step (s); empty: adaptive
+  double rtol = 1e-6;                                         // relative tolerance (adaptive)
+  double atol = 1e-9;                                         // absolute tolerance (adaptive)
+  double max_step = std::numeric_limits<double>::infinity();  // cap on an adaptive step (s)
+  double blowup = 1e12;  // a state with |y|inf > blowup * max(1, |y0|inf) has diverged
+  long max_steps = 50'000'000;                                // a run taking more steps fails
+};
+
+struct Stats {
+  long steps = 0;           // accepted steps
+  long rejected = 0;        // steps rejected by error or convergence tests
+  long rhs_evals = 0;       // calls of f, counted in the wrapper (finite-difference Jacobians included)
+  long jac_evals = 0;       // analytic or finite-difference Jacobian evaluations
+  long linear_solves = 0;   // solves with a factorised Newton matrix
+  long factorizations = 0;  // factorisations of a Newton matrix
+  long events = 0;          // events handled
+  double cpu_seconds = 0;   // thread CPU time of the integration
+};
+
+enum class Status { ok, diverged, failed };
+std::string_view to_string(Status status);
+
+// state at each requested output time; a run that stops early ends its trajectory there
+struct Trajectory {
+  std::vector<double> t;
+  std::vector<Eigen::VectorXd> y;
+};
+
+struct EventRecord {
+  double t = 0;
+  std::string kind;
+};
+
+struct RunResult {
+  Status status = Status::ok;
+  std::string message;   // empty when ok; names the time (diverged) or the backend call and its code (failed)
+  double t_stop = 0;     // time the run ended: the last output time, or when it diverged or failed
+  Eigen::VectorXd y_stop;  // last finite state
+  Trajectory trajectory;
+  Stats stats;
+  std::vector<EventRecord> events;
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  // integrate from (t0, y0) through the increasing output times t_out (each > t0)
+  virtual RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
+                              std::span<const double> t_out) const = 0;
+};
+
+// one row of DESIGN.md's method table
+struct MethodInfo {
+  std::string_view name;
+  std::string_view kind;
+  std::string_view order;   // as documented ("4", "1-12")
+  std::string_view source;
+  int order_min = 0;        // documented order range of the stepper
+  int order_max = 0;
+  bool fixed_step = false;  // accepts a fixed dt
+  bool adaptive = false;    // accepts rtol/atol
+  bool needs_second_order = false;  // needs y = (x, v)
+};
+
+std::span<const MethodInfo> methods();
+const MethodInfo* find_method(std::string_view name);
+
+// thrown for an unknown method or a step control the method cannot use
+struct BadMethod : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control);
+
+}  // namespace stepwise

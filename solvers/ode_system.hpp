@@ -1,0 +1,57 @@
+// The one thing every integrator sees: dy/dt = f(t, y), with optional structure.
+//
+// An integrator never includes a models/ header; a model implements this interface.
+#pragma once
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCore>
+
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+
+namespace stepwise {
+
+// y = (x, v) with dx/dt = v: the layout symplectic steppers need.
+struct SecondOrderView {
+  int positions = 0;  // number of position coordinates n; y has 2n entries, x = y[0..n), v = y[n..2n)
+};
+
+// An event g(t, y) = 0 (a collision, a plane crossing) and what happens at it.
+struct Event {
+  std::string kind;                                                      // name written to summary.json ("impact")
+  int direction = 0;                                                     // +1: g rising through 0, -1: falling, 0: either
+  std::function<double(double t, const Eigen::VectorXd& y)> g;          // root function
+  std::function<void(double t, Eigen::VectorXd& y)> apply;              // state change at the root (collision response)
+};
+
+class OdeSystem {
+ public:
+  virtual ~OdeSystem() = default;
+
+  // dimension of y
+  virtual int size() const = 0;
+
+  // dydt = f(t, y); y and dydt have size() entries
+  virtual void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const = 0;
+
+  // true when f does not depend on t (then df/dt = 0)
+  virtual bool autonomous() const { return false; }
+
+  // optional analytic Jacobian df/dy, dense (size() x size())
+  virtual bool has_jacobian() const { return false; }
+  virtual void jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::MatrixXd> dfdy) const;
+
+  // optional sparse Jacobian with a pattern that never changes (CSC); CVODE uses KLU with it
+  virtual bool has_sparse_jacobian() const { return false; }
+  virtual void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const;
+
+  // optional second-order structure for symplectic steppers
+  virtual std::optional<SecondOrderView> second_order() const { return std::nullopt; }
+
+  // optional events; an empty span means none
+  virtual std::span<const Event> events() const { return {}; }
+};
+
+}  // namespace stepwise

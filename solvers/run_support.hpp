@@ -1,0 +1,75 @@
+// Pieces every integrator shares: RHS counting, divergence test, CPU clock, trajectory recording.
+#pragma once
+
+#include "integrator.hpp"
+
+#include <fmt/format.h>
+
+#include <ctime>
+
+namespace stepwise {
+
+// forwards to a system and counts every call of f in Stats; backends see only this wrapper.
+// Jacobian evaluations are counted by the caller, analytic or finite-difference alike.
+class CountedSystem final : public OdeSystem {
+ public:
+  CountedSystem(const OdeSystem& inner, Stats& stats) : inner_(inner), stats_(stats) {}
+  int size() const override { return inner_.size(); }
+  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    ++stats_.rhs_evals;
+    inner_.rhs(t, y, dydt);
+  }
+  bool autonomous() const override { return inner_.autonomous(); }
+  bool has_jacobian() const override { return inner_.has_jacobian(); }
+  void jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+    inner_.jacobian(t, y, dfdy);
+  }
+  bool has_sparse_jacobian() const override { return inner_.has_sparse_jacobian(); }
+  void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const override {
+    inner_.sparse_jacobian(t, y, dfdy);
+  }
+  std::optional<SecondOrderView> second_order() const override { return inner_.second_order(); }
+  std::span<const Event> events() const override { return inner_.events(); }
+  Stats& stats() const { return stats_; }
+
+ private:
+  const OdeSystem& inner_;
+  Stats& stats_;
+};
+
+// thread CPU time in seconds: sweeps run in parallel, so process time would mix runs
+inline double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// |y|inf above which a run has blown up: blowup * max(1, |y0|inf)
+inline double divergence_bound(const StepControl& control, const Eigen::VectorXd& y0) {
+  return control.blowup * std::max(1.0, y0.lpNorm<Eigen::Infinity>());
+}
+
+inline bool has_diverged(const Eigen::VectorXd& y, double bound) {
+  return !y.allFinite() || y.lpNorm<Eigen::Infinity>() > bound;
+}
+
+inline void mark_diverged(RunResult& result, double t) {
+  result.status = Status::diverged;
+  result.t_stop = t;
+  result.message = fmt::format("diverged at t = {:.9g}: state non-finite or beyond the blow-up bound", t);
+}
+
+inline void mark_failed(RunResult& result, double t, std::string message) {
+  result.status = Status::failed;
+  result.t_stop = t;
+  result.message = std::move(message);
+}
+
+// the integrators here do not detect events yet: refuse such a system rather than step through its events
+inline bool refuse_events(const OdeSystem& system, std::string_view method, RunResult& result, double t0) {
+  if (system.events().empty()) return false;
+  mark_failed(result, t0, fmt::format("{}: this system has events, which no integrator handles yet", method));
+  return true;
+}
+
+}  // namespace stepwise

@@ -1,0 +1,31 @@
+#include "measure.hpp"
+
+#include <cmath>
+
+namespace stepwise {
+
+std::vector<double> output_times(double t_end, double output_dt) {
+  std::vector<double> t;
+  const auto n = static_cast<long>(std::floor(t_end / output_dt * (1 + 1e-12)));
+  t.reserve(static_cast<size_t>(n) + 1);
+  for (long k = 1; k <= n; ++k) {
+    const double tk = static_cast<double>(k) * output_dt;
+    if (tk < t_end * (1 - 1e-12)) t.push_back(tk);
+  }
+  t.push_back(t_end);
+  return t;
+}
+
+double max_norm_error(const Eigen::VectorXd& a, const Eigen::VectorXd& b) { return (a - b).lpNorm<Eigen::Infinity>(); }
+
+Measured run_and_measure(const Model& model, std::string_view method, const StepControl& control, double t_end,
+                         double output_dt) {
+  Measured m;
+  m.t_out = output_times(t_end, output_dt);
+  m.result = make_integrator(method, control)->integrate(model, 0.0, model.initial_state(), m.t_out);
+  if (m.result.status == Status::ok && model.has_exact())
+    m.error = max_norm_error(m.result.trajectory.y.back(), model.exact(t_end));
+  return m;
+}
+
+}  // namespace stepwise

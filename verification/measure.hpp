@@ -1,0 +1,29 @@
+// Run a model with a method and measure it against its exact solution: the one path shared by
+// `stepwise run`, the studies and the tests.
+#pragma once
+
+#include "models/model.hpp"
+#include "solvers/integrator.hpp"
+
+#include <optional>
+#include <vector>
+
+namespace stepwise {
+
+struct Measured {
+  std::vector<double> t_out;     // requested output times (t0 excluded)
+  RunResult result;
+  std::optional<double> error;   // max-norm error against the exact solution at t_end; empty if none or not ok
+};
+
+// output times t0 + k * output_dt up to t_end, t_end always last
+std::vector<double> output_times(double t_end, double output_dt);
+
+// integrate model from its initial state at t = 0 to t_end, sampling every output_dt
+Measured run_and_measure(const Model& model, std::string_view method, const StepControl& control, double t_end,
+                         double output_dt);
+
+// |a - b|inf
+double max_norm_error(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
+
+}  // namespace stepwise
