@@ -99,6 +99,9 @@ Prepared prepare(const RunOptions& o) {
   if (p.control.dt && *p.control.dt > p.t_end)
     throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.t_end));
   p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
+  // a fixed-step run samples on its own step grid: an output time between grid points would shorten a step
+  // and change the very run being sampled (a dt beyond the stability limit would be hidden by short steps)
+  if (p.control.dt) p.output_dt = std::max(1.0, std::round(p.output_dt / *p.control.dt)) * *p.control.dt;
   return p;
 }
 

@@ -1,13 +1,18 @@
 #include "pendulum.hpp"
 
+#include <gsl/gsl_errno.h>
 #include <gsl/gsl_sf_ellint.h>
 #include <gsl/gsl_sf_elljac.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace stepwise {
 namespace {
+
+// GSL's default error handler aborts the process on a domain error: report through return values instead
+const bool gsl_abort_handler_off = (gsl_set_error_handler_off(), true);
 
 constexpr std::array params{
     ParamSpec{"theta0", 1.0, "rad", "initial angle from the downward vertical", Bound::finite},
@@ -86,6 +91,8 @@ std::span<const ParamSpec> pendulum_params() { return params; }
 std::unique_ptr<Model> make_pendulum(const Params& p, bool small_angle) { return std::make_unique<Pendulum>(p, small_angle); }
 
 double pendulum_period(double theta0, double g, double length) {
+  (void)gsl_abort_handler_off;
+  if (std::abs(theta0) >= std::numbers::pi) return std::numeric_limits<double>::infinity();
   return 4 * gsl_sf_ellint_Kcomp(std::sin(std::abs(theta0) / 2), GSL_PREC_DOUBLE) / std::sqrt(g / length);
 }
 

@@ -50,8 +50,11 @@ class Projectile final : public Model {
     const double e = x == 0 ? t : -std::expm1(-x) / k_;
     double rest = 0;
     if (x < 0.5) {
-      double term = 0.5;
-      for (int n = 2; n < 30; ++n, term *= -x / (n + 1)) rest += term;
+      double term = 0.5;  // (-x)^(n-2)/n! at n = 2
+      for (int n = 2; n < 30; ++n) {
+        rest += term;
+        term *= -x / (n + 1);
+      }
       rest *= t * t;
     } else {
       rest = (t - e) / k_;

@@ -30,7 +30,7 @@ constexpr std::array method_table{
     MethodInfo{"implicit-euler", "implicit, fixed step, Newton + dense LU", "1", "hand-written", 1, 1, true, false, false},
     MethodInfo{"cvode-adams", "adaptive, variable order Adams-Moulton, fixed-point iteration", "1-12", "SUNDIALS CVODE", 1, 12, false, true, false},
     MethodInfo{"cvode-bdf", "adaptive, variable order BDF, Newton + dense LU or KLU", "1-5", "SUNDIALS CVODE", 1, 5, false, true, false},
-    MethodInfo{"gsl-rk2", "explicit Runge-Kutta (2,3)", "2", "GSL odeiv2", 2, 2, true, true, false},
+    MethodInfo{"gsl-rk2", "explicit embedded Runge-Kutta (2,3), advances with the third-order solution", "3", "GSL odeiv2", 3, 3, true, true, false},
     MethodInfo{"gsl-rk4", "explicit classical Runge-Kutta, error by step doubling", "4", "GSL odeiv2", 4, 4, true, true, false},
     MethodInfo{"gsl-rkf45", "explicit embedded Runge-Kutta-Fehlberg (4,5)", "5", "GSL odeiv2", 5, 5, true, true, false},
     MethodInfo{"gsl-rkck", "explicit embedded Runge-Kutta Cash-Karp (4,5)", "5", "GSL odeiv2", 5, 5, true, true, false},

@@ -15,7 +15,7 @@ double small_angle_phase_error(double theta0, double n_periods) {
 
 double small_angle_max_amplitude(double phase_tolerance, double n_periods) {
   // the phase error grows monotonically with amplitude on (0, pi)
-  double lo = 0, hi = std::numbers::pi * (1 - 1e-12);
+  double lo = 0, hi = std::numbers::pi - 1e-6;  // K(k) is finite for k = sin(theta0/2) < 1
   if (small_angle_phase_error(hi, n_periods) <= phase_tolerance) return hi;
   for (int i = 0; i < 100 && hi - lo > 1e-14; ++i) {
     const double mid = 0.5 * (lo + hi);

@@ -8,14 +8,21 @@ namespace stepwise::tolerance {
 // moves the slope by a few hundredths, well inside the band, while an order lost (p -> p-1) lies outside.
 inline constexpr double order_band = 0.15;
 
+// a convergence fit uses only errors inside (roundoff_floor, asymptotic_ceiling): above the ceiling the
+// leading error term does not dominate yet (the pendulum's Euler error at 1e-1 rad is no longer linear in dt);
+// below the floor, round-off accumulated as a random walk over 1e4-1e6 steps of eps |y| each is comparable
+inline constexpr double roundoff_floor = 1e-12;
+inline constexpr double asymptotic_ceiling = 1e-1;
+
 // the claim: high-order adaptive methods at rtol 1e-12, atol 1e-15 are this close to the exact
 // pendulum at theta0 = 170 degrees
 inline constexpr double tight_adaptive_error = 1e-6;
 
-// global error against rtol: a method whose error does not fall at least as rtol^0.5 has lost tolerance
-// proportionality (for a well-behaved code the slope is ~1; step-size controllers with order p
-// local error per unit step give p/(p+1), >= 0.5 for p >= 1)
-inline constexpr double min_tolerance_slope = 0.5;
+// global error against rtol: a controller that keeps the local error of an order-p method per step
+// below rtol takes steps h ~ rtol^(1/(p+1)), so the global error ~ h^p falls as rtol^(p/(p+1)) (1/2 for
+// p = 1, towards 1 for high order; per unit step control gives 1). The slope may fall short of p/(p+1),
+// with p the lowest order the method uses, by at most order_band.
+inline constexpr double min_tolerance_slope(int p) { return static_cast<double>(p) / (p + 1) - order_band; }
 
 // GSL rk4 estimates its error by step doubling and returns the two-half-step result: its error at h is
 // that of classical RK4 at h/2, i.e. 2^4 = 16 times smaller. The ratio measured in the asymptotic range

@@ -1,0 +1,28 @@
+// Convergence sweep of a fixed-step method: error at t_end against dt over successive halvings.
+#pragma once
+
+#include "measure.hpp"
+
+#include <vector>
+
+namespace stepwise {
+
+struct ConvergenceSweep {
+  std::vector<double> dt;           // each step size tried, coarsest first: halvings, or for orders above 5
+                                    // twice as many refinements by sqrt(2), so the error stays in range
+  std::vector<Measured> runs;       // one run per dt
+  std::vector<double> fit_dt, fit_error;  // the points in the asymptotic range above round-off, which the slope is fitted to
+  double observed_order = 0;        // least-squares slope of log error against log dt
+};
+
+// the coarsest step of a sweep for a method of this order, for a scene whose fastest time scale is
+// time_scale (s): the fraction shrinks with the order so that the error starts near 1e-3 and stays above
+// round-off for at least four halvings (chosen by measurement on the pendulum, flow-field and projectile scenes);
+// a power of two of time_scale, so that t_end is a whole number of steps
+double coarse_dt(const MethodInfo& method, double time_scale);
+
+// run model with method from dt = coarse down to coarse / 2^halvings, to t_end
+ConvergenceSweep convergence_sweep(const Model& model, const MethodInfo& method, double t_end, int halvings,
+                                   double coarse);
+
+}  // namespace stepwise

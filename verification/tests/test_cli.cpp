@@ -1,0 +1,146 @@
+// The command-line contract of DESIGN.md, pinned against the built binary: names and shapes of
+// methods --json, trajectory.csv and summary.json, exit statuses, and one-line errors naming file, line and key.
+#include "solvers/integrator.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace stepwise {
+namespace {
+namespace fs = std::filesystem;
+
+struct Output {
+  int status;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("stepwise-cli-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Output run(const std::string& args) const {
+    const std::string cmd = fmt::format("cd '{}' && '{}' {} >'{}' 2>'{}'", STEPWISE_SOURCE_DIR, STEPWISE_BIN, args, (dir_ / "stdout").string(), (dir_ / "stderr").string());
+    const int raw = std::system(cmd.c_str());
+    return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(dir_ / "stdout"), slurp(dir_ / "stderr")};
+  }
+  fs::path scene(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+  fs::path dir_;
+};
+
+TEST_F(Cli, MethodsJsonListsEveryMethodOfTheTable) {
+  const Output o = run("methods --json");
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto j = nlohmann::json::parse(o.out);
+  ASSERT_EQ(j.size(), methods().size());
+  for (size_t i = 0; i < methods().size(); ++i) EXPECT_EQ(j[i]["name"], std::string(methods()[i].name));
+}
+
+TEST_F(Cli, RunWritesTheContractsFilesAndFields) {
+  for (const std::string step : {"--method rk4 --dt 1e-3", "--method cvode-bdf --rtol 1e-8", "--method gsl-rk8pd --rtol 1e-8"}) {
+    const fs::path out = dir_ / "run";
+    const Output o = run(fmt::format("run scenes/pendulum.toml {} --out '{}'", step, out.string()));
+    ASSERT_EQ(o.status, 0) << step << ": " << o.err;
+    const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+    for (const char* key : {"scene", "method", "status", "message", "t_end", "steps", "rhs_evals", "jac_evals",
+                            "cpu_seconds", "final_state", "error", "events"})
+      EXPECT_TRUE(s.contains(key)) << key;
+    EXPECT_EQ(s["status"], "ok");
+    EXPECT_TRUE(s["message"].is_null());
+    EXPECT_TRUE(s["steps"].is_number_integer());
+    EXPECT_TRUE(s["events"].is_array());
+    EXPECT_LT(s["error"].get<double>(), 1e-5) << step;
+    EXPECT_EQ(s["final_state"].size(), 2u);
+    std::istringstream csv(slurp(out / "trajectory.csv"));
+    std::string header;
+    std::getline(csv, header);
+    EXPECT_EQ(header.rfind("t,theta,omega", 0), 0u) << header;
+    long rows = 0;
+    for (std::string line; std::getline(csv, line);) ++rows;
+    EXPECT_EQ(rows, 1001) << "t = 0 and every t_end/1000";
+  }
+}
+
+TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
+  const fs::path out = dir_ / "bad";
+  const fs::path bad_toml = scene("broken.toml", "model = \"pendulum\"\n[parameters]\ng = = 3\n");
+  const fs::path bad_model = scene("nomodel.toml", "model = \"pendulumm\"\n");
+  const fs::path bad_key = scene("badkey.toml", "model = \"pendulum\"\n[parameters]\n\nlenght = 2.0\n");
+  const fs::path bad_length = scene("length.toml", "model = \"pendulum\"\n[parameters]\nlength = -1.0\n[run]\ndt = 0.01\n");
+  const fs::path big_dt = scene("bigdt.toml", "model = \"pendulum\"\n[run]\nt_end = 1.0\ndt = 2.0\n");
+  const fs::path nan_value = scene("nan.toml", "model = \"pendulum\"\n[parameters]\ng = nan\n[run]\ndt = 0.01\n");
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {fmt::format("run '{}' --out '{}'", bad_toml.string(), out.string()), "broken.toml:3:"},
+      {fmt::format("run '{}' --out '{}'", bad_model.string(), out.string()), "nomodel.toml:1: model"},
+      {fmt::format("run '{}' --out '{}'", bad_key.string(), out.string()), "badkey.toml:4: parameters.lenght"},
+      {fmt::format("run '{}' --out '{}'", bad_length.string(), out.string()), "length.toml:3: parameters.length"},
+      {fmt::format("run '{}' --out '{}'", big_dt.string(), out.string()), "bigdt.toml:4: run.dt"},
+      {fmt::format("run '{}' --out '{}'", nan_value.string(), out.string()), "nan.toml:3: parameters.g"},
+      {fmt::format("run scenes/pendulum.toml --method no-such-method --out '{}'", out.string()), "--method"},
+      {fmt::format("run scenes/pendulum.toml --set no_such_key=1 --out '{}'", out.string()), "--set no_such_key"},
+      {fmt::format("run scenes/pendulum.toml --set g=nan --out '{}'", out.string()), "--set g"},
+      {fmt::format("run scenes/pendulum.toml --set length=0 --out '{}'", out.string()), "--set length"},
+      {fmt::format("run scenes/pendulum.toml --dt -1 --out '{}'", out.string()), "--dt"},
+      {fmt::format("run scenes/pendulum.toml --dt 0 --out '{}'", out.string()), "--dt"},
+      {fmt::format("run scenes/pendulum.toml --t-end -3 --out '{}'", out.string()), "--t-end"},
+      {fmt::format("run scenes/pendulum.toml --method cvode-bdf --rtol 0 --out '{}'", out.string()), "--rtol"},
+      {fmt::format("run scenes/pendulum.toml --method rk4 --rtol 1e-6 --out '{}'", out.string()), "rk4"},
+      {fmt::format("run scenes/flow-particle.toml --method symplectic-euler --out '{}'", out.string()), "symplectic-euler"},
+      {"run scenes/pendulum.toml --out /proc/no-such-dir", "--out"},
+      {fmt::format("run scenes/no-such-scene.toml --out '{}'", out.string()), "no-such-scene.toml"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const Output o = run(args);
+    EXPECT_EQ(o.status, 2) << args << "\n" << o.err;
+    EXPECT_NE(o.err.find(expected), std::string::npos) << args << " said: " << o.err;
+    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << args << " said: " << o.err;
+    EXPECT_FALSE(fs::exists(out / "summary.json")) << args;
+  }
+}
+
+TEST_F(Cli, ADivergedRunExitsOneWithItsSummaryWritten) {
+  const fs::path out = dir_ / "diverged";
+  const Output o = run(fmt::format("run scenes/projectile.toml --set drag=100 --method euler --dt 0.05 --out '{}'", out.string()));
+  EXPECT_EQ(o.status, 1) << o.err;
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  EXPECT_EQ(s["status"], "diverged");
+  EXPECT_TRUE(s["error"].is_null());
+  EXPECT_LT(s["t_stop"].get<double>(), s["t_end"].get<double>());
+  EXPECT_NE(s["message"].get<std::string>().find("diverged at t ="), std::string::npos);
+  for (const auto& [name, value] : s["final_state"].items()) EXPECT_TRUE(value.is_number()) << name;
+}
+
+TEST_F(Cli, ARerunReplacesOutputsWholeAndLeavesNoTemporaryFiles) {
+  const fs::path out = dir_ / "again";
+  ASSERT_EQ(run(fmt::format("run scenes/pendulum.toml --out '{}'", out.string())).status, 0);
+  ASSERT_EQ(run(fmt::format("run scenes/pendulum.toml --method euler --out '{}'", out.string())).status, 0);
+  EXPECT_EQ(nlohmann::json::parse(slurp(out / "summary.json"))["method"], "euler");
+  long files = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(out)) ++files;
+  EXPECT_EQ(files, 2);
+}
+
+}  // namespace
+}  // namespace stepwise

@@ -1,0 +1,196 @@
+// Solver backends: counting, the pitfalls of the exact library versions, divergence, and the seeds'
+// claim about explicit and implicit Euler in a position-independent force field.
+#include "models/model.hpp"
+#include "solvers/integrator.hpp"
+#include "verification/measure.hpp"
+#include "verification/tolerances.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace stepwise {
+namespace {
+
+// forwards to a model and counts the calls of f it sees itself; optionally hides the analytic Jacobian
+class SelfCounting final : public OdeSystem {
+ public:
+  SelfCounting(const Model& m, bool hide_jacobian) : model_(m), hide_(hide_jacobian) {}
+  int size() const override { return model_.size(); }
+  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> f) const override {
+    ++calls;
+    model_.rhs(t, y, f);
+  }
+  bool has_jacobian() const override { return !hide_ && model_.has_jacobian(); }
+  void jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::MatrixXd> J) const override {
+    model_.jacobian(t, y, J);
+  }
+  std::optional<SecondOrderView> second_order() const override { return model_.second_order(); }
+  mutable long calls = 0;
+
+ private:
+  const Model& model_;
+  bool hide_;
+};
+
+StepControl fixed(double dt) {
+  StepControl c;
+  c.dt = dt;
+  return c;
+}
+
+StepControl adaptive(double rtol, double atol) {
+  StepControl c;
+  c.rtol = rtol;
+  c.atol = atol;
+  return c;
+}
+
+TEST(Solvers, EveryCallOfTheRightHandSideIsCountedWithOrWithoutAnAnalyticJacobian) {
+  const auto model = make_model("pendulum", {{"theta0", 2.0}});
+  const std::vector<double> t_out{1.0, 2.0};
+  for (const auto& method : methods()) {
+    for (const bool hide : {false, true}) {
+      SelfCounting system(*model, hide);
+      const auto control = method.adaptive ? adaptive(1e-8, 1e-10) : fixed(1e-2);
+      const RunResult r = make_integrator(method.name, control)->integrate(system, 0, model->initial_state(), t_out);
+      ASSERT_EQ(r.status, Status::ok) << method.name << ": " << r.message;
+      // difference-quotient Jacobians (CVODE's, GSL's implicit steppers') included: nothing escapes the wrapper
+      EXPECT_EQ(r.stats.rhs_evals, system.calls) << method.name << (hide ? " without" : " with") << " analytic Jacobian";
+      EXPECT_GT(r.stats.steps, 0) << method.name;
+    }
+  }
+}
+
+TEST(Solvers, CvodeAdamsRunsWithItsFixedPointSolver) {
+  // with CVODE's default Newton solver and no linear solver, CVode returns -13 (CV_LINIT_FAIL)
+  const auto model = make_model("pendulum");
+  const Measured m = run_and_measure(*model, "cvode-adams", adaptive(1e-10, 1e-12), 10.0, 1.0);
+  ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+  EXPECT_EQ(m.result.stats.linear_solves, 0) << "fixed-point iteration solves no linear system";
+  EXPECT_LT(*m.error, 1e-6);
+}
+
+TEST(Solvers, GslImplicitSteppersRunWithoutAnAnalyticJacobian) {
+  // GSL 2.7's rk1imp, rk2imp, rk4imp, bsimp and msbdf dereference the Jacobian: NULL segfaults
+  const auto model = make_model("pendulum");
+  for (const char* method : {"gsl-rk1imp", "gsl-rk2imp", "gsl-rk4imp", "gsl-bsimp", "gsl-msbdf"}) {
+    for (const auto& control : {fixed(1e-2), adaptive(1e-8, 1e-10)}) {
+      SelfCounting without(*model, true), with(*model, false);
+      const auto integrator = make_integrator(method, control);
+      const RunResult a = integrator->integrate(without, 0, model->initial_state(), std::vector{2.0});
+      const RunResult b = integrator->integrate(with, 0, model->initial_state(), std::vector{2.0});
+      ASSERT_EQ(a.status, Status::ok) << method << ": " << a.message;
+      EXPECT_GT(a.stats.jac_evals, 0) << method << " used a finite-difference Jacobian";
+      // the Jacobian only steers the iteration: central differences (relative error ~1e-10) change the result
+      // by no more than the iteration's own tolerance
+      const double difference = (a.trajectory.y.back() - b.trajectory.y.back()).lpNorm<Eigen::Infinity>();
+      EXPECT_LT(difference, 1e-6) << method;
+    }
+  }
+}
+
+TEST(Solvers, GslRk4CostsElevenCallsPerStepAndIsSixteenTimesMoreAccurate) {
+  // GSL rk4 takes one full step (4 calls) and two half steps (4 + 4) sharing k1, and returns the
+  // half-step result: 11 calls per step, and the error of classical RK4 at h/2, i.e. 2^4 = 16 times smaller.
+  // Fixed-step comparisons must therefore count RHS evaluations, not steps.
+  const auto model = make_model("pendulum", {{"theta0", 1.0}});
+  const double h = 2.0 / 400;
+  const Measured textbook = run_and_measure(*model, "rk4", fixed(h), 2.0, 2.0);
+  const Measured gsl = run_and_measure(*model, "gsl-rk4", fixed(h), 2.0, 2.0);
+  EXPECT_EQ(textbook.result.stats.rhs_evals, 4 * textbook.result.stats.steps);
+  EXPECT_EQ(gsl.result.stats.rhs_evals, 11 * gsl.result.stats.steps);
+  const double ratio = *textbook.error / *gsl.error;
+  std::cout << "error ratio textbook rk4 / gsl-rk4 at h = " << h << ": " << ratio << '\n';
+  EXPECT_NEAR(ratio, tolerance::gsl_rk4_ratio, tolerance::gsl_rk4_ratio_band * tolerance::gsl_rk4_ratio);
+}
+
+TEST(Solvers, FixedStepGslRunsAreNeverRejectedByErrorControl) {
+  // gsl_odeiv2_driver_apply_fixed_step would test this step against the tolerance and fail; a fixed step is a fixed step
+  const auto model = make_model("pendulum", {{"theta0", 2.0}});
+  for (const char* method : {"gsl-rkf45", "gsl-rkck", "gsl-rk8pd", "gsl-rk2"}) {
+    StepControl control = fixed(0.25);
+    control.rtol = 1e-12;
+    control.atol = 1e-15;
+    const Measured m = run_and_measure(*model, method, control, 10.0, 10.0);
+    EXPECT_EQ(m.result.status, Status::ok) << method << ": " << m.result.message;
+    EXPECT_EQ(m.result.stats.steps, 40) << method;
+    EXPECT_EQ(m.result.stats.rejected, 0) << method;
+  }
+}
+
+// dy/dt = y^2, y(0) = 1: y = 1 / (1 - t) blows up at t = 1
+class BlowUp final : public OdeSystem {
+ public:
+  int size() const override { return 1; }
+  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> f) const override { f[0] = y[0] * y[0]; }
+};
+
+TEST(Solvers, ABlowUpIsReportedAsDivergedAtTheTimeItHappened) {
+  BlowUp system;
+  const Eigen::VectorXd y0 = Eigen::VectorXd::Constant(1, 1.0);
+  const std::vector<double> t_out{0.5, 1.5, 2.0};
+  for (const auto& method : methods()) {
+    if (method.needs_second_order) continue;
+    const auto control = method.adaptive ? adaptive(1e-8, 1e-10) : fixed(1e-4);
+    const RunResult r = make_integrator(method.name, control)->integrate(system, 0, y0, t_out);
+    // the state passes 1e12 within 1e-12 of the singularity for an exact solver; fixed-step methods lag it by O(dt).
+    // An implicit step may instead find no solution: y1 = y0 + h y1^2 has none once y0 > 1/(4h), and that
+    // is reported as the Newton failure it is
+    std::cout << method.name << ": " << to_string(r.status) << " at t = " << r.t_stop << '\n';
+    if (r.status == Status::failed) EXPECT_NE(r.message.find("t = "), std::string::npos) << method.name << ": " << r.message;
+    else EXPECT_EQ(r.status, Status::diverged) << method.name << ": " << to_string(r.status) << " " << r.message;
+    EXPECT_GT(r.t_stop, 0.99) << method.name;
+    EXPECT_LT(r.t_stop, 1.1) << method.name;
+    EXPECT_TRUE(r.y_stop.allFinite()) << method.name;
+    EXPECT_EQ(r.trajectory.t.size(), 1u) << method.name << " kept only the output before the blow-up";
+  }
+}
+
+TEST(Solvers, ExplicitEulerBlowsUpOnStiffDragBeyondItsStabilityLimit) {
+  // v' = -k v: explicit Euler multiplies v by (1 - k dt) per step, unstable for dt > 2/k
+  const auto model = make_model("projectile", {{"drag", 100.0}});
+  const Measured m = run_and_measure(*model, "euler", fixed(0.05), 10.0, 0.1);
+  EXPECT_EQ(m.result.status, Status::diverged);
+  EXPECT_LT(m.result.t_stop, 10.0);
+  EXPECT_FALSE(m.error.has_value());
+  const Measured implicit = run_and_measure(*model, "implicit-euler", fixed(0.05), 10.0, 0.1);
+  EXPECT_EQ(implicit.result.status, Status::ok);
+}
+
+TEST(Solvers, ExplicitAndImplicitEulerShareVelocitiesButNotPositionsUnderConstantForce) {
+  // The seeds claim explicit and implicit Euler coincide when the force does not depend on position.
+  // Only the velocity update coincides (v1 = v0 - h g either way); positions use v0 (explicit) or v1
+  // (implicit), so y_implicit - y_explicit = h (vy_n - vy_0) = -h g t_n exactly, and x agrees.
+  const double h = 1e-2, t_end = 2.0, g = 9.81;
+  const auto model = make_model("projectile", {{"drag", 0.0}, {"g", g}});
+  const Measured ex = run_and_measure(*model, "euler", fixed(h), t_end, t_end);
+  const Measured im = run_and_measure(*model, "implicit-euler", fixed(h), t_end, t_end);
+  const Eigen::VectorXd a = ex.result.trajectory.y.back(), b = im.result.trajectory.y.back();
+  const double ulp = std::numeric_limits<double>::epsilon();
+  const double roundoff = tolerance::roundoff_per_step * ulp * static_cast<double>(ex.result.stats.steps);
+  EXPECT_NEAR(a[2], b[2], roundoff * (1 + std::abs(a[2])));
+  EXPECT_NEAR(a[3], b[3], roundoff * (1 + std::abs(a[3])));
+  EXPECT_NEAR(a[0], b[0], roundoff * (1 + std::abs(a[0])));
+  EXPECT_NEAR(b[1] - a[1], -h * g * t_end, roundoff * (1 + std::abs(a[1])));
+  // with drag, even the velocities part: (1 - k h)^n against (1 + k h)^-n
+  const auto dragged = make_model("projectile", {{"drag", 1.0}});
+  const Measured ex2 = run_and_measure(*dragged, "euler", fixed(h), t_end, t_end);
+  const Measured im2 = run_and_measure(*dragged, "implicit-euler", fixed(h), t_end, t_end);
+  EXPECT_GT(std::abs(ex2.result.trajectory.y.back()[2] - im2.result.trajectory.y.back()[2]), 1e-3);
+}
+
+TEST(Solvers, UnknownMethodsAndMismatchedStepControlsAreRefused) {
+  EXPECT_THROW(make_integrator("rk5", fixed(0.1)), BadMethod);
+  EXPECT_THROW(make_integrator("rk4", adaptive(1e-6, 1e-9)), BadMethod);
+  EXPECT_THROW(make_integrator("cvode-bdf", fixed(0.1)), BadMethod);
+  EXPECT_THROW(make_integrator("rk4", fixed(-1)), BadMethod);
+  EXPECT_THROW(make_integrator("gsl-rkf45", adaptive(0, 1e-9)), BadMethod);
+  const auto flow = make_model("flow-particle");
+  EXPECT_THROW(make_integrator("symplectic-euler", fixed(0.1))->integrate(*flow, 0, flow->initial_state(), std::vector{1.0}),
+               BadMethod);
+}
+
+}  // namespace
+}  // namespace stepwise
