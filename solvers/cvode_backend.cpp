@@ -100,10 +100,8 @@ class CvodeIntegrator final : public Integrator {
 
   RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                       std::span<const double> t_out) const override {
-    RunResult result;
-    result.t_stop = t0;
-    result.y_stop = y0;
-    if (refuse_events(system, method_, result, t0)) return result;
+    RunResult result = begin_run(system, method_, t0, y0);
+    if (result.status != Status::ok) return result;
     const double start = thread_cpu_seconds();
     CountedSystem counted(system, result.stats);
     const int n = system.size();
@@ -172,10 +170,7 @@ class CvodeIntegrator final : public Integrator {
         mark_diverged(result, t);
         break;
       }
-      result.trajectory.t.push_back(t);
-      result.trajectory.y.push_back(ym);
-      result.y_stop = ym;
-      result.t_stop = t;
+      record_output(result, t, ym);
     }
 
     // CVODE's own counters for steps, rejections and linear algebra; f is counted in the wrapper

@@ -6,10 +6,8 @@ namespace stepwise {
 
 RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                                          std::span<const double> t_out) const {
-  RunResult result;
-  result.t_stop = t0;
-  result.y_stop = y0;
-  if (refuse_events(system, method_, result, t0)) return result;
+  RunResult result = begin_run(system, method_, t0, y0);
+  if (result.status != Status::ok) return result;
   const double start = thread_cpu_seconds();
   CountedSystem counted(system, result.stats);
   auto stepper = make_stepper_(counted);
@@ -23,10 +21,6 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
   std::string failure;
   for (const double target : t_out) {
     while (t < target) {
-      if (result.stats.steps >= control_.max_steps) {
-        mark_failed(result, t, fmt::format("{}: more than {} steps before t = {:.9g}", method_, control_.max_steps, target));
-        break;
-      }
       const double t_next = (target - (t + dt) <= snap) ? target : t + dt;
       if (!stepper->step(t, t_next - t, y, failure)) {
         mark_failed(result, t, failure);
@@ -41,9 +35,7 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
       result.y_stop = y;
     }
     if (result.status != Status::ok) break;
-    result.trajectory.t.push_back(t);
-    result.trajectory.y.push_back(y);
-    result.t_stop = t;
+    record_output(result, t, y);
   }
   result.stats.cpu_seconds = thread_cpu_seconds() - start;
   return result;

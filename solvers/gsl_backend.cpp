@@ -141,10 +141,8 @@ class GslAdaptiveIntegrator final : public Integrator {
 
   RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                       std::span<const double> t_out) const override {
-    RunResult result;
-    result.t_stop = t0;
-    result.y_stop = y0;
-    if (refuse_events(system, method_, result, t0)) return result;
+    RunResult result = begin_run(system, method_, t0, y0);
+    if (result.status != Status::ok) return result;
     const double start = thread_cpu_seconds();
     CountedSystem counted(system, result.stats);
     // first trial step: a small fraction of the first output interval; the control adapts it
@@ -179,9 +177,7 @@ class GslAdaptiveIntegrator final : public Integrator {
         result.y_stop = y;
       }
       if (result.status != Status::ok) break;
-      result.trajectory.t.push_back(t);
-      result.trajectory.y.push_back(y);
-      result.t_stop = t;
+      record_output(result, t, y);
     }
     result.stats.cpu_seconds = thread_cpu_seconds() - start;
     return result;

@@ -20,7 +20,7 @@ struct StepControl {
   double atol = 1e-9;                                         // absolute tolerance (adaptive)
   double max_step = std::numeric_limits<double>::infinity();  // cap on an adaptive step (s)
   double blowup = 1e12;  // a state with |y|inf > blowup * max(1, |y0|inf) has diverged
-  long max_steps = 50'000'000;                                // a run taking more steps fails
+  long max_steps = 5'000'000;  // an adaptive run taking more steps (CVODE: between two outputs) fails
 };
 
 struct Stats {

@@ -67,11 +67,23 @@ inline void mark_failed(RunResult& result, double t, std::string message) {
   result.message = std::move(message);
 }
 
-// the integrators here do not detect events yet: refuse such a system rather than step through its events
-inline bool refuse_events(const OdeSystem& system, std::string_view method, RunResult& result, double t0) {
-  if (system.events().empty()) return false;
-  mark_failed(result, t0, fmt::format("{}: this system has events, which no integrator handles yet", method));
-  return true;
+// a fresh result at (t0, y0), already failed if the system has events: no integrator here detects them
+// yet, and stepping through them would be silently wrong
+inline RunResult begin_run(const OdeSystem& system, std::string_view method, double t0, const Eigen::VectorXd& y0) {
+  RunResult result;
+  result.t_stop = t0;
+  result.y_stop = y0;
+  if (!system.events().empty())
+    mark_failed(result, t0, fmt::format("{}: this system has events, which no integrator handles yet", method));
+  return result;
+}
+
+// the state at an output time joins the trajectory
+inline void record_output(RunResult& result, double t, const Eigen::VectorXd& y) {
+  result.trajectory.t.push_back(t);
+  result.trajectory.y.push_back(y);
+  result.t_stop = t;
+  result.y_stop = y;
 }
 
 }  // namespace stepwise
