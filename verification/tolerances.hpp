@@ -43,4 +43,29 @@ inline constexpr double roundoff_per_step = 4.0;
 // Lipschitz constant over unit time is a small multiple of rtol (CVODE's guide: "a factor of 10 or so")
 inline constexpr double adaptive_agreement_factor = 100.0;
 
+// analytic Jacobian against central differences with d = eps^(1/3) |y|: truncation O(d^2 |f'''|) plus
+// round-off O(eps |f| / d), each ~1e-11 for O(1) derivatives; relative to 1 + |J|
+inline constexpr double jacobian_fd = 1e-9;
+
+// exact solution against the ODE: its time derivative by a central difference with h = 1e-5 has truncation
+// h^2 |y'''| / 6 ~ 1e-10 |y'''| and round-off eps |y| / h ~ 1e-11 |y|; relative to 1 + |f|
+inline constexpr double exact_derivative_fd_step = 1e-5;
+inline constexpr double exact_ode_residual = 1e-7;
+
+// invariants of exact solutions evaluated through GSL's special functions (accurate to a few ulps)
+inline constexpr double exact_invariant = 1e-12;
+
+// a Jacobian only steers an implicit stepper's iteration: replacing it by central differences changes the
+// result by no more than the iteration tolerance (GSL's default 1e-6 relative at the control's error level)
+inline constexpr double jacobian_steering = 1e-6;
+
+// energy drift of explicit and implicit Euler against the linearised prediction (1 + (w h)^2)^(+-n): at
+// theta0 = 0.5 the pendulum's frequency differs from w by theta0^2/16 ~ 1.6% (3% in (w h)^2), and the
+// quadratic term of the compounding adds a few percent more over the run
+inline constexpr double linearised_drift_band = 0.1;
+
+// Richardson estimate (y_h - y_h/2) 2^p / (2^p - 1) against the true error: off by the next order's share,
+// O(h) relative, a few percent at h = T/80 for RK4
+inline constexpr double richardson_band = 0.2;
+
 }  // namespace stepwise::tolerance

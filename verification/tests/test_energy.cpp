@@ -58,16 +58,16 @@ TEST(Energy, ExplicitEulerGrowsAndImplicitEulerDecays) {
   const double predicted_after_one = wh * wh * n;  // (1 + (wh)^2)^n - 1 ~ n (wh)^2 for the first period
   std::cout << "after 1 period: explicit " << ex.front() << ", implicit " << im.front() << ", predicted +-"
             << predicted_after_one << "; after " << periods << ": explicit " << ex.back() << ", implicit " << im.back() << '\n';
-  EXPECT_NEAR(ex.front(), predicted_after_one, 0.1 * predicted_after_one);
-  EXPECT_NEAR(im.front(), -predicted_after_one, 0.1 * predicted_after_one);
+  EXPECT_NEAR(ex.front(), predicted_after_one, tolerance::linearised_drift_band * predicted_after_one);
+  EXPECT_NEAR(im.front(), -predicted_after_one, tolerance::linearised_drift_band * predicted_after_one);
   for (size_t i = 1; i < ex.size(); ++i) {
     ASSERT_GT(ex[i], ex[i - 1]) << "explicit Euler energy grows every period, period " << i;
     ASSERT_LT(im[i], im[i - 1]) << "implicit Euler energy decays every period, period " << i;
   }
   // over all periods the same factors compound: e^{+-1000 n (wh)^2} - 1
   const double compound = 1000 * n * wh * wh;
-  EXPECT_NEAR(std::log1p(ex.back()), compound, 0.1 * compound);
-  EXPECT_NEAR(std::log1p(im.back()), -compound, 0.1 * compound);
+  EXPECT_NEAR(std::log1p(ex.back()), compound, tolerance::linearised_drift_band * compound);
+  EXPECT_NEAR(std::log1p(im.back()), -compound, tolerance::linearised_drift_band * compound);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include "models/model.hpp"
 #include "models/pendulum.hpp"
 #include "solvers/fd_jacobian.hpp"
+#include "verification/tolerances.hpp"
 
 #include <gtest/gtest.h>
 
@@ -44,8 +45,7 @@ TEST(Models, AnalyticJacobianMatchesCentralDifferences) {
       Eigen::MatrixXd analytic(n, n), fd(n, n);
       model->jacobian(t, y, analytic);
       fd_jacobian(*model, t, y, fd);
-      // central differences with d = eps^(1/3): error O(d^2 |f'''|) + O(eps |f| / d) ~ 1e-10 for O(1) derivatives
-      EXPECT_LT((analytic - fd).lpNorm<Eigen::Infinity>(), 1e-9 * (1 + analytic.lpNorm<Eigen::Infinity>())) << label(c);
+      EXPECT_LT((analytic - fd).lpNorm<Eigen::Infinity>(), tolerance::jacobian_fd * (1 + analytic.lpNorm<Eigen::Infinity>())) << label(c);
     }
   }
 }
@@ -57,12 +57,11 @@ TEST(Models, ExactSolutionSatisfiesTheOde) {
     EXPECT_LT((model->exact(0) - model->initial_state()).lpNorm<Eigen::Infinity>(), 1e-14) << label(c);
     Eigen::VectorXd f(model->size());
     for (const double t : {0.1, 0.55, 0.9}) {
-      // d/dt of the exact solution by a central difference, h = 1e-5: truncation h^2 |y'''| / 6 ~ 1e-10,
-      // round-off eps |y| / h ~ 1e-11
-      const double h = 1e-5;
+      // d/dt of the exact solution by a central difference
+      const double h = tolerance::exact_derivative_fd_step;
       const Eigen::VectorXd dydt = (model->exact(t + h) - model->exact(t - h)) / (2 * h);
       model->rhs(t, model->exact(t), f);
-      EXPECT_LT((dydt - f).lpNorm<Eigen::Infinity>(), 1e-7 * (1 + f.lpNorm<Eigen::Infinity>())) << label(c) << " t=" << t << " dydt " << dydt.transpose() << " f " << f.transpose();
+      EXPECT_LT((dydt - f).lpNorm<Eigen::Infinity>(), tolerance::exact_ode_residual * (1 + f.lpNorm<Eigen::Infinity>())) << label(c) << " t=" << t << " dydt " << dydt.transpose() << " f " << f.transpose();
     }
   }
 }
@@ -74,7 +73,7 @@ TEST(Models, ExactPendulumConservesEnergyAndHasTheEllipticPeriod) {
   const double period = pendulum_period(theta0, 9.81, 1.0);
   for (int k = 1; k <= 1000; k += 37) {
     const double t = 0.123 * k;
-    EXPECT_NEAR(*model->energy(model->exact(t)), e0, 1e-12 * e0);
+    EXPECT_NEAR(*model->energy(model->exact(t)), e0, tolerance::exact_invariant * e0);
   }
   // after whole periods the state returns; far along, the reduction modulo 4K keeps the digits
   EXPECT_LT((model->exact(1000 * period) - model->initial_state()).lpNorm<Eigen::Infinity>(), 1e-9);

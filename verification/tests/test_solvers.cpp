@@ -86,7 +86,7 @@ TEST(Solvers, GslImplicitSteppersRunWithoutAnAnalyticJacobian) {
       // the Jacobian only steers the iteration: central differences (relative error ~1e-10) change the result
       // by no more than the iteration's own tolerance
       const double difference = (a.trajectory.y.back() - b.trajectory.y.back()).lpNorm<Eigen::Infinity>();
-      EXPECT_LT(difference, 1e-6) << method;
+      EXPECT_LT(difference, tolerance::jacobian_steering) << method;
     }
   }
 }
