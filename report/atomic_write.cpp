@@ -11,7 +11,7 @@
 namespace stepwise {
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
-  std::string tmp = (path.parent_path() / ("." + path.filename().string() + ".XXXXXX")).string();
+  std::string tmp = (path.parent_path() / fmt::format(".{}.XXXXXX", path.filename().string())).string();
   const int fd = mkstemp(tmp.data());
   if (fd < 0) throw std::runtime_error(fmt::format("{}: cannot create a temporary file: {}", path.string(), std::strerror(errno)));
   const char* p = content.data();

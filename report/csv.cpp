@@ -11,17 +11,27 @@ std::string cell_text(const Cell& cell) {
   const auto& s = std::get<std::string>(cell);
   if (s.find_first_of(",\"\n") == std::string::npos) return s;
   std::string quoted = "\"";
-  for (char c : s) quoted += (c == '"') ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
+  for (char c : s) {
+    quoted += c;
+    if (c == '"') quoted += c;  // a quote inside a quoted field is doubled
+  }
+  quoted += '"';
+  return quoted;
 }
 }  // namespace
 
 std::string to_csv(const Table& table) {
   std::string out;
-  for (size_t i = 0; i < table.columns.size(); ++i) out += (i ? "," : "") + cell_text(table.columns[i]);
+  for (size_t i = 0; i < table.columns.size(); ++i) {
+    if (i) out += ',';
+    out += cell_text(table.columns[i]);
+  }
   out += '\n';
   for (const auto& row : table.rows) {
-    for (size_t i = 0; i < row.size(); ++i) out += (i ? "," : "") + cell_text(row[i]);
+    for (size_t i = 0; i < row.size(); ++i) {
+      if (i) out += ',';
+      out += cell_text(row[i]);
+    }
     out += '\n';
   }
   return out;

@@ -67,7 +67,7 @@ int report_command(bool quick, const std::string& out) {
   try {
     ensure_writable_directory(parent);
     // the report is built beside its target and swapped in whole at the end
-    std::string pattern = (parent / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
+    std::string pattern = (parent / fmt::format(".{}.tmp-XXXXXX", target.filename().string())).string();
     if (!mkdtemp(pattern.data())) throw std::runtime_error(fmt::format("{}: cannot create a staging directory", parent.string()));
     staging = pattern;
   } catch (const std::runtime_error& e) {
@@ -84,7 +84,7 @@ int report_command(bool quick, const std::string& out) {
   write_file_atomic(staging / "report.md", md);
 
   // swap: the old report is moved aside, the new one renamed into place, then the old one removed
-  const fs::path old = parent / ("." + target.filename().string() + ".old");
+  const fs::path old = parent / fmt::format(".{}.old", target.filename().string());
   std::error_code ec;
   fs::remove_all(old, ec);
   if (fs::exists(target)) fs::rename(target, old);

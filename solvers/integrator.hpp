@@ -21,6 +21,18 @@ struct StepControl {
   double max_step = std::numeric_limits<double>::infinity();  // cap on an adaptive step (s)
   double blowup = 1e12;  // a state with |y|inf > blowup * max(1, |y0|inf) has diverged
   long max_steps = 5'000'000;  // an adaptive run taking more steps (CVODE: between two outputs) fails
+
+  static StepControl fixed(double dt) {
+    StepControl c;
+    c.dt = dt;
+    return c;
+  }
+  static StepControl adaptive(double rtol, double atol) {
+    StepControl c;
+    c.rtol = rtol;
+    c.atol = atol;
+    return c;
+  }
 };
 
 struct Stats {

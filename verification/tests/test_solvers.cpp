@@ -34,26 +34,13 @@ class SelfCounting final : public OdeSystem {
   bool hide_;
 };
 
-StepControl fixed(double dt) {
-  StepControl c;
-  c.dt = dt;
-  return c;
-}
-
-StepControl adaptive(double rtol, double atol) {
-  StepControl c;
-  c.rtol = rtol;
-  c.atol = atol;
-  return c;
-}
-
 TEST(Solvers, EveryCallOfTheRightHandSideIsCountedWithOrWithoutAnAnalyticJacobian) {
   const auto model = make_model("pendulum", {{"theta0", 2.0}});
   const std::vector<double> t_out{1.0, 2.0};
   for (const auto& method : methods()) {
     for (const bool hide : {false, true}) {
       SelfCounting system(*model, hide);
-      const auto control = method.adaptive ? adaptive(1e-8, 1e-10) : fixed(1e-2);
+      const auto control = method.adaptive ? StepControl::adaptive(1e-8, 1e-10) : StepControl::fixed(1e-2);
       const RunResult r = make_integrator(method.name, control)->integrate(system, 0, model->initial_state(), t_out);
       ASSERT_EQ(r.status, Status::ok) << method.name << ": " << r.message;
       // difference-quotient Jacobians (CVODE's, GSL's implicit steppers') included: nothing escapes the wrapper
@@ -66,7 +53,7 @@ TEST(Solvers, EveryCallOfTheRightHandSideIsCountedWithOrWithoutAnAnalyticJacobia
 TEST(Solvers, CvodeAdamsRunsWithItsFixedPointSolver) {
   // with CVODE's default Newton solver and no linear solver, CVode returns -13 (CV_LINIT_FAIL)
   const auto model = make_model("pendulum");
-  const Measured m = run_and_measure(*model, "cvode-adams", adaptive(1e-10, 1e-12), 10.0, 1.0);
+  const Measured m = run_and_measure(*model, "cvode-adams", StepControl::adaptive(1e-10, 1e-12), 10.0, 1.0);
   ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
   EXPECT_EQ(m.result.stats.linear_solves, 0) << "fixed-point iteration solves no linear system";
   EXPECT_LT(*m.error, 1e-6);
@@ -76,7 +63,7 @@ TEST(Solvers, GslImplicitSteppersRunWithoutAnAnalyticJacobian) {
   // GSL 2.7's rk1imp, rk2imp, rk4imp, bsimp and msbdf dereference the Jacobian: NULL segfaults
   const auto model = make_model("pendulum");
   for (const char* method : {"gsl-rk1imp", "gsl-rk2imp", "gsl-rk4imp", "gsl-bsimp", "gsl-msbdf"}) {
-    for (const auto& control : {fixed(1e-2), adaptive(1e-8, 1e-10)}) {
+    for (const auto& control : {StepControl::fixed(1e-2), StepControl::adaptive(1e-8, 1e-10)}) {
       SelfCounting without(*model, true), with(*model, false);
       const auto integrator = make_integrator(method, control);
       const RunResult a = integrator->integrate(without, 0, model->initial_state(), std::vector{2.0});
@@ -97,8 +84,8 @@ TEST(Solvers, GslRk4CostsElevenCallsPerStepAndIsSixteenTimesMoreAccurate) {
   // Fixed-step comparisons must therefore count RHS evaluations, not steps.
   const auto model = make_model("pendulum", {{"theta0", 1.0}});
   const double h = 2.0 / 400;
-  const Measured textbook = run_and_measure(*model, "rk4", fixed(h), 2.0, 2.0);
-  const Measured gsl = run_and_measure(*model, "gsl-rk4", fixed(h), 2.0, 2.0);
+  const Measured textbook = run_and_measure(*model, "rk4", StepControl::fixed(h), 2.0, 2.0);
+  const Measured gsl = run_and_measure(*model, "gsl-rk4", StepControl::fixed(h), 2.0, 2.0);
   EXPECT_EQ(textbook.result.stats.rhs_evals, 4 * textbook.result.stats.steps);
   EXPECT_EQ(gsl.result.stats.rhs_evals, 11 * gsl.result.stats.steps);
   const double ratio = *textbook.error / *gsl.error;
@@ -110,7 +97,7 @@ TEST(Solvers, FixedStepGslRunsAreNeverRejectedByErrorControl) {
   // gsl_odeiv2_driver_apply_fixed_step would test this step against the tolerance and fail; a fixed step is a fixed step
   const auto model = make_model("pendulum", {{"theta0", 2.0}});
   for (const char* method : {"gsl-rkf45", "gsl-rkck", "gsl-rk8pd", "gsl-rk2"}) {
-    StepControl control = fixed(0.25);
+    StepControl control = StepControl::fixed(0.25);
     control.rtol = 1e-12;
     control.atol = 1e-15;
     const Measured m = run_and_measure(*model, method, control, 10.0, 10.0);
@@ -133,7 +120,7 @@ TEST(Solvers, ABlowUpIsReportedAsDivergedAtTheTimeItHappened) {
   const std::vector<double> t_out{0.5, 1.5, 2.0};
   for (const auto& method : methods()) {
     if (method.needs_second_order) continue;
-    auto control = method.adaptive ? adaptive(1e-8, 1e-10) : fixed(1e-4);
+    auto control = method.adaptive ? StepControl::adaptive(1e-8, 1e-10) : StepControl::fixed(1e-4);
     // CVODE Adams' fixed-point iteration needs h |df/dy| = 2 h y < 1, so its steps collapse near the
     // singularity: a step budget ends it (measured: 5e7 steps, a minute, without one)
     control.max_steps = 200'000;
@@ -154,11 +141,11 @@ TEST(Solvers, ABlowUpIsReportedAsDivergedAtTheTimeItHappened) {
 TEST(Solvers, ExplicitEulerBlowsUpOnStiffDragBeyondItsStabilityLimit) {
   // v' = -k v: explicit Euler multiplies v by (1 - k dt) per step, unstable for dt > 2/k
   const auto model = make_model("projectile", {{"drag", 100.0}});
-  const Measured m = run_and_measure(*model, "euler", fixed(0.05), 10.0, 0.1);
+  const Measured m = run_and_measure(*model, "euler", StepControl::fixed(0.05), 10.0, 0.1);
   EXPECT_EQ(m.result.status, Status::diverged);
   EXPECT_LT(m.result.t_stop, 10.0);
   EXPECT_FALSE(m.error.has_value());
-  const Measured implicit = run_and_measure(*model, "implicit-euler", fixed(0.05), 10.0, 0.1);
+  const Measured implicit = run_and_measure(*model, "implicit-euler", StepControl::fixed(0.05), 10.0, 0.1);
   EXPECT_EQ(implicit.result.status, Status::ok);
 }
 
@@ -168,8 +155,8 @@ TEST(Solvers, ExplicitAndImplicitEulerShareVelocitiesButNotPositionsUnderConstan
   // (implicit), so y_implicit - y_explicit = h (vy_n - vy_0) = -h g t_n exactly, and x agrees.
   const double h = 1e-2, t_end = 2.0, g = 9.81;
   const auto model = make_model("projectile", {{"drag", 0.0}, {"g", g}});
-  const Measured ex = run_and_measure(*model, "euler", fixed(h), t_end, t_end);
-  const Measured im = run_and_measure(*model, "implicit-euler", fixed(h), t_end, t_end);
+  const Measured ex = run_and_measure(*model, "euler", StepControl::fixed(h), t_end, t_end);
+  const Measured im = run_and_measure(*model, "implicit-euler", StepControl::fixed(h), t_end, t_end);
   const Eigen::VectorXd a = ex.result.trajectory.y.back(), b = im.result.trajectory.y.back();
   const double ulp = std::numeric_limits<double>::epsilon();
   const double roundoff = tolerance::roundoff_per_step * ulp * static_cast<double>(ex.result.stats.steps);
@@ -179,19 +166,19 @@ TEST(Solvers, ExplicitAndImplicitEulerShareVelocitiesButNotPositionsUnderConstan
   EXPECT_NEAR(b[1] - a[1], -h * g * t_end, roundoff * (1 + std::abs(a[1])));
   // with drag, even the velocities part: (1 - k h)^n against (1 + k h)^-n
   const auto dragged = make_model("projectile", {{"drag", 1.0}});
-  const Measured ex2 = run_and_measure(*dragged, "euler", fixed(h), t_end, t_end);
-  const Measured im2 = run_and_measure(*dragged, "implicit-euler", fixed(h), t_end, t_end);
+  const Measured ex2 = run_and_measure(*dragged, "euler", StepControl::fixed(h), t_end, t_end);
+  const Measured im2 = run_and_measure(*dragged, "implicit-euler", StepControl::fixed(h), t_end, t_end);
   EXPECT_GT(std::abs(ex2.result.trajectory.y.back()[2] - im2.result.trajectory.y.back()[2]), 1e-3);
 }
 
 TEST(Solvers, UnknownMethodsAndMismatchedStepControlsAreRefused) {
-  EXPECT_THROW(make_integrator("rk5", fixed(0.1)), BadMethod);
-  EXPECT_THROW(make_integrator("rk4", adaptive(1e-6, 1e-9)), BadMethod);
-  EXPECT_THROW(make_integrator("cvode-bdf", fixed(0.1)), BadMethod);
-  EXPECT_THROW(make_integrator("rk4", fixed(-1)), BadMethod);
-  EXPECT_THROW(make_integrator("gsl-rkf45", adaptive(0, 1e-9)), BadMethod);
+  EXPECT_THROW(make_integrator("rk5", StepControl::fixed(0.1)), BadMethod);
+  EXPECT_THROW(make_integrator("rk4", StepControl::adaptive(1e-6, 1e-9)), BadMethod);
+  EXPECT_THROW(make_integrator("cvode-bdf", StepControl::fixed(0.1)), BadMethod);
+  EXPECT_THROW(make_integrator("rk4", StepControl::fixed(-1)), BadMethod);
+  EXPECT_THROW(make_integrator("gsl-rkf45", StepControl::adaptive(0, 1e-9)), BadMethod);
   const auto flow = make_model("flow-particle");
-  EXPECT_THROW(make_integrator("symplectic-euler", fixed(0.1))->integrate(*flow, 0, flow->initial_state(), std::vector{1.0}),
+  EXPECT_THROW(make_integrator("symplectic-euler", StepControl::fixed(0.1))->integrate(*flow, 0, flow->initial_state(), std::vector{1.0}),
                BadMethod);
 }
 
