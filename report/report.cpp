@@ -65,6 +65,10 @@ int report_command(bool quick, const std::string& out) {
   const fs::path parent = target.parent_path();
   fs::path staging;
   try {
+    // the old report is replaced whole: never a directory that is something else (a source folder, a home)
+    if (fs::exists(target) && !(fs::is_directory(target) && (fs::is_empty(target) || fs::exists(target / "report.md"))))
+      throw std::runtime_error(fmt::format("{}: exists and is not a stepwise report (no report.md); refusing to replace it",
+                                           target.string()));
     ensure_writable_directory(parent);
     // the report is built beside its target and swapped in whole at the end
     std::string pattern = (parent / fmt::format(".{}.tmp-XXXXXX", target.filename().string())).string();

@@ -142,5 +142,16 @@ TEST_F(Cli, ARerunReplacesOutputsWholeAndLeavesNoTemporaryFiles) {
   EXPECT_EQ(files, 2);
 }
 
+TEST_F(Cli, ReportRefusesToReplaceADirectoryThatIsNotAReport) {
+  // the report swaps its directory in whole; `--out report` in the source tree must not delete the sources
+  const fs::path precious = dir_ / "precious";
+  fs::create_directories(precious);
+  std::ofstream(precious / "source.cpp") << "int main() {}\n";
+  const Output o = run(fmt::format("report --quick --out '{}'", precious.string()));
+  EXPECT_EQ(o.status, 2) << o.err;
+  EXPECT_NE(o.err.find("not a stepwise report"), std::string::npos) << o.err;
+  EXPECT_TRUE(fs::exists(precious / "source.cpp"));
+}
+
 }  // namespace
 }  // namespace stepwise
