@@ -1,5 +1,5 @@
-// Google Benchmark main that prints, after the usual table, the ratio of each benchmark to its peer
-// measured in the same run: "ratio A / B = x".
+// Google Benchmark main that prints, after the usual table, the ratio of each benchmark's CPU time to its
+// peer's measured in the same run: "ratio A / B = x". With --benchmark_repetitions the medians are compared.
 #pragma once
 
 #include <benchmark/benchmark.h>
@@ -15,8 +15,13 @@ class RatioReporter : public benchmark::ConsoleReporter {
  public:
   explicit RatioReporter(std::vector<std::pair<std::string, std::string>> pairs) : pairs_(std::move(pairs)) {}
   void ReportRuns(const std::vector<Run>& runs) override {
-    for (const auto& run : runs)
-      if (run.run_type == Run::RT_Iteration) cpu_[run.benchmark_name()] = run.GetAdjustedCPUTime();
+    for (const auto& run : runs) {
+      if (run.run_type == Run::RT_Iteration && !median_.contains(run.run_name.str())) cpu_[run.run_name.str()] = run.GetAdjustedCPUTime();
+      if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median") {
+        median_[run.run_name.str()] = true;
+        cpu_[run.run_name.str()] = run.GetAdjustedCPUTime();
+      }
+    }
     ConsoleReporter::ReportRuns(runs);
   }
   void Finalize() override {
@@ -28,6 +33,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
  private:
   std::vector<std::pair<std::string, std::string>> pairs_;
   std::map<std::string, double> cpu_;
+  std::map<std::string, bool> median_;  // names whose median has been seen
 };
 
 // run every registered benchmark and print the ratios of the given pairs (names as Google Benchmark prints them)

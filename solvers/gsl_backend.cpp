@@ -42,13 +42,14 @@ void switch_off_abort_handler() {
 // what GSL's C callbacks reach through their void* parameter
 struct Callbacks {
   const CountedSystem* system;
+  int n;                       // system->size(), read once: the RHS callback is the hot path
   Eigen::MatrixXd jac;         // df/dy (n x n), column-major scratch
   Eigen::VectorXd fp, fm;      // scratch for df/dt
 };
 
 int gsl_rhs(double t, const double y[], double dydt[], void* params) {
   const auto& c = *static_cast<Callbacks*>(params);
-  const int n = c.system->size();
+  const int n = c.n;
   Eigen::Map<Eigen::VectorXd> out(dydt, n);
   // counted here and the inner system called directly: one virtual call per evaluation, not two
   ++c.system->stats().rhs_evals;
@@ -81,7 +82,7 @@ int gsl_jacobian(double t, const double y[], double* dfdy, double dfdt[], void* 
 class GslSession {
  public:
   GslSession(const CountedSystem& system, const gsl_odeiv2_step_type* type, double h0, const StepControl& control)
-      : callbacks_{&system, Eigen::MatrixXd(system.size(), system.size()), Eigen::VectorXd(system.size()),
+      : callbacks_{&system, system.size(), Eigen::MatrixXd(system.size(), system.size()), Eigen::VectorXd(system.size()),
                    Eigen::VectorXd(system.size())},
         sys_{gsl_rhs, gsl_jacobian, static_cast<size_t>(system.size()), &callbacks_},
         driver_(gsl_odeiv2_driver_alloc_y_new(&sys_, type, h0, control.atol, control.rtol)),
