@@ -69,6 +69,8 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--atol", run.atol, "absolute tolerance (adaptive)");
   run_cmd->add_option("--t-end", run.t_end, "end time (s)");
   run_cmd->add_option("--output-dt", run.output_dt, "trajectory sampling interval (s), default t_end/1000");
+  run_cmd->add_option("--event-location", run.event_location,
+                      "linear (the seeds' segment method, default) or restep (re-step to the root of g)");
   run_cmd->add_option("--out", run.out, "output directory")->required();
 
   std::string study_name, study_out;

@@ -95,6 +95,12 @@ Prepared prepare(const RunOptions& o) {
   if (method->needs_second_order && !p.model->second_order())
     throw InputError(fmt::format("--method: {} needs a second-order model y = (x, v); {} is first order", p.method, s.model));
 
+  const std::string location = o.event_location.value_or(s.event_location.value_or("linear"));
+  if (location == "restep") p.control.event_location = EventLocation::restep;
+  else if (location != "linear")
+    throw InputError(fmt::format("{}: event location '{}' is neither linear nor restep",
+                                 o.event_location ? "--event-location" : s.where("run.event_location"), location));
+
   p.t_end = o.t_end.value_or(s.t_end.value_or(10.0));
   if (p.control.dt && *p.control.dt > p.t_end)
     throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.t_end));

@@ -11,6 +11,7 @@ struct RunOptions {
   std::string scene_file;
   std::vector<std::string> sets;  // "key=value" overrides of scene parameters
   std::optional<std::string> method;
+  std::optional<std::string> event_location;  // linear | restep
   std::optional<double> dt, rtol, atol, t_end, output_dt;
   std::string out;
 };

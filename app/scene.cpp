@@ -68,12 +68,16 @@ Scene load_scene(const std::string& file) {
           const auto* s = value.as_string();
           if (!s) throw InputError(fmt::format("{}:{}: {}: expected a string", file, line_of(value), full));
           scene.method = s->get();
+        } else if (name == "event_location") {
+          const auto* s = value.as_string();
+          if (!s) throw InputError(fmt::format("{}:{}: {}: expected a string", file, line_of(value), full));
+          scene.event_location = s->get();
         } else if (name == "t_end") scene.t_end = number(value, scene, full);
         else if (name == "dt") scene.dt = number(value, scene, full);
         else if (name == "rtol") scene.rtol = number(value, scene, full);
         else if (name == "atol") scene.atol = number(value, scene, full);
         else if (name == "output_dt") scene.output_dt = number(value, scene, full);
-        else throw InputError(fmt::format("{}:{}: {}: unknown key (run takes t_end, method, dt, rtol, atol, output_dt)", file, line_of(value), full));
+        else throw InputError(fmt::format("{}:{}: {}: unknown key (run takes t_end, method, dt, rtol, atol, output_dt, event_location)", file, line_of(value), full));
       }
     } else {
       throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run])", file, line_of(node), key));

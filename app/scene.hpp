@@ -3,7 +3,7 @@
 //   model = "pendulum"
 //   [parameters]   # the model's keys (see `stepwise scenes`), numbers only
 //   theta0 = 1.0
-//   [run]          # t_end (s), method, dt (s) or rtol/atol, output_dt (s)
+//   [run]          # t_end (s), method, dt (s) or rtol/atol, output_dt (s), event_location
 //   t_end = 10.0
 //   method = "rk4"
 //   dt = 1e-3
@@ -31,6 +31,7 @@ struct Scene {
   std::map<std::string, int, std::less<>> lines;  // line of each key ("model", "parameters.g", "run.dt")
   std::optional<double> t_end, dt, rtol, atol, output_dt;
   std::optional<std::string> method;
+  std::optional<std::string> event_location;
 
   // "file:line: key" where the key was written, "file: key" otherwise
   std::string where(const std::string& key) const;

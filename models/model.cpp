@@ -1,5 +1,6 @@
 #include "model.hpp"
 
+#include "bouncing_ball.hpp"
 #include "flow_particle.hpp"
 #include "pendulum.hpp"
 #include "projectile.hpp"
@@ -28,6 +29,8 @@ const std::array model_table{
               flow_particle_3d_params(), [](const Params& p) { return make_flow_particle_3d(p); }},
     ModelInfo{"projectile", "particle under gravity with optional linear drag; exact solution",
               projectile_params(), [](const Params& p) { return make_projectile(p); }},
+    ModelInfo{"bouncing-ball", "ball dropped on the ground plane with restitution; exact impact times and apex heights",
+              bouncing_ball_params(), [](const Params& p) { return make_bouncing_ball(p); }},
 };
 
 }  // namespace
@@ -55,6 +58,8 @@ Params resolve_params(const ModelInfo& model, const Params& values) {
       throw BadParameter(key, fmt::format("parameter '{}' must be positive, got {}", key, value));
     if (spec->bound == Bound::nonnegative && !(value >= 0))
       throw BadParameter(key, fmt::format("parameter '{}' must be non-negative, got {}", key, value));
+    if (spec->bound == Bound::unit_interval && !(value >= 0 && value <= 1))
+      throw BadParameter(key, fmt::format("parameter '{}' must lie in [0, 1], got {}", key, value));
     resolved[key] = value;
   }
   return resolved;

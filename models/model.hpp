@@ -18,7 +18,7 @@
 namespace stepwise {
 
 // what values a parameter may take
-enum class Bound { finite, positive, nonnegative };
+enum class Bound { finite, positive, nonnegative, unit_interval };
 
 struct ParamSpec {
   std::string_view key;

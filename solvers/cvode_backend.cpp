@@ -5,6 +5,9 @@
 //   CV_LINIT_FAIL): Adams gets SUNNonlinSol_FixedPoint, BDF gets Newton with a direct linear solver;
 // - CVodeGetNumRhsEvals misses the calls made for difference-quotient Jacobians and is reset by
 //   CVodeReInit: every call of f is counted in the CountedSystem wrapper instead;
+// - events use CVODE's rootfinding (CVodeRootInit, CVodeSetRootDirection); after a root the handler changes
+//   the state and CVodeReInit restarts there, which resets CVODE's counters, so they are summed across
+//   re-initialisations; a root exactly at the restart point is not reported again by CVODE;
 // - a right-hand side that produces non-finite values returns 1 (recoverable): CVODE cuts the step,
 //   and a run that still fails is reported as diverged, not as a solver failure.
 #include "cvode_backend.hpp"
@@ -20,6 +23,7 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <algorithm>
 #include <cstdlib>
 
 namespace stepwise {
@@ -89,6 +93,15 @@ int cvode_sparse_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void
   return 0;
 }
 
+int cvode_roots(sunrealtype t, N_Vector y, sunrealtype* gout, void* user_data) {
+  const auto& c = *static_cast<Callbacks*>(user_data);
+  const auto n = static_cast<Eigen::Index>(N_VGetLength(y));
+  const Eigen::VectorXd state = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(y), n);
+  const auto events = c.system->events();
+  for (size_t i = 0; i < events.size(); ++i) gout[i] = events[i].g(t, state);
+  return 0;
+}
+
 void cvode_error_handler(int, const char* module, const char* function, char* msg, void* user_data) {
   static_cast<Callbacks*>(user_data)->last_error = fmt::format("{}:{}: {}", module, function, msg);
 }
@@ -100,8 +113,7 @@ class CvodeIntegrator final : public Integrator {
 
   RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                       std::span<const double> t_out) const override {
-    RunResult result = begin_run(system, method_, t0, y0);
-    if (result.status != Status::ok) return result;
+    RunResult result = begin_run(t0, y0);
     const double start = thread_cpu_seconds();
     CountedSystem counted(system, result.stats);
     const int n = system.size();
@@ -127,8 +139,8 @@ class CvodeIntegrator final : public Integrator {
     if (const int code = CVodeSetUserData(mem.get(), &callbacks)) return setup_failed("CVodeSetUserData", code);
     if (const int code = CVodeSStolerances(mem.get(), control_.rtol, control_.atol)) return setup_failed("CVodeSStolerances", code);
     if (const int code = CVodeSetMaxNumSteps(mem.get(), control_.max_steps)) return setup_failed("CVodeSetMaxNumSteps", code);
-    if (std::isfinite(control_.max_step)) {
-      if (const int code = CVodeSetMaxStep(mem.get(), control_.max_step)) return setup_failed("CVodeSetMaxStep", code);
+    if (const double max_step = max_adaptive_step(control_, system); std::isfinite(max_step)) {
+      if (const int code = CVodeSetMaxStep(mem.get(), max_step)) return setup_failed("CVodeSetMaxStep", code);
     }
 
     // nonlinear and linear solvers: fixed point for Adams; Newton with dense LU or KLU for BDF
@@ -155,11 +167,55 @@ class CvodeIntegrator final : public Integrator {
       }
     }
 
+    // events: CVODE's rootfinding with each event's direction; after a root, the handler and a re-initialisation
+    const auto events = system.events();
+    if (!events.empty()) {
+      std::vector<int> directions;
+      for (const auto& e : events) directions.push_back(e.direction);
+      if (const int code = CVodeRootInit(mem.get(), static_cast<int>(events.size()), cvode_roots)) return setup_failed("CVodeRootInit", code);
+      if (const int code = CVodeSetRootDirection(mem.get(), directions.data())) return setup_failed("CVodeSetRootDirection", code);
+    }
+    std::vector<int> roots_found(events.size());
+
+    // CVODE's own counters for steps, rejections and linear algebra, summed over re-initialisations (which
+    // reset them); f is counted in the wrapper
+    auto add_counters = [&] {
+      long steps = 0, error_fails = 0, convergence_fails = 0, setups = 0, iterations = 0, fd_jacobians = 0;
+      CVodeGetNumSteps(mem.get(), &steps);
+      CVodeGetNumErrTestFails(mem.get(), &error_fails);
+      CVodeGetNumNonlinSolvConvFails(mem.get(), &convergence_fails);
+      result.stats.steps += steps;
+      result.stats.rejected += error_fails + convergence_fails;
+      if (!bdf_) return;
+      CVodeGetNumLinSolvSetups(mem.get(), &setups);
+      CVodeGetNumNonlinSolvIters(mem.get(), &iterations);
+      CVodeGetNumJacEvals(mem.get(), &fd_jacobians);
+      // analytic Jacobians are counted in the callbacks; difference-quotient ones only by CVODE
+      if (!system.has_jacobian() && !system.has_sparse_jacobian()) result.stats.jac_evals += fd_jacobians;
+      result.stats.factorizations += setups;
+      result.stats.linear_solves += iterations;
+    };
+
     const double bound = divergence_bound(control_, y0);
     Eigen::Map<Eigen::VectorXd> ym(N_VGetArrayPointer(y.get()), n);
     double t = t0;
     for (const double target : t_out) {
-      const int code = CVode(mem.get(), target, y.get(), &t, CV_NORMAL);
+      int code = CV_SUCCESS;
+      while (true) {
+        code = CVode(mem.get(), target, y.get(), &t, CV_NORMAL);
+        if (code != CV_ROOT_RETURN) break;
+        CVodeGetRootInfo(mem.get(), roots_found.data());
+        const auto hit = std::find_if(roots_found.begin(), roots_found.end(), [](int r) { return r != 0; });
+        Eigen::VectorXd y_event = ym;
+        handle_event(result, events[static_cast<size_t>(hit - roots_found.begin())], t, y_event);
+        ym = y_event;
+        add_counters();
+        if (const int re = CVodeReInit(mem.get(), t, y.get())) {
+          code = re;
+          break;
+        }
+        if (t >= target) break;
+      }
       if (code < 0) {
         if (callbacks.non_finite || has_diverged(ym, bound)) mark_diverged(result, t);
         else mark_failed(result, t, fmt::format("{}: CVode returned {} ({}) at t = {:.9g}: {}", method_, code,
@@ -172,24 +228,7 @@ class CvodeIntegrator final : public Integrator {
       }
       record_output(result, t, ym);
     }
-
-    // CVODE's own counters for steps, rejections and linear algebra; f is counted in the wrapper
-    long steps = 0, error_fails = 0, convergence_fails = 0, setups = 0, iterations = 0;
-    CVodeGetNumSteps(mem.get(), &steps);
-    CVodeGetNumErrTestFails(mem.get(), &error_fails);
-    CVodeGetNumNonlinSolvConvFails(mem.get(), &convergence_fails);
-    result.stats.steps = steps;
-    result.stats.rejected = error_fails + convergence_fails;
-    if (bdf_) {
-      CVodeGetNumLinSolvSetups(mem.get(), &setups);
-      CVodeGetNumNonlinSolvIters(mem.get(), &iterations);
-      long fd_jacobians = 0;
-      CVodeGetNumJacEvals(mem.get(), &fd_jacobians);
-      // analytic Jacobians are counted in the callbacks; difference-quotient ones only by CVODE
-      if (!system.has_jacobian() && !system.has_sparse_jacobian()) result.stats.jac_evals = fd_jacobians;
-      result.stats.factorizations = setups;
-      result.stats.linear_solves = iterations;
-    }
+    add_counters();
     result.stats.cpu_seconds = thread_cpu_seconds() - start;
     return result;
   }

@@ -1,13 +1,13 @@
 #include "fixed_step.hpp"
 
+#include "events.hpp"
 #include "run_support.hpp"
 
 namespace stepwise {
 
 RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                                          std::span<const double> t_out) const {
-  RunResult result = begin_run(system, method_, t0, y0);
-  if (result.status != Status::ok) return result;
+  RunResult result = begin_run(t0, y0);
   const double start = thread_cpu_seconds();
   CountedSystem counted(system, result.stats);
   auto stepper = make_stepper_(counted);
@@ -16,13 +16,17 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
   // a step ending within this of an output time lands on it instead of leaving a sliver
   const double snap = 1e-9 * dt;
 
-  Eigen::VectorXd y = y0;
+  Eigen::VectorXd y = y0, y_start;
   double t = t0;
   std::string failure;
+  const auto events = system.events();
+  Eigen::VectorXd g_start = event_values(events, t, y);
   for (const double target : t_out) {
     while (t < target) {
-      const double t_next = (target - (t + dt) <= snap) ? target : t + dt;
-      if (!stepper->step(t, t_next - t, y, failure)) {
+      double t_next = (target - (t + dt) <= snap) ? target : t + dt;
+      const double h = t_next - t;
+      y_start = y;
+      if (!stepper->step(t, h, y, failure)) {
         mark_failed(result, t, failure);
         break;
       }
@@ -30,6 +34,25 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
       if (has_diverged(y, bound)) {
         mark_diverged(result, t_next);
         break;
+      }
+      // an event inside the step: move to it, apply its handler, and go on from there
+      if (!events.empty()) {
+        Eigen::VectorXd g_end = event_values(events, t_next, y);
+        if (const auto crossing = first_crossing(events, g_start, g_end)) {
+          const Restep restep = [&](double s, Eigen::VectorXd& ys) {
+            stepper->reset();
+            ys = y_start;
+            return stepper->step(t, s * h, ys, failure);
+          };
+          const Event& event = events[crossing->index];
+          auto [t_event, y_event] = locate_event(event, *crossing, t, h, y_start, y, control_.event_location, restep);
+          handle_event(result, event, t_event, y_event);
+          stepper->reset();
+          y = std::move(y_event);
+          t_next = t_event;
+          g_end = event_values(events, t_next, y);
+        }
+        g_start = std::move(g_end);
       }
       t = t_next;
       result.y_stop = y;

@@ -15,6 +15,8 @@ class FixedStepper {
   virtual ~FixedStepper() = default;
   // advance y in place; on failure return false and say which call failed in `failure`
   virtual bool step(double t, double h, Eigen::VectorXd& y, std::string& failure) = 0;
+  // forget any history: the next step starts afresh (after an event changed the state, or to re-step)
+  virtual void reset() {}
 };
 
 using FixedStepperFactory = std::function<std::unique_ptr<FixedStepper>(const CountedSystem& system)>;

@@ -9,6 +9,7 @@
 // - GSL's default error handler aborts the process: it is switched off once, and return codes are reported.
 #include "gsl_backend.hpp"
 
+#include "events.hpp"
 #include "fd_jacobian.hpp"
 #include "fixed_step.hpp"
 #include "run_support.hpp"
@@ -128,6 +129,7 @@ class GslFixedStepper final : public FixedStepper {
     failure = fmt::format("{}: gsl_odeiv2_step_apply returned {} ({}) at t = {:.9g}", method_, code, gsl_strerror(code), t);
     return false;
   }
+  void reset() override { gsl_odeiv2_step_reset(session_.driver()->s); }
 
  private:
   GslSession session_;
@@ -142,20 +144,24 @@ class GslAdaptiveIntegrator final : public Integrator {
 
   RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                       std::span<const double> t_out) const override {
-    RunResult result = begin_run(system, method_, t0, y0);
-    if (result.status != Status::ok) return result;
+    RunResult result = begin_run(t0, y0);
     const double start = thread_cpu_seconds();
     CountedSystem counted(system, result.stats);
     // first trial step: a small fraction of the first output interval; the control adapts it
-    double h = std::min(control_.max_step, 1e-3 * (t_out.front() - t0));
+    const double max_step = max_adaptive_step(control_, system);
+    double h = std::min(max_step, 1e-3 * (t_out.front() - t0));
     GslSession session(counted, type_, h, control_);
     gsl_odeiv2_driver* d = session.driver();
     const double bound = divergence_bound(control_, y0);
 
-    Eigen::VectorXd y = y0;
+    Eigen::VectorXd y = y0, y_start;
     double t = t0;
+    const auto events = system.events();
+    Eigen::VectorXd g_start = event_values(events, t, y);
     for (const double target : t_out) {
       while (t < target) {
+        y_start = y;
+        const double t_start = t;
         if (result.stats.steps >= control_.max_steps) {
           mark_failed(result, t, fmt::format("{}: more than {} steps before t = {:.9g}", method_, control_.max_steps, target));
           break;
@@ -174,7 +180,29 @@ class GslAdaptiveIntegrator final : public Integrator {
           mark_diverged(result, t);
           break;
         }
-        h = std::min(h, control_.max_step);
+        h = std::min(h, max_step);
+        // an event inside the accepted step: locate it, apply its handler, restart the stepper there
+        if (!events.empty()) {
+          Eigen::VectorXd g_end = event_values(events, t, y);
+          if (const auto crossing = first_crossing(events, g_start, g_end)) {
+            const double taken = t - t_start;
+            const Restep restep = [&](double s, Eigen::VectorXd& ys) {
+              gsl_odeiv2_step_reset(d->s);
+              ys = y_start;
+              return gsl_odeiv2_step_apply(d->s, t_start, s * taken, ys.data(), session.yerr(), nullptr, nullptr,
+                                           session.sys()) == GSL_SUCCESS;
+            };
+            const Event& event = events[crossing->index];
+            auto [t_event, y_event] = locate_event(event, *crossing, t_start, taken, y_start, y, control_.event_location, restep);
+            handle_event(result, event, t_event, y_event);
+            y = std::move(y_event);
+            t = t_event;
+            gsl_odeiv2_evolve_reset(d->e);
+            gsl_odeiv2_step_reset(d->s);
+            g_end = event_values(events, t, y);
+          }
+          g_start = std::move(g_end);
+        }
         result.y_stop = y;
       }
       if (result.status != Status::ok) break;

@@ -13,6 +13,10 @@
 
 namespace stepwise {
 
+// where an event found between two step ends is placed: on the straight segment between the two states
+// (the seeds' method: g interpolated linearly), or by re-stepping from the step's start to the root of g
+enum class EventLocation { linear, restep };
+
 // how a run is stepped: a fixed dt, or adaptively to rtol/atol
 struct StepControl {
   std::optional<double> dt;                                   // fixed step (s); empty: adaptive
@@ -21,6 +25,7 @@ struct StepControl {
   double max_step = std::numeric_limits<double>::infinity();  // cap on an adaptive step (s)
   double blowup = 1e12;  // a state with |y|inf > blowup * max(1, |y0|inf) has diverged
   long max_steps = 5'000'000;  // an adaptive run taking more steps (CVODE: between two outputs) fails
+  EventLocation event_location = EventLocation::linear;  // hand-written and GSL steppers; CVODE finds roots itself
 
   static StepControl fixed(double dt) {
     StepControl c;

@@ -7,6 +7,7 @@
 #include <Eigen/SparseCore>
 
 #include <functional>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -20,10 +21,12 @@ struct SecondOrderView {
 
 // An event g(t, y) = 0 (a collision, a plane crossing) and what happens at it.
 struct Event {
-  std::string kind;                                                      // name written to summary.json ("impact")
+  std::string name;                                                      // what the event is ("ground")
   int direction = 0;                                                     // +1: g rising through 0, -1: falling, 0: either
   std::function<double(double t, const Eigen::VectorXd& y)> g;          // root function
-  std::function<void(double t, Eigen::VectorXd& y)> apply;              // state change at the root (collision response)
+  // state change at the root (a collision response); returns what happened, as summary.json's events
+  // write it ("impact", "rest")
+  std::function<std::string(double t, Eigen::VectorXd& y)> apply;
 };
 
 class OdeSystem {
@@ -52,6 +55,11 @@ class OdeSystem {
 
   // optional events; an empty span means none
   virtual std::span<const Event> events() const { return {}; }
+
+  // the shortest time between two zeros of one event's g (a bouncing ball's shortest flight): adaptive
+  // integrators step at most half of it, so a step never jumps over a pair of crossings and the ball
+  // never passes through the floor unseen
+  virtual double event_free_interval() const { return std::numeric_limits<double>::infinity(); }
 };
 
 }  // namespace stepwise

@@ -30,6 +30,7 @@ class CountedSystem final : public OdeSystem {
   }
   std::optional<SecondOrderView> second_order() const override { return inner_.second_order(); }
   std::span<const Event> events() const override { return inner_.events(); }
+  double event_free_interval() const override { return inner_.event_free_interval(); }
   Stats& stats() const { return stats_; }
   // the wrapped system, for a backend's hot path that counts its calls itself
   const OdeSystem& inner() const { return inner_; }
@@ -44,6 +45,12 @@ inline double thread_cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// the largest step an adaptive integrator may take on this system: the control's cap, and half the
+// shortest event-free interval
+inline double max_adaptive_step(const StepControl& control, const OdeSystem& system) {
+  return std::min(control.max_step, 0.5 * system.event_free_interval());
 }
 
 // |y|inf above which a run has blown up: blowup * max(1, |y0|inf)
@@ -67,15 +74,18 @@ inline void mark_failed(RunResult& result, double t, std::string message) {
   result.message = std::move(message);
 }
 
-// a fresh result at (t0, y0), already failed if the system has events: no integrator here detects them
-// yet, and stepping through them would be silently wrong
-inline RunResult begin_run(const OdeSystem& system, std::string_view method, double t0, const Eigen::VectorXd& y0) {
+// a fresh result at (t0, y0)
+inline RunResult begin_run(double t0, const Eigen::VectorXd& y0) {
   RunResult result;
   result.t_stop = t0;
   result.y_stop = y0;
-  if (!system.events().empty())
-    mark_failed(result, t0, fmt::format("{}: this system has events, which no integrator handles yet", method));
   return result;
+}
+
+// an event handled at t: the state is changed by its handler and the event is recorded
+inline void handle_event(RunResult& result, const Event& event, double t, Eigen::VectorXd& y) {
+  result.events.push_back({t, event.apply(t, y)});
+  ++result.stats.events;
 }
 
 // the state at an output time joins the trajectory

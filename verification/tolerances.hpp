@@ -68,4 +68,11 @@ inline constexpr double linearised_drift_band = 0.1;
 // O(h) relative, a few percent at h = T/80 for RK4
 inline constexpr double richardson_band = 0.2;
 
+// event times: an adaptive code at rtol 1e-10 puts the ball within ~rtol of its path, and CVODE locates the
+// root to ~100 ulps of t; over 27 bounces the errors of successive impacts add
+inline constexpr double event_time_adaptive = 1e-8;
+
+// re-stepping to the root of g with a method exact on the parabola (rk4) leaves round-off in t
+inline constexpr double event_time_restep = 1e-12;
+
 }  // namespace stepwise::tolerance

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -103,6 +104,8 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run scenes/pendulum.toml --set g=nan --out '{}'", out.string()), "--set g"},
       {fmt::format("run scenes/pendulum.toml --set length=0 --out '{}'", out.string()), "--set length"},
       {fmt::format("run scenes/pendulum.toml --dt -1 --out '{}'", out.string()), "--dt"},
+      {fmt::format("run scenes/bouncing-ball.toml --set restitution=1.5 --out '{}'", out.string()), "--set restitution"},
+      {fmt::format("run scenes/bouncing-ball.toml --event-location cubic --out '{}'", out.string()), "--event-location"},
       {fmt::format("run scenes/pendulum.toml --dt 0 --out '{}'", out.string()), "--dt"},
       {fmt::format("run scenes/pendulum.toml --t-end -3 --out '{}'", out.string()), "--t-end"},
       {fmt::format("run scenes/pendulum.toml --method cvode-bdf --rtol 0 --out '{}'", out.string()), "--rtol"},
@@ -118,6 +121,18 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
     EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << args << " said: " << o.err;
     EXPECT_FALSE(fs::exists(out / "summary.json")) << args;
   }
+}
+
+TEST_F(Cli, TheBouncingBallWritesItsImpactsAndRestIntoTheSummary) {
+  const fs::path out = dir_ / "ball";
+  const Output o = run(fmt::format("run scenes/bouncing-ball.toml --method cvode-bdf --rtol 1e-10 --out '{}'", out.string()));
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  ASSERT_GT(s["events"].size(), 2u);
+  EXPECT_EQ(s["events"][0]["kind"], "impact");
+  EXPECT_NEAR(s["events"][0]["t"].get<double>(), std::sqrt(2 * 1.0 / 9.81), 1e-8);
+  EXPECT_EQ(s["events"].back()["kind"], "rest");
+  EXPECT_EQ(s["final_state"]["y"], 0.0);
 }
 
 TEST_F(Cli, ADivergedRunExitsOneWithItsSummaryWritten) {

@@ -1,0 +1,60 @@
+#include "events.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace stepwise {
+
+Eigen::VectorXd event_values(std::span<const Event> events, double t, const Eigen::VectorXd& y) {
+  Eigen::VectorXd g(static_cast<Eigen::Index>(events.size()));
+  for (size_t i = 0; i < events.size(); ++i) g[static_cast<Eigen::Index>(i)] = events[i].g(t, y);
+  return g;
+}
+
+std::optional<Crossing> first_crossing(std::span<const Event> events, const Eigen::VectorXd& g0, const Eigen::VectorXd& g1) {
+  std::optional<Crossing> first;
+  for (size_t i = 0; i < events.size(); ++i) {
+    const double a = g0[static_cast<Eigen::Index>(i)], b = g1[static_cast<Eigen::Index>(i)];
+    // a state resting on the surface (g = 0 at both ends) does not cross it
+    const bool falling = a > 0 && b <= 0, rising = a < 0 && b >= 0;
+    const int d = events[i].direction;
+    if (!((d <= 0 && falling) || (d >= 0 && rising))) continue;
+    const double s = a / (a - b);
+    if (!first || s < first->fraction) first = Crossing{i, s};
+  }
+  return first;
+}
+
+std::pair<double, Eigen::VectorXd> locate_event(const Event& event, const Crossing& crossing, double t, double h,
+                                                const Eigen::VectorXd& y0, const Eigen::VectorXd& y1,
+                                                EventLocation location, const Restep& restep) {
+  double s = crossing.fraction;
+  Eigen::VectorXd y = y0 + s * (y1 - y0);
+  if (location == EventLocation::linear) return {t + s * h, y};
+
+  // Illinois regula falsi on g(s) over the bracket [0, 1] of the step
+  double s_lo = 0, s_hi = 1;
+  double g_lo = event.g(t, y0), g_hi = event.g(t + h, y1);
+  int side = 0;  // which end was kept last time, to halve its g (Illinois)
+  const double scale = std::max(std::abs(g_lo), std::abs(g_hi));
+  for (int iteration = 0; iteration < 60; ++iteration) {
+    s = (s_lo * g_hi - s_hi * g_lo) / (g_hi - g_lo);
+    if (!restep(s, y)) break;
+    const double g = event.g(t + s * h, y);
+    if (std::abs(g) <= 4 * std::numeric_limits<double>::epsilon() * scale || s_hi - s_lo <= 1e-15) break;
+    if ((g > 0) == (g_lo > 0)) {
+      s_lo = s;
+      g_lo = g;
+      if (side == -1) g_hi /= 2;
+      side = -1;
+    } else {
+      s_hi = s;
+      g_hi = g;
+      if (side == 1) g_lo /= 2;
+      side = 1;
+    }
+  }
+  return {t + s * h, y};
+}
+
+}  // namespace stepwise

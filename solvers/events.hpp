@@ -1,0 +1,35 @@
+// Events between two step ends: detection by the sign of g, and location on the step.
+//
+// The seeds' method (collision of a particle with a plane): when the signed distance g changes sign over
+// a step, the crossing is placed on the segment p(t) -> p(t + h) where the linear interpolant of g
+// vanishes, s = g0 / (g0 - g1), and the state there is y0 + s (y1 - y0). The refinement re-steps from the
+// step's start with h s, s found by the Illinois variant of regula falsi on g, until g is zero to round-off.
+#pragma once
+
+#include "integrator.hpp"
+
+#include <functional>
+#include <optional>
+
+namespace stepwise {
+
+// g_i(t, y) for every event
+Eigen::VectorXd event_values(std::span<const Event> events, double t, const Eigen::VectorXd& y);
+
+struct Crossing {
+  size_t index;     // which event
+  double fraction;  // where in the step the linear interpolant of its g vanishes, in (0, 1]
+};
+
+// the earliest event whose g crosses zero in its direction between g0 (step start) and g1 (step end)
+std::optional<Crossing> first_crossing(std::span<const Event> events, const Eigen::VectorXd& g0, const Eigen::VectorXd& g1);
+
+// recomputes the state at fraction s of the step from its start; false when the step fails
+using Restep = std::function<bool(double s, Eigen::VectorXd& y)>;
+
+// the time and state of the crossing in the step (t, y0) -> (t + h, y1)
+std::pair<double, Eigen::VectorXd> locate_event(const Event& event, const Crossing& crossing, double t, double h,
+                                                const Eigen::VectorXd& y0, const Eigen::VectorXd& y1,
+                                                EventLocation location, const Restep& restep);
+
+}  // namespace stepwise
