@@ -19,6 +19,8 @@ class BouncingBall final : public Model {
     events_.push_back(Event{
         "ground", -1, [](double, const Eigen::VectorXd& y) { return y[0]; },
         [this](double, Eigen::VectorXd& y) -> std::string {
+          // still above and rising: the crossing was estimated too early, nothing happens yet
+          if (y[0] > 0 && y[1] >= 0) return "";
           // the contact point lies on the plane; the normal velocity reverses, scaled by eps
           const double rebound = -eps_ * y[1];
           y[0] = 0;

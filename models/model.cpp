@@ -2,6 +2,7 @@
 
 #include "bouncing_ball.hpp"
 #include "flow_particle.hpp"
+#include "particles_in_box.hpp"
 #include "pendulum.hpp"
 #include "projectile.hpp"
 
@@ -31,6 +32,8 @@ const std::array model_table{
               projectile_params(), [](const Params& p) { return make_projectile(p); }},
     ModelInfo{"bouncing-ball", "ball dropped on the ground plane with restitution; exact impact times and apex heights",
               bouncing_ball_params(), [](const Params& p) { return make_bouncing_ball(p); }},
+    ModelInfo{"particles-in-box", "N particles under gravity bouncing off the six walls of a box; seeded, reproducible",
+              particles_in_box_params(), [](const Params& p) { return make_particles_in_box(p); }},
 };
 
 }  // namespace

@@ -14,12 +14,25 @@ Eigen::VectorXd event_values(std::span<const Event> events, double t, const Eige
 std::optional<Crossing> first_crossing(std::span<const Event> events, const Eigen::VectorXd& g0, const Eigen::VectorXd& g1) {
   std::optional<Crossing> first;
   for (size_t i = 0; i < events.size(); ++i) {
-    const double a = g0[static_cast<Eigen::Index>(i)], b = g1[static_cast<Eigen::Index>(i)];
-    // a state resting on the surface (g = 0 at both ends) does not cross it
-    const bool falling = a > 0 && b <= 0, rising = a < 0 && b >= 0;
     const int d = events[i].direction;
-    if (!((d <= 0 && falling) || (d >= 0 && rising))) continue;
-    const double s = a / (a - b);
+    // signs as for a falling event; a rising one is the same with g negated
+    const double a = d >= 0 && d != 0 ? -g0[static_cast<Eigen::Index>(i)] : g0[static_cast<Eigen::Index>(i)];
+    const double b = d >= 0 && d != 0 ? -g1[static_cast<Eigen::Index>(i)] : g1[static_cast<Eigen::Index>(i)];
+    double s = 0;
+    if (d == 0) {
+      // either way through zero
+      if (!((a > 0 && b <= 0) || (a < 0 && b >= 0))) continue;
+      s = a / (a - b);
+    } else {
+      // a directed event is a surface the state may not end a step behind (a wall, the ground):
+      // - from the front to or behind it: the crossing of the segment;
+      // - from on it (just after an event) to behind it: it left and came back within the step, a flight
+      //   shorter than the step, and the segment cannot say when: the step's end;
+      // - already behind it (carried there by a step to another event): at once, at the step's start.
+      // A state resting on the surface (g = 0 at both ends) does not cross it.
+      if (!(b < 0 || (a > 0 && b == 0))) continue;
+      s = a > 0 ? a / (a - b) : a == 0 ? 1.0 : 0.0;
+    }
     if (!first || s < first->fraction) first = Crossing{i, s};
   }
   return first;
@@ -29,8 +42,15 @@ std::pair<double, Eigen::VectorXd> locate_event(const Event& event, const Crossi
                                                 const Eigen::VectorXd& y0, const Eigen::VectorXd& y1,
                                                 EventLocation location, const Restep& restep) {
   double s = crossing.fraction;
+  if (s == 1) return {t + h, y1};
+  if (s == 0) return {t, y0};
+  // the whole state is carried to the estimated time by a step of h s from the step's start: interpolating
+  // it on the segment instead would cut through the parabola of every other particle in flight, and one
+  // that left a surface and came back within the step would be put behind it
   Eigen::VectorXd y = y0 + s * (y1 - y0);
-  if (location == EventLocation::linear) return {t + s * h, y};
+  if (!restep(s, y)) y = y0 + s * (y1 - y0);
+  // g starting at zero gives no bracket to refine
+  if (location == EventLocation::linear || event.g(t, y0) == 0) return {t + s * h, y};
 
   // Illinois regula falsi on g(s) over the bracket [0, 1] of the step
   double s_lo = 0, s_hi = 1;

@@ -1,9 +1,10 @@
 // Events between two step ends: detection by the sign of g, and location on the step.
 //
 // The seeds' method (collision of a particle with a plane): when the signed distance g changes sign over
-// a step, the crossing is placed on the segment p(t) -> p(t + h) where the linear interpolant of g
-// vanishes, s = g0 / (g0 - g1), and the state there is y0 + s (y1 - y0). The refinement re-steps from the
-// step's start with h s, s found by the Illinois variant of regula falsi on g, until g is zero to round-off.
+// a step, the crossing time is estimated on the segment p(t) -> p(t + h), where the linear interpolant of g
+// vanishes, s = g0 / (g0 - g1), and the state is carried there by one step of h s from the step's start
+// (the model's handler then moves the particle onto the surface). The refinement repeats such steps,
+// s found by the Illinois variant of regula falsi on g, until g is zero to round-off.
 #pragma once
 
 #include "integrator.hpp"
@@ -18,7 +19,9 @@ Eigen::VectorXd event_values(std::span<const Event> events, double t, const Eige
 
 struct Crossing {
   size_t index;     // which event
-  double fraction;  // where in the step the linear interpolant of its g vanishes, in (0, 1]
+  double fraction;  // where in the step the linear interpolant of its g vanishes, in [0, 1]: 1 when g
+                    // starts at zero (a flight shorter than the step left the surface and came back), 0
+                    // when the state is already behind the surface of a directed event
 };
 
 // the earliest event whose g crosses zero in its direction between g0 (step start) and g1 (step end)

@@ -25,7 +25,8 @@ struct Event {
   int direction = 0;                                                     // +1: g rising through 0, -1: falling, 0: either
   std::function<double(double t, const Eigen::VectorXd& y)> g;          // root function
   // state change at the root (a collision response); returns what happened, as summary.json's events
-  // write it ("impact", "rest")
+  // write it ("impact", "rest"), or an empty string when nothing did (a crossing estimated too early,
+  // where the state is still in front of the surface and moving away)
   std::function<std::string(double t, Eigen::VectorXd& y)> apply;
 };
 

@@ -84,7 +84,9 @@ inline RunResult begin_run(double t0, const Eigen::VectorXd& y0) {
 
 // an event handled at t: the state is changed by its handler and the event is recorded
 inline void handle_event(RunResult& result, const Event& event, double t, Eigen::VectorXd& y) {
-  result.events.push_back({t, event.apply(t, y)});
+  std::string kind = event.apply(t, y);
+  if (kind.empty()) return;
+  result.events.push_back({t, std::move(kind)});
   ++result.stats.events;
 }
 

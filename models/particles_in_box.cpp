@@ -1,0 +1,133 @@
+#include "particles_in_box.hpp"
+
+#include "plane_collision.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <random>
+
+namespace stepwise {
+namespace {
+
+constexpr std::array params{
+    ParamSpec{"count", 100, "", "number of particles N", Bound::positive},
+    ParamSpec{"size", 1.0, "m", "edge length L of the cubic box [0, L]^3", Bound::positive},
+    ParamSpec{"restitution", 0.8, "", "coefficient of restitution eps of the walls", Bound::unit_interval},
+    ParamSpec{"friction", 0.0, "", "Coulomb friction coefficient mu at impacts", Bound::nonnegative},
+    ParamSpec{"g", 9.81, "m/s^2", "gravitational acceleration along -z", Bound::nonnegative},
+    ParamSpec{"speed", 2.0, "m/s", "initial velocities are uniform in [-speed, speed]^3", Bound::nonnegative},
+    ParamSpec{"seed", 1, "", "random seed of the initial state", Bound::nonnegative},
+    ParamSpec{"rest_speed", 0.01, "m/s", "a rebound off the floor slower than this ends in resting contact", Bound::positive},
+};
+
+// more particles than this would not fit a state and its integrator's copies in memory
+constexpr double max_count = 1e7;
+
+class ParticlesInBox final : public Model {
+ public:
+  explicit ParticlesInBox(const Params& p)
+      : n_(static_cast<int>(p.at("count"))), size_(p.at("size")), eps_(p.at("restitution")), mu_(p.at("friction")),
+        g_(p.at("g")), speed_(p.at("speed")), seed_(static_cast<unsigned long>(p.at("seed"))), rest_speed_(p.at("rest_speed")) {
+    const Eigen::Vector3d o = Eigen::Vector3d::Zero(), l = Eigen::Vector3d::Constant(size_);
+    walls_ = {make_plane(o, Eigen::Vector3d::UnitX()), make_plane(l, -Eigen::Vector3d::UnitX()),
+              make_plane(o, Eigen::Vector3d::UnitY()), make_plane(l, -Eigen::Vector3d::UnitY()),
+              make_plane(o, Eigen::Vector3d::UnitZ()), make_plane(l, -Eigen::Vector3d::UnitZ())};
+    for (int i = 0; i < n_; ++i) {
+      for (size_t w = 0; w < walls_.size(); ++w) {
+        events_.push_back(Event{
+            fmt::format("particle {} wall {}", i, w), -1,
+            [this, i, w](double, const Eigen::VectorXd& y) { return signed_distance(walls_[w], y.segment<3>(3 * i)); },
+            [this, i, w](double, Eigen::VectorXd& y) { return collide(i, walls_[w], y); }});
+      }
+    }
+  }
+
+  std::string_view name() const override { return "particles-in-box"; }
+  int size() const override { return 6 * n_; }
+  bool autonomous() const override { return true; }
+  std::vector<std::string> state_names() const override {
+    std::vector<std::string> names;
+    for (const char* c : {"", "v"})
+      for (int i = 0; i < n_; ++i)
+        for (const char* axis : {"x", "y", "z"}) names.push_back(fmt::format("{}{}[{}]", c, axis, i));
+    return names;
+  }
+  Eigen::VectorXd initial_state() const override {
+    std::mt19937_64 rng(seed_);
+    // uniform in [0, 1) from the top 53 bits: the same numbers on every platform, unlike std's distributions
+    auto uniform = [&rng] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+    Eigen::VectorXd y(6 * n_);
+    const double margin = size_ / 20;
+    for (int k = 0; k < 3 * n_; ++k) y[k] = margin + (size_ - 2 * margin) * uniform();
+    for (int k = 0; k < 3 * n_; ++k) y[3 * n_ + k] = speed_ * (2 * uniform() - 1);
+    return y;
+  }
+  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }
+  std::span<const Event> events() const override { return events_; }
+  // the shortest return to one wall: a rebound off the floor at rest_speed, up and down
+  double event_free_interval() const override { return g_ > 0 ? 2 * rest_speed_ / g_ : std::numeric_limits<double>::infinity(); }
+
+  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    dydt.head(3 * n_) = y.tail(3 * n_);
+    dydt.tail(3 * n_).setZero();
+    for (int i = 0; i < n_; ++i) {
+      // resting contact, set exactly by the event handler: the floor's normal force cancels gravity
+      const bool resting = y[3 * i + 2] == 0 && y[3 * n_ + 3 * i + 2] == 0;
+      dydt[3 * n_ + 3 * i + 2] = resting ? 0 : -g_;
+    }
+  }
+  bool has_jacobian() const override { return true; }
+  void jacobian(double, Eigen::Ref<const Eigen::VectorXd>, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+    dfdy.setZero();
+    dfdy.topRightCorner(3 * n_, 3 * n_).setIdentity();
+  }
+
+  std::optional<double> energy(const Eigen::VectorXd& y) const override {
+    double e = 0.5 * y.tail(3 * n_).squaredNorm();
+    for (int i = 0; i < n_; ++i) e += g_ * y[3 * i + 2];
+    return e;
+  }
+
+ private:
+  // particle i meets `wall`: onto the plane, then the plane response; a slow rebound off the floor rests
+  std::string collide(int i, const Plane& wall, Eigen::VectorXd& y) const {
+    auto p = y.segment<3>(3 * i);
+    auto v = y.segment<3>(3 * n_ + 3 * i);
+    // still in front and moving away: the crossing was estimated too early, nothing happens yet
+    const double d = signed_distance(wall, p);
+    if (d > 0 && v.dot(wall.normal) >= 0) return "";
+    p -= d * wall.normal;
+    // only a particle moving into the wall is reflected
+    if (v.dot(wall.normal) < 0) v = collision_response(wall, v, eps_, mu_);
+    const bool floor = wall.normal.z() > 0;
+    if (floor && v.dot(wall.normal) < rest_speed_) {
+      p.z() = 0;
+      v.z() = 0;
+      return "rest";
+    }
+    return "impact";
+  }
+
+  int n_;
+  double size_, eps_, mu_, g_, speed_;
+  unsigned long seed_;
+  double rest_speed_;
+  std::array<Plane, 6> walls_;
+  std::vector<Event> events_;
+};
+
+}  // namespace
+
+std::span<const ParamSpec> particles_in_box_params() { return params; }
+
+std::unique_ptr<Model> make_particles_in_box(const Params& p) {
+  const double count = p.at("count"), seed = p.at("seed");
+  if (count != std::floor(count) || count > max_count)
+    throw BadParameter("count", fmt::format("parameter 'count' must be a whole number of particles up to {:.0e}, got {}", max_count, count));
+  if (seed != std::floor(seed) || seed > 9.007199254740992e15)
+    throw BadParameter("seed", fmt::format("parameter 'seed' must be a whole number below 2^53, got {}", seed));
+  return std::make_unique<ParticlesInBox>(p);
+}
+
+}  // namespace stepwise

@@ -1,0 +1,40 @@
+#include "plane_collision.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace stepwise {
+
+Plane make_plane(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
+  const double length = normal.norm();
+  if (!(length > 0) || !std::isfinite(length) || !point.allFinite())
+    throw std::invalid_argument("a plane needs a finite point and a non-zero finite normal");
+  return {point, normal / length};
+}
+
+double signed_distance(const Plane& plane, const Eigen::Vector3d& p) { return (p - plane.point).dot(plane.normal); }
+
+Side side_of(const Plane& plane, const Eigen::Vector3d& p, double tolerance) {
+  const double d = signed_distance(plane, p);
+  if (std::abs(d) <= tolerance) return Side::on;
+  return d > 0 ? Side::positive : Side::negative;
+}
+
+std::optional<double> segment_crossing(const Plane& plane, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1) {
+  const double d0 = signed_distance(plane, p0), d1 = signed_distance(plane, p1);
+  if ((d0 > 0 && d1 > 0) || (d0 < 0 && d1 < 0) || d0 == d1) return std::nullopt;
+  return d0 / (d0 - d1);
+}
+
+Eigen::Vector3d collision_response(const Plane& plane, const Eigen::Vector3d& v, double restitution, double friction) {
+  const Eigen::Vector3d& n = plane.normal;
+  const double vn = v.dot(n);
+  const Eigen::Vector3d tangential = v - vn * n;
+  const double impulse = (1 + restitution) * std::abs(vn);
+  const double speed = tangential.norm();
+  // Coulomb: the tangential speed falls by mu times the normal impulse, and stops at zero
+  const double kept = speed > 0 ? std::max(0.0, speed - friction * impulse) / speed : 0.0;
+  return -restitution * vn * n + kept * tangential;
+}
+
+}  // namespace stepwise
