@@ -207,7 +207,7 @@ class CvodeIntegrator final : public Integrator {
         CVodeGetRootInfo(mem.get(), roots_found.data());
         const auto hit = std::find_if(roots_found.begin(), roots_found.end(), [](int r) { return r != 0; });
         Eigen::VectorXd y_event = ym;
-        handle_event(result, events[static_cast<size_t>(hit - roots_found.begin())], t, y_event);
+        handle_event(result, events, static_cast<size_t>(hit - roots_found.begin()), t, y_event);
         ym = y_event;
         add_counters();
         if (const int re = CVodeReInit(mem.get(), t, y.get())) {

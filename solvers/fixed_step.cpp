@@ -46,7 +46,7 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
           };
           const Event& event = events[crossing->index];
           auto [t_event, y_event] = locate_event(event, *crossing, t, h, y_start, y, control_.event_location, restep);
-          handle_event(result, event, t_event, y_event);
+          handle_event(result, events, crossing->index, t_event, y_event);
           stepper->reset();
           y = std::move(y_event);
           t_next = t_event;

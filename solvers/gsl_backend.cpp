@@ -194,7 +194,7 @@ class GslAdaptiveIntegrator final : public Integrator {
             };
             const Event& event = events[crossing->index];
             auto [t_event, y_event] = locate_event(event, *crossing, t_start, taken, y_start, y, control_.event_location, restep);
-            handle_event(result, event, t_event, y_event);
+            handle_event(result, events, crossing->index, t_event, y_event);
             y = std::move(y_event);
             t = t_event;
             gsl_odeiv2_evolve_reset(d->e);

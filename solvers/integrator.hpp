@@ -62,7 +62,8 @@ struct Trajectory {
 
 struct EventRecord {
   double t = 0;
-  std::string kind;
+  std::string kind;  // what the handler reported ("impact", "rest")
+  size_t event = 0;  // which of the system's events
 };
 
 struct RunResult {

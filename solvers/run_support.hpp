@@ -83,10 +83,10 @@ inline RunResult begin_run(double t0, const Eigen::VectorXd& y0) {
 }
 
 // an event handled at t: the state is changed by its handler and the event is recorded
-inline void handle_event(RunResult& result, const Event& event, double t, Eigen::VectorXd& y) {
-  std::string kind = event.apply(t, y);
+inline void handle_event(RunResult& result, std::span<const Event> events, size_t index, double t, Eigen::VectorXd& y) {
+  std::string kind = events[index].apply(t, y);
   if (kind.empty()) return;
-  result.events.push_back({t, std::move(kind)});
+  result.events.push_back({t, std::move(kind), index});
   ++result.stats.events;
 }
 

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -96,6 +97,37 @@ TEST(ParticlesInBox, EnergyNeverGrowsAndElasticWallsKeepIt) {
     EXPECT_LT(worst_rise, 1e-12);
     if (eps == 1.0) EXPECT_NEAR(previous, e0, 1e-11 * e0);
     else EXPECT_LT(previous, 0.5 * e0);
+  }
+}
+
+TEST(ParticlesInBox, EachImpactTakesTheShareOfEnergyRestitutionImplies) {
+  // each impact multiplies the energy of the motion normal to its wall by eps^2: the x energy vx^2/2 at the
+  // x walls, the vertical energy vz^2/2 + g z at the floor. rk4 is exact on the parabolas and re-stepping
+  // puts each impact at its root, so per axis E_final = E_initial eps^(2 n) with n that axis's impacts.
+  // The box is tall enough that the ceiling is never reached, and the run ends before the floor's Zeno point.
+  const double eps = 0.7, g = 9.81;
+  for (const double seed : {1.0, 2.0, 3.0}) {
+    const Params params{{"count", 1}, {"size", 2.0}, {"restitution", eps}, {"speed", 1.0}, {"seed", seed}, {"rest_speed", 1e-9}};
+    const auto model = make_model("particles-in-box", params);
+    StepControl control = StepControl::fixed(1e-3);
+    control.event_location = EventLocation::restep;
+    const Eigen::VectorXd y0 = model->initial_state();
+    const RunResult r = make_integrator("rk4", control)->integrate(*model, 0, y0, std::vector{2.0});
+    ASSERT_EQ(r.status, Status::ok) << r.message;
+    std::array<int, 6> hits{};
+    for (const auto& e : r.events) ++hits[e.event % 6];
+    ASSERT_EQ(hits[5], 0) << "the ceiling was reached";
+    ASSERT_GT(hits[4], 2) << "a few floor impacts";
+    const Eigen::VectorXd& y = r.trajectory.y.back();
+    const std::array<double, 3> initial{0.5 * y0[3] * y0[3], 0.5 * y0[4] * y0[4], 0.5 * y0[5] * y0[5] + g * y0[2]};
+    const std::array<double, 3> final{0.5 * y[3] * y[3], 0.5 * y[4] * y[4], 0.5 * y[5] * y[5] + g * y[2]};
+    for (int axis = 0; axis < 3; ++axis) {
+      const int n = hits[2 * axis] + hits[2 * axis + 1];
+      const double predicted = initial[axis] * std::pow(eps, 2.0 * n);
+      EXPECT_NEAR(final[axis], predicted, 1e-10 * initial[axis]) << "seed " << seed << " axis " << axis << " after " << n << " impacts";
+    }
+    std::cout << "seed " << seed << ": impacts x " << hits[0] + hits[1] << ", y " << hits[2] + hits[3] << ", floor " << hits[4]
+              << "; vertical energy " << initial[2] << " -> " << final[2] << " J/kg\n";
   }
 }
 
