@@ -158,7 +158,8 @@ nlohmann::json summary_json(const Prepared& p, const Measured& m) {
     j["energy_final"] = *p.model->energy(r.y_stop);
   }
   j["events"] = nlohmann::json::array();
-  for (const auto& e : r.events) j["events"].push_back({{"t", e.t}, {"kind", e.kind}});
+  const auto events = p.model->events();
+  for (const auto& e : r.events) j["events"].push_back({{"t", e.t}, {"kind", e.kind}, {"event", events[e.event].name}});
   j["parameters"] = nlohmann::json::object();
   for (const auto& [key, value] : p.params) j["parameters"][key] = value;
   return j;

@@ -16,8 +16,8 @@ std::optional<Crossing> first_crossing(std::span<const Event> events, const Eige
   for (size_t i = 0; i < events.size(); ++i) {
     const int d = events[i].direction;
     // signs as for a falling event; a rising one is the same with g negated
-    const double a = d >= 0 && d != 0 ? -g0[static_cast<Eigen::Index>(i)] : g0[static_cast<Eigen::Index>(i)];
-    const double b = d >= 0 && d != 0 ? -g1[static_cast<Eigen::Index>(i)] : g1[static_cast<Eigen::Index>(i)];
+    const double sign = d > 0 ? -1.0 : 1.0;
+    const double a = sign * g0[static_cast<Eigen::Index>(i)], b = sign * g1[static_cast<Eigen::Index>(i)];
     double s = 0;
     if (d == 0) {
       // either way through zero
