@@ -1,5 +1,7 @@
 #include "events.hpp"
 
+#include "run_support.hpp"
+
 #include <cmath>
 #include <limits>
 
@@ -75,6 +77,23 @@ std::pair<double, Eigen::VectorXd> locate_event(const Event& event, const Crossi
     }
   }
   return {t + s * h, y};
+}
+
+std::optional<double> settle_step_events(std::span<const Event> events, Eigen::VectorXd& g_start, double t, double h,
+                                         const Eigen::VectorXd& y_start, Eigen::VectorXd& y, EventLocation location,
+                                         const Restep& restep, RunResult& result) {
+  if (events.empty()) return std::nullopt;
+  Eigen::VectorXd g_end = event_values(events, t + h, y);
+  const auto crossing = first_crossing(events, g_start, g_end);
+  if (!crossing) {
+    g_start = std::move(g_end);
+    return std::nullopt;
+  }
+  auto [t_event, y_event] = locate_event(events[crossing->index], *crossing, t, h, y_start, y, location, restep);
+  handle_event(result, events, crossing->index, t_event, y_event);
+  y = std::move(y_event);
+  g_start = event_values(events, t_event, y);
+  return t_event;
 }
 
 }  // namespace stepwise

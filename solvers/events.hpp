@@ -35,4 +35,11 @@ std::pair<double, Eigen::VectorXd> locate_event(const Event& event, const Crossi
                                                 const Eigen::VectorXd& y0, const Eigen::VectorXd& y1,
                                                 EventLocation location, const Restep& restep);
 
+// After a step (t, y_start) -> (t + h, y): if an event fired inside it, carry y to it, apply its handler
+// (recording what happened in result) and return the event's time; either way g_start becomes g at the
+// new end of the step. The one event pass of every integrator that steps by itself (fixed-step, GSL).
+std::optional<double> settle_step_events(std::span<const Event> events, Eigen::VectorXd& g_start, double t, double h,
+                                         const Eigen::VectorXd& y_start, Eigen::VectorXd& y, EventLocation location,
+                                         const Restep& restep, RunResult& result);
+
 }  // namespace stepwise

@@ -35,24 +35,15 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
         mark_diverged(result, t_next);
         break;
       }
-      // an event inside the step: move to it, apply its handler, and go on from there
-      if (!events.empty()) {
-        Eigen::VectorXd g_end = event_values(events, t_next, y);
-        if (const auto crossing = first_crossing(events, g_start, g_end)) {
-          const Restep restep = [&](double s, Eigen::VectorXd& ys) {
-            stepper->reset();
-            ys = y_start;
-            return stepper->step(t, s * h, ys, failure);
-          };
-          const Event& event = events[crossing->index];
-          auto [t_event, y_event] = locate_event(event, *crossing, t, h, y_start, y, control_.event_location, restep);
-          handle_event(result, events, crossing->index, t_event, y_event);
-          stepper->reset();
-          y = std::move(y_event);
-          t_next = t_event;
-          g_end = event_values(events, t_next, y);
-        }
-        g_start = std::move(g_end);
+      // an event inside the step: move to it, apply its handler, and go on from there afresh
+      const Restep restep = [&](double s, Eigen::VectorXd& ys) {
+        stepper->reset();
+        ys = y_start;
+        return stepper->step(t, s * h, ys, failure);
+      };
+      if (const auto t_event = settle_step_events(events, g_start, t, h, y_start, y, control_.event_location, restep, result)) {
+        stepper->reset();
+        t_next = *t_event;
       }
       t = t_next;
       result.y_stop = y;

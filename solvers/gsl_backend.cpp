@@ -182,26 +182,17 @@ class GslAdaptiveIntegrator final : public Integrator {
         }
         h = std::min(h, max_step);
         // an event inside the accepted step: locate it, apply its handler, restart the stepper there
-        if (!events.empty()) {
-          Eigen::VectorXd g_end = event_values(events, t, y);
-          if (const auto crossing = first_crossing(events, g_start, g_end)) {
-            const double taken = t - t_start;
-            const Restep restep = [&](double s, Eigen::VectorXd& ys) {
-              gsl_odeiv2_step_reset(d->s);
-              ys = y_start;
-              return gsl_odeiv2_step_apply(d->s, t_start, s * taken, ys.data(), session.yerr(), nullptr, nullptr,
-                                           session.sys()) == GSL_SUCCESS;
-            };
-            const Event& event = events[crossing->index];
-            auto [t_event, y_event] = locate_event(event, *crossing, t_start, taken, y_start, y, control_.event_location, restep);
-            handle_event(result, events, crossing->index, t_event, y_event);
-            y = std::move(y_event);
-            t = t_event;
-            gsl_odeiv2_evolve_reset(d->e);
-            gsl_odeiv2_step_reset(d->s);
-            g_end = event_values(events, t, y);
-          }
-          g_start = std::move(g_end);
+        const double taken = t - t_start;
+        const Restep restep = [&](double s, Eigen::VectorXd& ys) {
+          gsl_odeiv2_step_reset(d->s);
+          ys = y_start;
+          return gsl_odeiv2_step_apply(d->s, t_start, s * taken, ys.data(), session.yerr(), nullptr, nullptr,
+                                       session.sys()) == GSL_SUCCESS;
+        };
+        if (const auto t_event = settle_step_events(events, g_start, t_start, taken, y_start, y, control_.event_location, restep, result)) {
+          t = *t_event;
+          gsl_odeiv2_evolve_reset(d->e);
+          gsl_odeiv2_step_reset(d->s);
         }
         result.y_stop = y;
       }

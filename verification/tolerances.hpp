@@ -75,4 +75,26 @@ inline constexpr double event_time_adaptive = 1e-8;
 // re-stepping to the root of g with a method exact on the parabola (rk4) leaves round-off in t
 inline constexpr double event_time_restep = 1e-12;
 
+// a handful of floating-point operations on O(1-10) quantities (a collision response, an apex height from
+// closed forms): a few hundred ulps of 1
+inline constexpr double kernel_roundoff = 1e-12;
+
+// the first impact of the bouncing ball found by any method at dt = 1e-4 or rtol 1e-10: the segment method
+// errs by g h^2 / (8 v) ~ 3e-9 for rk4, explicit Euler's own error by ~h / 2 = 5e-5; 1e-3 s is a frame at
+// 1000 fps, far above both and far below a flight (0.7 s)
+inline constexpr double first_impact_any_method = 1e-3;
+
+// the ball's rest time across methods: each impact time carries the method's error, and the rest follows
+// the last rebound slower than rest_speed, which a method may reach one bounce early or late — a flight of
+// 2 rest_speed / g ~ 2 ms, plus the accumulated impact errors; 0.05 s bounds both for dt = 1e-4
+inline constexpr double rest_time_any_method = 0.05;
+
+// energy held by rk4 (exact on parabolas) with re-stepped impacts over thousands of events: each impact
+// adds round-off of the state, ~eps relative, so the total stays below 1e-9 relative for <= 1e5 events
+inline constexpr double event_energy_roundoff = 1e-9;
+
+// per-axis energy after a few impacts of a re-stepped rk4 run, against E0 eps^(2n): each impact time is
+// exact to ~eps t, each reflection to a few ulps
+inline constexpr double per_impact_energy = 1e-10;
+
 }  // namespace stepwise::tolerance

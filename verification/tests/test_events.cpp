@@ -37,10 +37,10 @@ TEST(Events, EveryMethodSeesEveryImpactAndTheRest) {
       std::cout << method.name << (location == EventLocation::linear ? " linear" : " restep") << ": " << r.events.size()
                 << " events (exact " << exact.size() << "), first impact off by " << first_error << ", last "
                 << r.events.back().kind << " at " << r.events.back().t << '\n';
-      EXPECT_LT(first_error, 1e-3) << method.name;
+      EXPECT_LT(first_error, tolerance::first_impact_any_method) << method.name;
       // at dt = 1e-4 even explicit Euler's energy gain per flight stays below the rest threshold (see below)
       EXPECT_EQ(r.events.back().kind, "rest") << method.name;
-      EXPECT_NEAR(r.events.back().t, exact.back().t, 0.05) << method.name;
+      EXPECT_NEAR(r.events.back().t, exact.back().t, tolerance::rest_time_any_method) << method.name;
       EXPECT_EQ(r.trajectory.y.back()[0], 0.0) << method.name << " ends resting on the plane";
     }
   }
@@ -62,7 +62,7 @@ TEST(Events, CvodeFindsImpactTimesAndApexHeightsToItsTolerance) {
     for (size_t n = 0; n < apex_times.size(); ++n) {
       worst_time = std::max(worst_time, std::abs(r.events[n].t - exact[n].t));
       const double expected = std::pow(ball.at("restitution"), 2.0 * static_cast<double>(n + 1)) * ball.at("height");
-      EXPECT_NEAR(exact[n].apex, expected, 1e-12);
+      EXPECT_NEAR(exact[n].apex, expected, tolerance::kernel_roundoff);
       worst_height = std::max(worst_height, std::abs(r.trajectory.y[n][0] - expected));
     }
     std::cout << method << ": worst impact time error " << worst_time << " s, worst apex error " << worst_height << " m over "
@@ -120,7 +120,7 @@ TEST(Events, NoEnergyIsGainedOverTenThousandElasticBounces) {
     // the segment method can only lose energy; re-stepping keeps it to round-off
     EXPECT_LE(drift, tolerance::roundoff_per_step * std::numeric_limits<double>::epsilon() * static_cast<double>(r.events.size()));
     if (location == EventLocation::restep) {
-      EXPECT_GT(drift, -1e-9);
+      EXPECT_GT(drift, -tolerance::event_energy_roundoff);
     }
   }
 }

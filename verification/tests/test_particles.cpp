@@ -38,14 +38,14 @@ TEST(PlaneCollision, ResponseReversesTheNormalByRestitutionAndNeverAddsEnergy) {
     const double eps = unit(rng), mu = unit(rng);
     const Eigen::Vector3d n = plane.normal;
     const Eigen::Vector3d free = collision_response(plane, v, eps, 0);
-    EXPECT_NEAR(free.dot(n), -eps * v.dot(n), 1e-12);
-    EXPECT_LT((free - free.dot(n) * n - (v - v.dot(n) * n)).norm(), 1e-12) << "tangential kept without friction";
+    EXPECT_NEAR(free.dot(n), -eps * v.dot(n), tolerance::kernel_roundoff);
+    EXPECT_LT((free - free.dot(n) * n - (v - v.dot(n) * n)).norm(), tolerance::kernel_roundoff) << "tangential kept without friction";
     const Eigen::Vector3d rough = collision_response(plane, v, eps, mu);
     const Eigen::Vector3d vt = v - v.dot(n) * n, rt = rough - rough.dot(n) * n;
     // Coulomb: the tangential speed falls by mu (1 + eps) |v.n|, clamped at zero, direction kept
-    EXPECT_NEAR(rt.norm(), std::max(0.0, vt.norm() - mu * (1 + eps) * std::abs(v.dot(n))), 1e-12);
-    EXPECT_GE(rt.dot(vt), -1e-12);
-    EXPECT_LE(rough.squaredNorm(), v.squaredNorm() + 1e-12);
+    EXPECT_NEAR(rt.norm(), std::max(0.0, vt.norm() - mu * (1 + eps) * std::abs(v.dot(n))), tolerance::kernel_roundoff);
+    EXPECT_GE(rt.dot(vt), -tolerance::kernel_roundoff);
+    EXPECT_LE(rough.squaredNorm(), v.squaredNorm() + tolerance::kernel_roundoff);
   }
 }
 
@@ -94,9 +94,14 @@ TEST(ParticlesInBox, EnergyNeverGrowsAndElasticWallsKeepIt) {
     }
     std::cout << "eps " << eps << ": " << r.events.size() << " events, energy " << e0 << " -> " << previous
               << ", largest rise between samples " << worst_rise << '\n';
-    EXPECT_LT(worst_rise, 1e-12);
-    if (eps == 1.0) EXPECT_NEAR(previous, e0, 1e-11 * e0);
-    else EXPECT_LT(previous, 0.5 * e0);
+    EXPECT_LT(worst_rise, tolerance::kernel_roundoff);
+    if (eps == 1.0) {
+      EXPECT_NEAR(previous, e0, tolerance::event_energy_roundoff * e0);
+    } else {
+      // every particle meets the floor several times in 3 s, each impact taking 1 - eps^2 = 51% of its
+      // vertical energy, which holds most of the total: more than half of it goes
+      EXPECT_LT(previous, 0.5 * e0);
+    }
   }
 }
 
@@ -124,7 +129,7 @@ TEST(ParticlesInBox, EachImpactTakesTheShareOfEnergyRestitutionImplies) {
     for (int axis = 0; axis < 3; ++axis) {
       const int n = hits[2 * axis] + hits[2 * axis + 1];
       const double predicted = initial[axis] * std::pow(eps, 2.0 * n);
-      EXPECT_NEAR(final[axis], predicted, 1e-10 * initial[axis]) << "seed " << seed << " axis " << axis << " after " << n << " impacts";
+      EXPECT_NEAR(final[axis], predicted, tolerance::per_impact_energy * initial[axis]) << "seed " << seed << " axis " << axis << " after " << n << " impacts";
     }
     std::cout << "seed " << seed << ": impacts x " << hits[0] + hits[1] << ", y " << hits[2] + hits[3] << ", floor " << hits[4]
               << "; vertical energy " << initial[2] << " -> " << final[2] << " J/kg\n";
