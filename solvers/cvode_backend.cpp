@@ -226,7 +226,7 @@ class CvodeIntegrator final : public Integrator {
         mark_diverged(result, t);
         break;
       }
-      record_output(result, t, ym);
+      record_output(result, control_, t, ym);
     }
     add_counters();
     result.stats.cpu_seconds = thread_cpu_seconds() - start;

@@ -4,6 +4,7 @@
 #include "integrator.hpp"
 
 #include <functional>
+#include <optional>
 
 namespace stepwise {
 
@@ -13,8 +14,12 @@ class CountedSystem;
 class FixedStepper {
  public:
   virtual ~FixedStepper() = default;
-  // advance y in place; on failure return false and say which call failed in `failure`
-  virtual bool step(double t, double h, Eigen::VectorXd& y, std::string& failure) = 0;
+  // y_next = y(t + h) from y = y(t) (two buffers, so the loop keeps the step's start without a copy); on
+  // failure return false and say which call failed in `failure`
+  virtual bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) = 0;
+  // |y_next|inf of the last step, +inf if any entry is not finite, when the stepper measured it on its way
+  // through the state: the loop's divergence test then needs no pass of its own
+  virtual std::optional<double> last_norm() const { return std::nullopt; }
   // forget any history: the next step starts afresh (after an event changed the state, or to re-step)
   virtual void reset() {}
 };

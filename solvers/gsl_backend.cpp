@@ -122,8 +122,9 @@ class GslFixedStepper final : public FixedStepper {
     }
     return control;
   }
-  bool step(double t, double h, Eigen::VectorXd& y, std::string& failure) override {
-    const int code = gsl_odeiv2_step_apply(session_.driver()->s, t, h, y.data(), session_.yerr(), nullptr, nullptr,
+  bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
+    y_next = y;  // GSL steps in place
+    const int code = gsl_odeiv2_step_apply(session_.driver()->s, t, h, y_next.data(), session_.yerr(), nullptr, nullptr,
                                            session_.sys());
     if (code == GSL_SUCCESS) return true;
     failure = fmt::format("{}: gsl_odeiv2_step_apply returned {} ({}) at t = {:.9g}", method_, code, gsl_strerror(code), t);
@@ -197,7 +198,7 @@ class GslAdaptiveIntegrator final : public Integrator {
         result.y_stop = y;
       }
       if (result.status != Status::ok) break;
-      record_output(result, t, y);
+      record_output(result, control_, t, y);
     }
     result.stats.cpu_seconds = thread_cpu_seconds() - start;
     return result;

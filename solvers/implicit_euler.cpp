@@ -18,7 +18,7 @@ class ImplicitEuler final : public FixedStepper {
   explicit ImplicitEuler(const CountedSystem& s)
       : system_(s), matrix_(make_dense_newton_matrix(s)), f_(s.size()), residual_(s.size()), d_(s.size()), y1_(s.size()) {}
 
-  bool step(double t, double h, Eigen::VectorXd& y, std::string& failure) override {
+  bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
     const double t1 = t + h;
     y1_ = y;
     for (int iteration = 0; iteration < newton_max_iterations; ++iteration) {
@@ -32,7 +32,7 @@ class ImplicitEuler final : public FixedStepper {
       y1_ += d_;
       if (!y1_.allFinite()) break;
       if (d_.lpNorm<Eigen::Infinity>() <= newton_tol * (1 + y1_.lpNorm<Eigen::Infinity>())) {
-        y = y1_;
+        y_next = y1_;
         return true;
       }
     }

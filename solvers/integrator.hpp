@@ -3,6 +3,7 @@
 
 #include "ode_system.hpp"
 
+#include <functional>
 #include <limits>
 #include <memory>
 #include <span>
@@ -26,6 +27,9 @@ struct StepControl {
   double blowup = 1e12;  // a state with |y|inf > blowup * max(1, |y0|inf) has diverged
   long max_steps = 5'000'000;  // an adaptive run taking more steps (CVODE: between two outputs) fails
   EventLocation event_location = EventLocation::linear;  // hand-written and GSL steppers; CVODE finds roots itself
+  // what the trajectory keeps at each output time: the whole state when empty, or a summary of it (a
+  // particle system's energy and centroid rather than every particle)
+  std::function<Eigen::VectorXd(const Eigen::VectorXd& y)> observe;
 
   static StepControl fixed(double dt) {
     StepControl c;

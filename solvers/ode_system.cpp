@@ -12,4 +12,12 @@ void OdeSystem::sparse_jacobian(double, Eigen::Ref<const Eigen::VectorXd>, Eigen
   throw std::logic_error("OdeSystem::sparse_jacobian called on a system without a sparse Jacobian");
 }
 
+void OdeSystem::acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const {
+  const auto view = second_order();
+  if (!view) throw std::logic_error("OdeSystem::acceleration called on a first-order system");
+  Eigen::VectorXd f(size());
+  rhs(t, y, f);
+  a = f.tail(view->positions);
+}
+
 }  // namespace stepwise

@@ -54,6 +54,10 @@ class OdeSystem {
   // optional second-order structure for symplectic steppers
   virtual std::optional<SecondOrderView> second_order() const { return std::nullopt; }
 
+  // for a second-order system, a = dv/dt alone (the second half of f), which symplectic steppers need;
+  // by default through rhs, and a large system (a particle system) gives it directly to save a pass
+  virtual void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const;
+
   // optional events; an empty span means none
   virtual std::span<const Event> events() const { return {}; }
 

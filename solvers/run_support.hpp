@@ -29,6 +29,10 @@ class CountedSystem final : public OdeSystem {
     inner_.sparse_jacobian(t, y, dfdy);
   }
   std::optional<SecondOrderView> second_order() const override { return inner_.second_order(); }
+  void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
+    ++stats_.rhs_evals;
+    inner_.acceleration(t, y, a);
+  }
   std::span<const Event> events() const override { return inner_.events(); }
   double event_free_interval() const override { return inner_.event_free_interval(); }
   Stats& stats() const { return stats_; }
@@ -90,10 +94,10 @@ inline void handle_event(RunResult& result, std::span<const Event> events, size_
   ++result.stats.events;
 }
 
-// the state at an output time joins the trajectory
-inline void record_output(RunResult& result, double t, const Eigen::VectorXd& y) {
+// the state at an output time joins the trajectory (through the control's observer, if it has one)
+inline void record_output(RunResult& result, const StepControl& control, double t, const Eigen::VectorXd& y) {
   result.trajectory.t.push_back(t);
-  result.trajectory.y.push_back(y);
+  result.trajectory.y.push_back(control.observe ? control.observe(y) : y);
   result.t_stop = t;
   result.y_stop = y;
 }
