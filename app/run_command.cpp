@@ -111,21 +111,29 @@ Prepared prepare(const RunOptions& o) {
   return p;
 }
 
+// columns: the state's names, or the model's summary of a large state; energy beside them where it exists
+std::vector<std::string> sample_names(const Model& model) {
+  auto names = model.summary_names();
+  return names.empty() ? model.state_names() : names;
+}
+
 std::string trajectory_csv(const Model& model, const Measured& m) {
   Table table;
   table.columns.push_back("t");
-  for (const auto& name : model.state_names()) table.columns.push_back(name);
-  const bool with_energy = model.energy(model.initial_state()).has_value();
+  for (const auto& name : sample_names(model)) table.columns.push_back(name);
+  const bool summarised = !model.summary_names().empty();
+  const bool with_energy = !summarised && model.energy(model.initial_state()).has_value();
   if (with_energy) table.columns.push_back("energy");
-  auto add_row = [&](double t, const Eigen::VectorXd& y) {
+  // a recorded sample is the state itself (energy computed from it), or already the model's summary of it
+  auto add_row = [&](double t, const Eigen::VectorXd& sample) {
     std::vector<Cell> row{t};
-    for (const double v : y) row.emplace_back(v);
-    if (with_energy) row.emplace_back(*model.energy(y));
+    for (const double v : sample) row.emplace_back(v);
+    if (with_energy) row.emplace_back(*model.energy(sample));
     table.rows.push_back(std::move(row));
   };
-  add_row(0.0, model.initial_state());
+  add_row(0.0, model.summary(model.initial_state()));
   for (size_t i = 0; i < m.result.trajectory.t.size(); ++i) add_row(m.result.trajectory.t[i], m.result.trajectory.y[i]);
-  if (m.result.status != Status::ok) add_row(m.result.t_stop, m.result.y_stop);
+  if (m.result.status != Status::ok) add_row(m.result.t_stop, model.summary(m.result.y_stop));
   return to_csv(table);
 }
 
@@ -149,9 +157,10 @@ nlohmann::json summary_json(const Prepared& p, const Measured& m) {
   j["linear_solves"] = r.stats.linear_solves;
   j["factorizations"] = r.stats.factorizations;
   j["cpu_seconds"] = r.stats.cpu_seconds;
-  const auto names = p.model->state_names();
+  const auto names = sample_names(*p.model);
+  const Eigen::VectorXd final_sample = p.model->summary(r.y_stop);
   j["final_state"] = nlohmann::json::object();
-  for (size_t i = 0; i < names.size(); ++i) j["final_state"][names[i]] = r.y_stop[static_cast<Eigen::Index>(i)];
+  for (size_t i = 0; i < names.size(); ++i) j["final_state"][names[i]] = final_sample[static_cast<Eigen::Index>(i)];
   j["error"] = m.error ? nlohmann::json(*m.error) : nlohmann::json(nullptr);
   if (const auto e0 = p.model->energy(p.model->initial_state())) {
     j["energy_initial"] = *e0;

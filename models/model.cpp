@@ -2,6 +2,7 @@
 
 #include "bouncing_ball.hpp"
 #include "flow_particle.hpp"
+#include "particle_system.hpp"
 #include "particles_in_box.hpp"
 #include "pendulum.hpp"
 #include "projectile.hpp"
@@ -34,6 +35,8 @@ const std::array model_table{
               bouncing_ball_params(), [](const Params& p) { return make_bouncing_ball(p); }},
     ModelInfo{"particles-in-box", "N particles under gravity bouncing off the six walls of a box; seeded, reproducible",
               particles_in_box_params(), [](const Params& p) { return make_particles_in_box(p); }},
+    ModelInfo{"particle-system", "many particles in a trap with gravity and drag, optional short-range repulsion via a cell list",
+              particle_system_params(), [](const Params& p) { return make_particle_system(p); }},
 };
 
 }  // namespace

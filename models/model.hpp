@@ -44,6 +44,10 @@ class Model : public OdeSystem {
   virtual Eigen::VectorXd initial_state() const = 0;
   // the quantity the physics conserves (or dissipates), where there is one
   virtual std::optional<double> energy(const Eigen::VectorXd& y) const { (void)y; return std::nullopt; }
+  // a model whose state is too large to write entry by entry (a particle system) names the summary
+  // quantities trajectory.csv and summary.json's final_state carry instead; empty: the state itself
+  virtual std::vector<std::string> summary_names() const { return {}; }
+  virtual Eigen::VectorXd summary(const Eigen::VectorXd& y) const { return y; }
   // exact solution y(t) where one is known for these parameters
   virtual bool has_exact() const { return false; }
   virtual Eigen::VectorXd exact(double t) const;

@@ -1,11 +1,11 @@
 #include "particles_in_box.hpp"
 
+#include "particle_common.hpp"
 #include "plane_collision.hpp"
 
 #include <fmt/format.h>
 
 #include <cmath>
-#include <random>
 
 namespace stepwise {
 namespace {
@@ -21,14 +21,15 @@ constexpr std::array params{
     ParamSpec{"rest_speed", 0.01, "m/s", "a rebound off the floor slower than this ends in resting contact", Bound::positive},
 };
 
-// more particles than this would not fit a state and its integrator's copies in memory
-constexpr double max_count = 1e7;
+// per particle: its six state entries in the integrators' copies (CVODE Adams keeps up to ~25 vectors), and
+// six events, each a name and two closures
+constexpr double bytes_per_particle = 32 * 6 * 8 + 6 * 256;
 
 class ParticlesInBox final : public Model {
  public:
   explicit ParticlesInBox(const Params& p)
-      : n_(static_cast<int>(p.at("count"))), size_(p.at("size")), eps_(p.at("restitution")), mu_(p.at("friction")),
-        g_(p.at("g")), speed_(p.at("speed")), seed_(static_cast<unsigned long>(p.at("seed"))), rest_speed_(p.at("rest_speed")) {
+      : n_(particle_count(p, "count", bytes_per_particle)), size_(p.at("size")), eps_(p.at("restitution")), mu_(p.at("friction")),
+        g_(p.at("g")), speed_(p.at("speed")), seed_(particle_seed(p)), rest_speed_(p.at("rest_speed")) {
     const Eigen::Vector3d o = Eigen::Vector3d::Zero(), l = Eigen::Vector3d::Constant(size_);
     walls_ = {make_plane(o, Eigen::Vector3d::UnitX()), make_plane(l, -Eigen::Vector3d::UnitX()),
               make_plane(o, Eigen::Vector3d::UnitY()), make_plane(l, -Eigen::Vector3d::UnitY()),
@@ -55,8 +56,7 @@ class ParticlesInBox final : public Model {
   }
   Eigen::VectorXd initial_state() const override {
     std::mt19937_64 rng(seed_);
-    // uniform in [0, 1) from the top 53 bits: the same numbers on every platform, unlike std's distributions
-    auto uniform = [&rng] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+    auto uniform = [&rng] { return uniform01(rng); };
     Eigen::VectorXd y(6 * n_);
     const double margin = size_ / 20;
     for (int k = 0; k < 3 * n_; ++k) y[k] = margin + (size_ - 2 * margin) * uniform();
@@ -121,13 +121,6 @@ class ParticlesInBox final : public Model {
 
 std::span<const ParamSpec> particles_in_box_params() { return params; }
 
-std::unique_ptr<Model> make_particles_in_box(const Params& p) {
-  const double count = p.at("count"), seed = p.at("seed");
-  if (count != std::floor(count) || count > max_count)
-    throw BadParameter("count", fmt::format("parameter 'count' must be a whole number of particles up to {:.0e}, got {}", max_count, count));
-  if (seed != std::floor(seed) || seed > 9.007199254740992e15)
-    throw BadParameter("seed", fmt::format("parameter 'seed' must be a whole number below 2^53, got {}", seed));
-  return std::make_unique<ParticlesInBox>(p);
-}
+std::unique_ptr<Model> make_particles_in_box(const Params& p) { return std::make_unique<ParticlesInBox>(p); }
 
 }  // namespace stepwise

@@ -1,0 +1,30 @@
+#include "particle_common.hpp"
+
+#include <fmt/format.h>
+
+#include <unistd.h>
+
+#include <cmath>
+
+namespace stepwise {
+
+int particle_count(const Params& params, std::string_view key, double bytes_each) {
+  const double count = params.at(std::string(key));
+  const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  if (count != std::floor(count) || count < 1)
+    throw BadParameter(std::string(key), fmt::format("parameter '{}' must be a whole number of particles, got {}", key, count));
+  if (count * bytes_each > memory / 2 || count > 2e9)
+    throw BadParameter(std::string(key), fmt::format("parameter '{}' = {:.0f} would not fit in memory: about {:.3g} GiB, "
+                                                     "and this machine has {:.3g} GiB",
+                                                     key, count, count * bytes_each / 0x1p30, memory / 0x1p30));
+  return static_cast<int>(count);
+}
+
+unsigned long particle_seed(const Params& params) {
+  const double seed = params.at("seed");
+  if (seed != std::floor(seed) || seed < 0 || seed > 9.007199254740992e15)
+    throw BadParameter("seed", fmt::format("parameter 'seed' must be a whole number below 2^53, got {}", seed));
+  return static_cast<unsigned long>(seed);
+}
+
+}  // namespace stepwise
