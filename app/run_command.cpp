@@ -92,6 +92,12 @@ Prepared prepare(const RunOptions& o) {
     if (!p.control.dt) throw InputError(fmt::format("{}: {} is a fixed-step method and neither --dt nor run.dt is given", s.file, p.method));
     if (!method->fixed_step) throw InputError(fmt::format("--dt: {} is adaptive only: give --rtol/--atol", p.method));
   }
+  if (const double bytes = dense_matrix_bytes(*method, *p.model); bytes > 0.5 * physical_memory_bytes())
+    throw InputError(fmt::format("{}: {} keeps dense {} x {} matrices ({:.3g} GiB) for this {}-entry state, more than half this "
+                                 "machine's memory: use an explicit method{}",
+                                 o.method ? "--method" : s.where("run.method"), p.method, p.model->size(), p.model->size(),
+                                 bytes / 0x1p30, p.model->size(),
+                                 p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
   if (method->needs_second_order && !p.model->second_order())
     throw InputError(fmt::format("--method: {} needs a second-order model y = (x, v); {} is first order", p.method, s.model));
 

@@ -1,8 +1,8 @@
 #include "particle_common.hpp"
 
-#include <fmt/format.h>
+#include "solvers/integrator.hpp"
 
-#include <unistd.h>
+#include <fmt/format.h>
 
 #include <cmath>
 
@@ -10,7 +10,7 @@ namespace stepwise {
 
 int particle_count(const Params& params, std::string_view key, double bytes_each) {
   const double count = params.at(std::string(key));
-  const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const double memory = physical_memory_bytes();
   if (count != std::floor(count) || count < 1)
     throw BadParameter(std::string(key), fmt::format("parameter '{}' must be a whole number of particles, got {}", key, count));
   if (count * bytes_each > memory / 2 || count > 2e9)

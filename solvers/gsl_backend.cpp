@@ -44,7 +44,8 @@ void switch_off_abort_handler() {
 struct Callbacks {
   const CountedSystem* system;
   int n;                       // system->size(), read once: the RHS callback is the hot path
-  Eigen::MatrixXd jac;         // df/dy (n x n), column-major scratch
+  Eigen::MatrixXd jac;         // df/dy (n x n), column-major scratch, allocated by the first Jacobian call:
+                               // explicit steppers never make one, so they run systems too large for it
   Eigen::VectorXd fp, fm;      // scratch for df/dt
 };
 
@@ -64,6 +65,7 @@ int gsl_jacobian(double t, const double y[], double* dfdy, double dfdt[], void* 
   auto& c = *static_cast<Callbacks*>(params);
   const int n = c.system->size();
   Eigen::Map<const Eigen::VectorXd> ym(y, n);
+  c.jac.resize(n, n);
   jacobian_or_fd(*c.system, t, ym, c.jac);
   ++c.system->stats().jac_evals;
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(dfdy, n, n) = c.jac;
@@ -83,7 +85,7 @@ int gsl_jacobian(double t, const double y[], double* dfdy, double dfdt[], void* 
 class GslSession {
  public:
   GslSession(const CountedSystem& system, const gsl_odeiv2_step_type* type, double h0, const StepControl& control)
-      : callbacks_{&system, system.size(), Eigen::MatrixXd(system.size(), system.size()), Eigen::VectorXd(system.size()),
+      : callbacks_{&system, system.size(), Eigen::MatrixXd(), Eigen::VectorXd(system.size()),
                    Eigen::VectorXd(system.size())},
         sys_{gsl_rhs, gsl_jacobian, static_cast<size_t>(system.size()), &callbacks_},
         driver_(gsl_odeiv2_driver_alloc_y_new(&sys_, type, h0, control.atol, control.rtol)),

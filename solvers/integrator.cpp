@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <unistd.h>
+
 #include <array>
 #include <cmath>
 
@@ -28,20 +30,20 @@ constexpr std::array method_table{
     MethodInfo{"euler", "explicit, fixed step", "1", "hand-written", 1, 1, true, false, false},
     MethodInfo{"symplectic-euler", "semi-implicit, fixed step", "1", "hand-written", 1, 1, true, false, true},
     MethodInfo{"rk4", "explicit, fixed step", "4", "hand-written", 4, 4, true, false, false},
-    MethodInfo{"implicit-euler", "implicit, fixed step, Newton + dense LU", "1", "hand-written", 1, 1, true, false, false},
+    MethodInfo{"implicit-euler", "implicit, fixed step, Newton + dense LU", "1", "hand-written", 1, 1, true, false, false, true},
     MethodInfo{"cvode-adams", "adaptive, variable order Adams-Moulton, fixed-point iteration", "1-12", "SUNDIALS CVODE", 1, 12, false, true, false},
-    MethodInfo{"cvode-bdf", "adaptive, variable order BDF, Newton + dense LU or KLU", "1-5", "SUNDIALS CVODE", 1, 5, false, true, false},
+    MethodInfo{"cvode-bdf", "adaptive, variable order BDF, Newton + dense LU or KLU", "1-5", "SUNDIALS CVODE", 1, 5, false, true, false, true},
     MethodInfo{"gsl-rk2", "explicit embedded Runge-Kutta (2,3), advances with the third-order solution", "3", "GSL odeiv2", 3, 3, true, true, false},
     MethodInfo{"gsl-rk4", "explicit classical Runge-Kutta, error by step doubling", "4", "GSL odeiv2", 4, 4, true, true, false},
     MethodInfo{"gsl-rkf45", "explicit embedded Runge-Kutta-Fehlberg (4,5)", "5", "GSL odeiv2", 5, 5, true, true, false},
     MethodInfo{"gsl-rkck", "explicit embedded Runge-Kutta Cash-Karp (4,5)", "5", "GSL odeiv2", 5, 5, true, true, false},
     MethodInfo{"gsl-rk8pd", "explicit embedded Runge-Kutta Prince-Dormand (8,9), advances with the ninth-order solution", "9", "GSL odeiv2", 9, 9, true, true, false},
-    MethodInfo{"gsl-rk1imp", "implicit Gaussian first order Runge-Kutta (backward Euler)", "1", "GSL odeiv2", 1, 1, true, true, false},
-    MethodInfo{"gsl-rk2imp", "implicit Gaussian second order Runge-Kutta (midpoint)", "2", "GSL odeiv2", 2, 2, true, true, false},
-    MethodInfo{"gsl-rk4imp", "implicit Gaussian fourth order Runge-Kutta", "4", "GSL odeiv2", 4, 4, true, true, false},
-    MethodInfo{"gsl-bsimp", "implicit Bulirsch-Stoer (Bader-Deuflhard)", "variable", "GSL odeiv2", 1, 12, true, true, false},
+    MethodInfo{"gsl-rk1imp", "implicit Gaussian first order Runge-Kutta (backward Euler)", "1", "GSL odeiv2", 1, 1, true, true, false, true},
+    MethodInfo{"gsl-rk2imp", "implicit Gaussian second order Runge-Kutta (midpoint)", "2", "GSL odeiv2", 2, 2, true, true, false, true},
+    MethodInfo{"gsl-rk4imp", "implicit Gaussian fourth order Runge-Kutta", "4", "GSL odeiv2", 4, 4, true, true, false, true},
+    MethodInfo{"gsl-bsimp", "implicit Bulirsch-Stoer (Bader-Deuflhard)", "variable", "GSL odeiv2", 1, 12, true, true, false, true},
     MethodInfo{"gsl-msadams", "variable order Adams, functional iteration", "1-12", "GSL odeiv2", 1, 12, true, true, false},
-    MethodInfo{"gsl-msbdf", "variable order BDF, Newton iteration", "1-5", "GSL odeiv2", 1, 5, true, true, false},
+    MethodInfo{"gsl-msbdf", "variable order BDF, Newton iteration", "1-5", "GSL odeiv2", 1, 5, true, true, false, true},
 };
 
 }  // namespace
@@ -72,6 +74,17 @@ std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepC
   if (method == "implicit-euler") return std::make_unique<FixedStepIntegrator>(name, control, make_implicit_euler);
   if (info->source == "SUNDIALS CVODE") return make_cvode_integrator(method, control);
   return make_gsl_integrator(method, control);
+}
+
+double physical_memory_bytes() {
+  return static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+}
+
+double dense_matrix_bytes(const MethodInfo& method, const OdeSystem& system) {
+  if (!method.dense_matrix || (method.name == "cvode-bdf" && system.has_sparse_jacobian())) return 0;
+  const double n = system.size();
+  // the Jacobian and the Newton matrix (GSL's implicit steppers and Bulirsch-Stoer keep a few more)
+  return 2 * n * n * sizeof(double);
 }
 
 }  // namespace stepwise

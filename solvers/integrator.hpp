@@ -99,6 +99,7 @@ struct MethodInfo {
   bool fixed_step = false;  // accepts a fixed dt
   bool adaptive = false;    // accepts rtol/atol
   bool needs_second_order = false;  // needs y = (x, v)
+  bool dense_matrix = false;        // keeps a dense size() x size() Newton matrix (CVODE BDF: unless the system has a sparse Jacobian)
 };
 
 std::span<const MethodInfo> methods();
@@ -110,5 +111,12 @@ struct BadMethod : std::invalid_argument {
 };
 
 std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control);
+
+// bytes of the dense n x n matrices the method would keep for this system (0 when it keeps none): a large
+// system (a particle system) cannot be run by such a method, and the caller says so before trying
+double dense_matrix_bytes(const MethodInfo& method, const OdeSystem& system);
+
+// this machine's physical memory, the bound such checks (and a particle count's) are made against
+double physical_memory_bytes();
 
 }  // namespace stepwise
