@@ -97,4 +97,21 @@ inline constexpr double event_energy_roundoff = 1e-9;
 // exact to ~eps t, each reflection to a few ulps
 inline constexpr double per_impact_energy = 1e-10;
 
+// a sum of m pair forces in another order (cell list against all pairs): each partial sum rounds by eps
+// relative to the largest force, so m eps |f|max bounds the difference; with m <= 64 neighbours, 1e-13
+// relative to the largest acceleration
+inline constexpr double reordered_pair_sum = 1e-13;
+
+// energy of a particle system without drag through an adaptive code at rtol 1e-9 over 1 s: the global error
+// of a tolerance-proportional code is a small multiple of rtol times the Lipschitz constant times the run
+// (see adaptive_agreement_factor); the repulsion's force has a kink at r_c, which costs CVODE short steps,
+// not accuracy (measured: 3e-9 relative at rtol 1e-9, 1.4e-7 at 1e-8). 1e-6 relative leaves room and
+// fails at once if a pair force were one-sided (no energy to conserve)
+inline constexpr double particle_energy_adaptive = 1e-6;
+
+// symplectic Euler's energy error stays in a band of width O(h) around the true energy over long runs,
+// with no drift: the error over the run's second half exceeds that over its first half by no more than this
+// factor (a drifting method, explicit Euler, grows it by orders of magnitude)
+inline constexpr double symplectic_band_growth = 1.5;
+
 }  // namespace stepwise::tolerance

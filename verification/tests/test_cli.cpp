@@ -113,6 +113,9 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run scenes/flow-particle.toml --method symplectic-euler --out '{}'", out.string()), "symplectic-euler"},
       {"run scenes/pendulum.toml --out /proc/no-such-dir", "--out"},
       {fmt::format("run scenes/no-such-scene.toml --out '{}'", out.string()), "no-such-scene.toml"},
+      {fmt::format("run scenes/particle-system.toml --set count=1e12 --out '{}'", out.string()), "--set count"},
+      {fmt::format("run scenes/particle-system.toml --set count=-5 --out '{}'", out.string()), "--set count"},
+      {fmt::format("run scenes/particle-system.toml --method implicit-euler --out '{}'", out.string()), "--method: implicit-euler keeps dense"},
   };
   for (const auto& [args, expected] : cases) {
     const Output o = run(args);
@@ -133,6 +136,22 @@ TEST_F(Cli, TheBouncingBallWritesItsImpactsAndRestIntoTheSummary) {
   EXPECT_NEAR(s["events"][0]["t"].get<double>(), std::sqrt(2 * 1.0 / 9.81), 1e-8);
   EXPECT_EQ(s["events"].back()["kind"], "rest");
   EXPECT_EQ(s["final_state"]["y"], 0.0);
+}
+
+TEST_F(Cli, AParticleSystemWritesItsSummaryRatherThanEveryParticle) {
+  const fs::path out = dir_ / "particles";
+  const Output o = run(fmt::format("run scenes/particle-system.toml --set count=2000 --t-end 0.2 --out '{}'", out.string()));
+  ASSERT_EQ(o.status, 0) << o.err;
+  const std::string csv = slurp(out / "trajectory.csv");
+  EXPECT_EQ(csv.substr(0, csv.find('\n')), "t,energy,kinetic,centroid_x,centroid_y,centroid_z,rms_radius,max_speed,contacts");
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  EXPECT_EQ(s["final_state"].size(), 8u);
+  EXPECT_GT(s["final_state"]["contacts"].get<double>(), 0);
+  EXPECT_TRUE(s["error"].is_null()) << "no exact solution with repulsion";
+  // without repulsion every particle has an exact solution, and rk4 at dt = 5e-3 is within ~1e-9 of it
+  const Output exact = run(fmt::format("run scenes/particle-system.toml --set count=2000 --set repulsion=0 --method rk4 --t-end 0.2 --out '{}'", out.string()));
+  ASSERT_EQ(exact.status, 0) << exact.err;
+  EXPECT_LT(nlohmann::json::parse(slurp(out / "summary.json"))["error"].get<double>(), 1e-8);
 }
 
 TEST_F(Cli, ADivergedRunExitsOneWithItsSummaryWritten) {

@@ -64,7 +64,8 @@ TEST(Order, Rk8pdConvergesAtNinthOrderOnALongPendulumRun) {
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Order,
                          ::testing::Values(Scene{"pendulum", {{"theta0", 1.0}}, 10.0, 0.25}, Scene{"flow-particle", {}, 1.0, 1.0},
-                                           Scene{"projectile", {{"drag", 0.5}}, 2.0, 1.0}),
+                                           Scene{"projectile", {{"drag", 0.5}}, 2.0, 1.0},
+                                           Scene{"particle-system", {{"count", 3}, {"repulsion", 0}}, 2.0, 0.5}),
                          [](const auto& info) {
                            std::string name = info.param.model;
                            std::erase(name, '-');
