@@ -1,5 +1,6 @@
 // Google Benchmark main that prints, after the usual table, the ratio of each benchmark's CPU time to its
-// peer's measured in the same run: "ratio A / B = x". With --benchmark_repetitions the medians are compared.
+// peer's measured in the same run: "ratio A / B = x", and the fraction of a bound a rate reaches: "A reaches
+// x of the bound from B". With --benchmark_repetitions the medians are compared.
 #pragma once
 
 #include <benchmark/benchmark.h>
@@ -11,15 +12,26 @@
 
 namespace stepwise::bench {
 
+// a rate counter of one benchmark against the bound another one's rate sets: items per second at most
+// (bound's rate) / cost, e.g. particle-steps/s against triad bytes/s over the bytes a particle-step moves
+struct RateBound {
+  std::string name, counter;              // the measured rate
+  std::string bound_name, bound_counter;  // the rate that bounds it
+  double cost;                            // bound units per measured item
+};
+
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
-  explicit RatioReporter(std::vector<std::pair<std::string, std::string>> pairs) : pairs_(std::move(pairs)) {}
+  RatioReporter(std::vector<std::pair<std::string, std::string>> pairs, std::vector<RateBound> bounds)
+      : pairs_(std::move(pairs)), bounds_(std::move(bounds)) {}
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const auto& run : runs) {
-      if (run.run_type == Run::RT_Iteration && !median_.contains(run.run_name.str())) cpu_[run.run_name.str()] = run.GetAdjustedCPUTime();
-      if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median") {
-        median_[run.run_name.str()] = true;
-        cpu_[run.run_name.str()] = run.GetAdjustedCPUTime();
+      const std::string name = run.run_name.str();
+      const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
+      if ((run.run_type == Run::RT_Iteration && !median_.contains(name)) || median) {
+        if (median) median_[name] = true;
+        cpu_[name] = run.GetAdjustedCPUTime();
+        for (const auto& [key, counter] : run.counters) counters_[name][key] = counter.value;
       }
     }
     ConsoleReporter::ReportRuns(runs);
@@ -28,18 +40,28 @@ class RatioReporter : public benchmark::ConsoleReporter {
     ConsoleReporter::Finalize();
     for (const auto& [a, b] : pairs_)
       if (cpu_.contains(a) && cpu_.contains(b)) std::printf("ratio %s / %s = %.3f\n", a.c_str(), b.c_str(), cpu_[a] / cpu_[b]);
+    for (const auto& b : bounds_) {
+      if (!counters_[b.name].contains(b.counter) || !counters_[b.bound_name].contains(b.bound_counter)) continue;
+      const double rate = counters_[b.name][b.counter], bound = counters_[b.bound_name][b.bound_counter] / b.cost;
+      std::printf("bound %s: %.4g %s/s, bound %.4g from %s: %.3f of it\n", b.name.c_str(), rate, b.counter.c_str(), bound,
+                  b.bound_name.c_str(), rate / bound);
+    }
   }
 
  private:
   std::vector<std::pair<std::string, std::string>> pairs_;
+  std::vector<RateBound> bounds_;
   std::map<std::string, double> cpu_;
+  std::map<std::string, std::map<std::string, double>> counters_;
   std::map<std::string, bool> median_;  // names whose median has been seen
 };
 
-// run every registered benchmark and print the ratios of the given pairs (names as Google Benchmark prints them)
-inline int run_with_ratios(int argc, char** argv, std::vector<std::pair<std::string, std::string>> pairs) {
+// run every registered benchmark and print the ratios of the given pairs (names as Google Benchmark prints
+// them) and the fractions of the given bounds
+inline int run_with_ratios(int argc, char** argv, std::vector<std::pair<std::string, std::string>> pairs,
+                           std::vector<RateBound> bounds = {}) {
   benchmark::Initialize(&argc, argv);
-  RatioReporter reporter(std::move(pairs));
+  RatioReporter reporter(std::move(pairs), std::move(bounds));
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
   return 0;

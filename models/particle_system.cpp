@@ -57,17 +57,11 @@ class ParticleSystem final : public Model {
     acceleration(t, y, dydt.segment(3 * n_, 3 * n_));
   }
 
-  // one pass over positions and velocities for the field, then the pairs the cell list finds
-  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
+  // the field, then the pairs the cell list finds
+  void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
     const double* x = y.data();
-    const double* v = x + 3 * n_;
-    double* out = a.data();
-    const double k = k_, gamma = gamma_, gz = -g_;
-    for (long i = 0; i < 3L * n_; i += 3) {
-      out[i] = -k * x[i] - gamma * v[i];
-      out[i + 1] = -k * x[i + 1] - gamma * v[i + 1];
-      out[i + 2] = -k * x[i + 2] - gamma * v[i + 2] + gz;
-    }
+    field(x, x + 3 * n_, a.data(), 0, 3L * n_);
+    (void)t;
     if (s_ == 0) return;
     CellList cells;
     cells.build(x, n_, rc_);
@@ -78,6 +72,11 @@ class ParticleSystem final : public Model {
       a.segment<3>(3 * i) += f;
       a.segment<3>(3 * j) -= f;
     });
+  }
+  // without repulsion each coordinate's acceleration is its own: steppers may sweep in blocks
+  bool has_local_acceleration() const override { return s_ == 0; }
+  void local_acceleration(double, const double* x, const double* v, double* a, Eigen::Index first, Eigen::Index count) const override {
+    field(x, v, a, first, count);
   }
 
   // without repulsion df/dy has a fixed pattern: dx'/dv = I, dv'/dx = -k I, dv'/dv = -gamma I
@@ -137,6 +136,14 @@ class ParticleSystem final : public Model {
   }
 
  private:
+  // the trap, drag and gravity on coordinates [first, first + count) (x, v, a point at entry first)
+  void field(const double* x, const double* v, double* a, Eigen::Index first, Eigen::Index count) const {
+    const double k = k_, gamma = gamma_;
+    for (Eigen::Index i = 0; i < count; ++i) a[i] = -k * x[i] - gamma * v[i];
+    // gravity on the z entries (index 3 i + 2), a block's worth at a time while it is in cache
+    for (Eigen::Index i = (2 - first % 3 + 3) % 3; i < count; i += 3) a[i] -= g_;
+  }
+
   // kinetic energy and the trap's and gravity's potential energy
   double field_energy(const Eigen::VectorXd& y) const {
     const auto x = y.head(3 * n_), v = y.segment(3 * n_, 3 * n_);

@@ -20,4 +20,8 @@ void OdeSystem::acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eige
   a = f.tail(view->positions);
 }
 
+void OdeSystem::local_acceleration(double, const double*, const double*, double*, Eigen::Index, Eigen::Index) const {
+  throw std::logic_error("OdeSystem::local_acceleration called on a system without a local acceleration");
+}
+
 }  // namespace stepwise

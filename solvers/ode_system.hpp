@@ -58,6 +58,13 @@ class OdeSystem {
   // by default through rhs, and a large system (a particle system) gives it directly to save a pass
   virtual void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const;
 
+  // true when each acceleration entry depends only on the same entries of x and v (a force field without
+  // interactions): local_acceleration then gives a[first, first + count) from x and v over the same range,
+  // so a stepper can sweep a large state once, in blocks that stay in cache, rather than in three passes
+  virtual bool has_local_acceleration() const { return false; }
+  virtual void local_acceleration(double t, const double* x, const double* v, double* a, Eigen::Index first,
+                                  Eigen::Index count) const;
+
   // optional events; an empty span means none
   virtual std::span<const Event> events() const { return {}; }
 

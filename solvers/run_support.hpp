@@ -33,6 +33,12 @@ class CountedSystem final : public OdeSystem {
     ++stats_.rhs_evals;
     inner_.acceleration(t, y, a);
   }
+  // not counted here: a stepper sweeping in blocks counts one evaluation per sweep itself
+  bool has_local_acceleration() const override { return inner_.has_local_acceleration(); }
+  void local_acceleration(double t, const double* x, const double* v, double* a, Eigen::Index first,
+                          Eigen::Index count) const override {
+    inner_.local_acceleration(t, x, v, a, first, count);
+  }
   std::span<const Event> events() const override { return inner_.events(); }
   double event_free_interval() const override { return inner_.event_free_interval(); }
   Stats& stats() const { return stats_; }
