@@ -58,12 +58,16 @@ Prepared prepare(const RunOptions& o) {
   }
   const ModelInfo* info = find_model(s.model);
   if (!info) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
+  if (s.mesh && !info->make_with_mesh) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
   try {
     p.params = resolve_params(*info, values);
-    p.model = info->make(p.params);
+    p.model = s.mesh ? info->make_with_mesh(p.params, *s.mesh) : info->make(p.params);
   } catch (const BadParameter& e) {
     const auto origin = set_origin.find(e.key);
-    throw InputError(fmt::format("{}: {}", origin != set_origin.end() ? origin->second : s.where("parameters." + e.key), e.what()));
+    throw InputError(fmt::format("{}: {}", origin != set_origin.end() ? origin->second
+                                           : e.key == "mesh"             ? s.where("mesh")
+                                                                         : s.where("parameters." + e.key),
+                                 e.what()));
   }
 
   // method and step control: the command line wins over the scene; --dt and --rtol exclude each other

@@ -3,7 +3,11 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <array>
 #include <cmath>
+#include <limits>
+#include <type_traits>
+#include <vector>
 #include <cstdlib>
 #include <filesystem>
 
@@ -25,6 +29,64 @@ double number(const toml::node& node, const Scene& scene, const std::string& key
   if (!value) throw InputError(fmt::format("{}:{}: {}: expected a number", scene.file, line_of(node), key));
   if (!std::isfinite(*value)) throw InputError(fmt::format("{}:{}: {}: not a finite number ({})", scene.file, line_of(node), key, *value));
   return *value;
+}
+
+// an array of rows of three numbers, each element checked by `check(row, values)` ("" when fine)
+template <class T>
+std::vector<std::array<T, 3>> rows_of_three(const toml::node& node, const Scene& scene, const std::string& key) {
+  const auto* rows = node.as_array();
+  if (!rows) throw InputError(fmt::format("{}:{}: {}: expected an array of [a, b, c] rows", scene.file, line_of(node), key));
+  std::vector<std::array<T, 3>> out;
+  for (size_t r = 0; r < rows->size(); ++r) {
+    const toml::node& row_node = *rows->get(r);
+    const std::string at = fmt::format("{}[{}]", key, r);
+    const auto* row = row_node.as_array();
+    if (!row || row->size() != 3) throw InputError(fmt::format("{}:{}: {}: expected three numbers", scene.file, line_of(row_node), at));
+    std::array<T, 3> values{};
+    for (size_t c = 0; c < 3; ++c) {
+      const toml::node& cell = *row->get(c);
+      if constexpr (std::is_integral_v<T>) {
+        const auto* i = cell.as_integer();
+        if (!i) throw InputError(fmt::format("{}:{}: {}: expected whole vertex indices", scene.file, line_of(cell), at));
+        if (i->get() < 0 || i->get() > std::numeric_limits<int>::max())
+          throw InputError(fmt::format("{}:{}: {}: vertex index {} out of range", scene.file, line_of(cell), at, i->get()));
+        values[c] = static_cast<T>(i->get());
+      } else {
+        values[c] = number(cell, scene, at);
+      }
+    }
+    out.push_back(values);
+  }
+  return out;
+}
+
+// [mesh]: vertices and triangles, every index naming a vertex
+TriangleMesh mesh_table(const toml::node& node, Scene& scene) {
+  const auto* table = node.as_table();
+  if (!table) throw InputError(fmt::format("{}:{}: mesh: expected a table", scene.file, line_of(node)));
+  const toml::node* vertices = table->get("vertices");
+  const toml::node* triangles = table->get("triangles");
+  for (auto&& [k, value] : *table)
+    if (k.str() != "vertices" && k.str() != "triangles")
+      throw InputError(fmt::format("{}:{}: mesh.{}: unknown key (a mesh has vertices and triangles)", scene.file, line_of(value), k.str()));
+  if (!vertices || !triangles) throw InputError(fmt::format("{}:{}: mesh: needs both vertices and triangles", scene.file, line_of(node)));
+  const auto v = rows_of_three<double>(*vertices, scene, "mesh.vertices");
+  const auto f = rows_of_three<int>(*triangles, scene, "mesh.triangles");
+  TriangleMesh mesh;
+  mesh.vertices.resize(static_cast<Eigen::Index>(v.size()), 3);
+  mesh.faces.resize(static_cast<Eigen::Index>(f.size()), 3);
+  for (size_t r = 0; r < v.size(); ++r)
+    for (int c = 0; c < 3; ++c) mesh.vertices(static_cast<Eigen::Index>(r), c) = v[r][static_cast<size_t>(c)];
+  for (size_t r = 0; r < f.size(); ++r)
+    for (int c = 0; c < 3; ++c) {
+      const int index = f[r][static_cast<size_t>(c)];
+      if (index >= static_cast<int>(v.size()))
+        throw InputError(fmt::format("{}:{}: mesh.triangles[{}]: vertex index {} out of range ({} vertices)", scene.file,
+                                     line_of(*triangles->as_array()->get(r)), r, index, v.size()));
+      mesh.faces(static_cast<Eigen::Index>(r), c) = index;
+    }
+  scene.lines["mesh"] = line_of(node);
+  return mesh;
 }
 
 }  // namespace
@@ -79,8 +141,10 @@ Scene load_scene(const std::string& file) {
         else if (name == "output_dt") scene.output_dt = number(value, scene, full);
         else throw InputError(fmt::format("{}:{}: {}: unknown key (run takes t_end, method, dt, rtol, atol, output_dt, event_location)", file, line_of(value), full));
       }
+    } else if (key == "mesh") {
+      scene.mesh = mesh_table(node, scene);
     } else {
-      throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run])", file, line_of(node), key));
+      throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run], [mesh])", file, line_of(node), key));
     }
   }
   if (scene.model.empty()) throw InputError(fmt::format("{}: model: missing", file));

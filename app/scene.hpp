@@ -7,9 +7,13 @@
 //   t_end = 10.0
 //   method = "rk4"
 //   dt = 1e-3
+//   [mesh]         # for models that take a triangle mesh (particle-mesh): positions (m) and
+//   vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]   # counter-clockwise faces seen from outside
+//   triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
 #pragma once
 
 #include "models/model.hpp"
+#include "models/triangle_mesh.hpp"
 
 #include <map>
 #include <optional>
@@ -32,6 +36,7 @@ struct Scene {
   std::optional<double> t_end, dt, rtol, atol, output_dt;
   std::optional<std::string> method;
   std::optional<std::string> event_location;
+  std::optional<TriangleMesh> mesh;       // [mesh], indices in range and vertices finite (checked on loading)
 
   // "file:line: key" where the key was written, "file: key" otherwise
   std::string where(const std::string& key) const;

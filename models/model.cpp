@@ -2,6 +2,7 @@
 
 #include "bouncing_ball.hpp"
 #include "flow_particle.hpp"
+#include "particle_mesh.hpp"
 #include "particle_system.hpp"
 #include "particles_in_box.hpp"
 #include "pendulum.hpp"
@@ -37,6 +38,9 @@ const std::array model_table{
               particles_in_box_params(), [](const Params& p) { return make_particles_in_box(p); }},
     ModelInfo{"particle-system", "many particles in a trap with gravity and drag, optional short-range repulsion via a cell list",
               particle_system_params(), [](const Params& p) { return make_particle_system(p); }},
+    ModelInfo{"particle-mesh", "particles falling on a convex triangle-mesh obstacle ([mesh]) and a ground plane of any normal",
+              particle_mesh_params(), [](const Params& p) { return make_particle_mesh(p, default_obstacle()); },
+              [](const Params& p, const TriangleMesh& mesh) { return make_particle_mesh(p, mesh); }},
 };
 
 }  // namespace

@@ -53,11 +53,16 @@ class Model : public OdeSystem {
   virtual Eigen::VectorXd exact(double t) const;
 };
 
+struct TriangleMesh;
+
 struct ModelInfo {
   std::string_view name;
   std::string_view description;
   std::span<const ParamSpec> params;
   std::function<std::unique_ptr<Model>(const Params&)> make;
+  // for a model that takes a triangle mesh from the scene (its [mesh] table); make uses a default one.
+  // Throws BadParameter with key "mesh" for a mesh the model cannot use
+  std::function<std::unique_ptr<Model>(const Params&, const TriangleMesh&)> make_with_mesh = nullptr;
 };
 
 std::span<const ModelInfo> models();

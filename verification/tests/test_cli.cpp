@@ -92,6 +92,12 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
   const fs::path bad_length = scene("length.toml", "model = \"pendulum\"\n[parameters]\nlength = -1.0\n[run]\ndt = 0.01\n");
   const fs::path big_dt = scene("bigdt.toml", "model = \"pendulum\"\n[run]\nt_end = 1.0\ndt = 2.0\n");
   const fs::path nan_value = scene("nan.toml", "model = \"pendulum\"\n[parameters]\ng = nan\n[run]\ndt = 0.01\n");
+  // meshes: an index out of range, a non-finite vertex, an open mesh, and a mesh given to a model without one
+  const std::string verts = "vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]\n";
+  const fs::path bad_index = scene("index.toml", "model = \"particle-mesh\"\n[mesh]\n" + verts + "triangles = [[0, 2, 1],\n [0, 1, 3],\n [0, 3, 9],\n [1, 2, 3]]\n");
+  const fs::path bad_vertex = scene("vertex.toml", "model = \"particle-mesh\"\n[mesh]\nvertices = [[0, 0, 0],\n [1, nan, 0], [0, 1, 0], [0, 0, 1]]\ntriangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]\n");
+  const fs::path open_mesh = scene("open.toml", "model = \"particle-mesh\"\n\n[mesh]\n" + verts + "triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2]]\n");
+  const fs::path no_mesh_model = scene("pendmesh.toml", "model = \"pendulum\"\n[run]\ndt = 0.01\n[mesh]\n" + verts + "triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]\n");
   const std::vector<std::pair<std::string, std::string>> cases{
       {fmt::format("run '{}' --out '{}'", bad_toml.string(), out.string()), "broken.toml:3:"},
       {fmt::format("run '{}' --out '{}'", bad_model.string(), out.string()), "nomodel.toml:1: model"},
@@ -113,6 +119,11 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run scenes/flow-particle.toml --method symplectic-euler --out '{}'", out.string()), "symplectic-euler"},
       {"run scenes/pendulum.toml --out /proc/no-such-dir", "--out"},
       {fmt::format("run scenes/no-such-scene.toml --out '{}'", out.string()), "no-such-scene.toml"},
+      {fmt::format("run '{}' --out '{}'", bad_index.string(), out.string()), "index.toml:6: mesh.triangles[2]: vertex index 9 out of range"},
+      {fmt::format("run '{}' --out '{}'", bad_vertex.string(), out.string()), "vertex.toml:4: mesh.vertices[1]: not a finite number"},
+      {fmt::format("run '{}' --out '{}'", open_mesh.string(), out.string()), "open.toml:3: mesh: a closed mesh needs at least 4 triangles"},
+      {fmt::format("run '{}' --out '{}'", no_mesh_model.string(), out.string()), "pendmesh.toml:4: mesh: model pendulum takes no mesh"},
+      {fmt::format("run scenes/particle-mesh.toml --set plane_nx=0 --set plane_ny=0 --set plane_nz=0 --out '{}'", out.string()), "--set plane_nx: parameters plane_nx, plane_ny, plane_nz: the ground plane's normal is zero"},
       {fmt::format("run scenes/particle-system.toml --set count=1e12 --out '{}'", out.string()), "--set count"},
       {fmt::format("run scenes/particle-system.toml --set count=-5 --out '{}'", out.string()), "--set count"},
       {fmt::format("run scenes/particle-system.toml --method implicit-euler --out '{}'", out.string()), "--method: implicit-euler keeps dense"},

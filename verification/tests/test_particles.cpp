@@ -1,14 +1,17 @@
 // The particle-plane collision of the seeds and particles bouncing in a box: the three cases, the crossing
 // on the segment, the response, the box invariant at any dt, energy that only decays, reproducible runs.
 #include "models/model.hpp"
+#include "models/particle_mesh.hpp"
 #include "models/plane_collision.hpp"
 #include "solvers/integrator.hpp"
+#include "verification/measure.hpp"
 #include "verification/tolerances.hpp"
 
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
+#include <map>
 #include <random>
 
 namespace stepwise {
@@ -156,6 +159,87 @@ TEST(ParticlesInBox, BadCountsAndRestitutionsNameTheirKey) {
       EXPECT_EQ(e.key, key);
     }
   }
+}
+
+// the deepest any particle lies behind the ground (normal n, offset c) or inside the octahedron, over samples
+double deepest_penetration(const std::vector<Eigen::VectorXd>& samples, int count, const Eigen::Vector3d& n, double c) {
+  const TriangleMesh mesh = default_obstacle();
+  double worst = 0;
+  for (const auto& y : samples)
+    for (int i = 0; i < count; ++i) {
+      const Eigen::Vector3d p = y.segment<3>(3 * i);
+      double inside = -std::numeric_limits<double>::infinity();
+      for (int f = 0; f < mesh.faces.rows(); ++f) {
+        const Triangle t = triangle(mesh, f);
+        inside = std::max(inside, area_normal(t).normalized().dot(p - t.a));
+      }
+      worst = std::max({worst, -(n.normalized().dot(p) - c), -inside});
+    }
+  return worst;
+}
+
+Params rain(double count) { return {{"count", count}, {"plane_ny", 0.3}, {"rest_speed", 0.05}}; }
+
+TEST(ParticleMesh, NoParticleEndsAStepBehindTheGroundOrInsideTheMeshAndEnergyOnlyFalls) {
+  const auto model = make_model("particle-mesh", rain(30));
+  const double e0 = *model->energy(model->initial_state());
+  for (const char* method : {"rk4", "symplectic-euler", "gsl-rkf45", "cvode-bdf"}) {
+    const MethodInfo& info = *find_method(method);
+    StepControl control = info.fixed_step ? StepControl::fixed(1e-3) : StepControl::adaptive(1e-9, 1e-12);
+    control.event_location = EventLocation::restep;
+    const Measured m = run_and_measure(*model, method, control, 3.0, info.fixed_step ? 1e-3 : 0.01);
+    ASSERT_EQ(m.result.status, Status::ok) << method << ": " << m.result.message;
+    std::map<std::string, int> kinds;
+    for (const auto& e : m.result.events) ++kinds[e.kind];
+    const double worst = deepest_penetration(m.result.trajectory.y, 30, Eigen::Vector3d(0, 0.3, 1), 0);
+    double rise = 0, previous = e0;
+    for (const auto& y : m.result.trajectory.y) {
+      rise = std::max(rise, *model->energy(y) - previous);
+      previous = *model->energy(y);
+    }
+    std::cout << method << ": " << kinds["impact"] << " impacts, " << kinds["rest"] << " rests, deepest " << worst
+              << " m, largest energy rise " << rise / e0 << " of E0\n";
+    EXPECT_GT(kinds["rest"], 0) << method;
+    // a particle comes to rest on a face once, and again only after sliding off it: no chattering contact
+    EXPECT_LE(kinds["rest"], 2 * 30) << method;
+    // on a face up to the rounding of p - d n; a resting particle keeps within the contact tolerance (1e-9 m)
+    EXPECT_LE(worst, tolerance::contact_band) << method;
+    // flight and sliding are parabolas, but a particle sliding off a face's edge meets a jump in its
+    // acceleration that no step resolves exactly; impacts themselves only take energy away
+    EXPECT_LE(rise, tolerance::edge_crossing_energy * e0) << method;
+    EXPECT_LT(previous, e0) << method;
+  }
+}
+
+TEST(ParticleMesh, AZeroGroundNormalAndBadMeshesAreRefusedByKey) {
+  try {
+    make_model("particle-mesh", {{"plane_nx", 0}, {"plane_ny", 0}, {"plane_nz", 0}});
+    ADD_FAILURE() << "zero normal accepted";
+  } catch (const BadParameter& e) {
+    EXPECT_EQ(e.key, "plane_nx");
+  }
+  const ModelInfo& info = *find_model("particle-mesh");
+  const Params params = resolve_params(info, {});
+  TriangleMesh open = default_obstacle();
+  open.faces.conservativeResize(7, 3);
+  TriangleMesh inward = default_obstacle();
+  inward.faces.col(1).swap(inward.faces.col(2));
+  TriangleMesh dent = default_obstacle();
+  dent.vertices(1, 2) = 0.3;  // the top vertex pushed below the equator: not convex
+  TriangleMesh out_of_range = default_obstacle();
+  out_of_range.faces(2, 1) = 17;
+  TriangleMesh not_finite = default_obstacle();
+  not_finite.vertices(3, 0) = std::numeric_limits<double>::quiet_NaN();
+  for (const auto& [name, mesh] : std::vector<std::pair<std::string, TriangleMesh>>{
+           {"open", open}, {"inward", inward}, {"dent", dent}, {"out of range", out_of_range}, {"not finite", not_finite}}) {
+    try {
+      info.make_with_mesh(params, mesh);
+      ADD_FAILURE() << name << " mesh accepted";
+    } catch (const BadParameter& e) {
+      EXPECT_EQ(e.key, "mesh") << name;
+    }
+  }
+  EXPECT_NO_THROW(info.make_with_mesh(params, default_obstacle()));
 }
 
 }  // namespace

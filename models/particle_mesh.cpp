@@ -1,0 +1,210 @@
+#include "particle_mesh.hpp"
+
+#include "particle_common.hpp"
+#include "plane_collision.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <map>
+
+namespace stepwise {
+namespace {
+
+constexpr std::array params{
+    ParamSpec{"count", 40, "", "number of particles N", Bound::positive},
+    ParamSpec{"seed", 1, "", "random seed of the initial positions", Bound::nonnegative},
+    ParamSpec{"spread", 0.6, "m", "particles start in [-spread, spread]^2 horizontally", Bound::positive},
+    ParamSpec{"drop", 1.5, "m", "height of the bottom of the starting box", Bound::finite},
+    ParamSpec{"restitution", 0.6, "", "coefficient of restitution eps of both surfaces", Bound::unit_interval},
+    ParamSpec{"friction", 0.2, "", "Coulomb friction coefficient mu at impacts", Bound::nonnegative},
+    ParamSpec{"g", 9.81, "m/s^2", "gravitational acceleration along -z", Bound::nonnegative},
+    ParamSpec{"rest_speed", 0.05, "m/s", "a rebound slower than this ends in resting (sliding) contact", Bound::positive},
+    ParamSpec{"plane_nx", 0.0, "", "ground plane normal, x component (normalised with the other two)", Bound::finite},
+    ParamSpec{"plane_ny", 0.1, "", "ground plane normal, y component", Bound::finite},
+    ParamSpec{"plane_nz", 1.0, "", "ground plane normal, z component", Bound::finite},
+    ParamSpec{"plane_offset", 0.0, "m", "the ground is the plane n . p = offset (n normalised)", Bound::finite},
+};
+
+// per particle: the state in the integrators' copies and two events
+constexpr double bytes_per_particle = 32 * 6 * 8 + 2 * 256;
+
+// a particle within this of a surface (m), moving along it slower than this (m/s), is resting on it: far
+// above the round-off of sliding along a tilted face (1e-16 m per step) and above an adaptive code's error
+// on the contact (measured with CVODE: at 1e-9 a particle resting on a mesh face fell out of contact and
+// back 5 941 times in 3 s at rtol 1e-6; at 1e-7, once), far below any bounce
+constexpr double contact_tolerance = 1e-7;
+
+class ParticleMesh final : public Model {
+ public:
+  ParticleMesh(const Params& p, std::vector<Plane> faces)
+      : n_(particle_count(p, "count", bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
+        drop_(p.at("drop")), eps_(p.at("restitution")), mu_(p.at("friction")), g_(p.at("g")),
+        rest_speed_(p.at("rest_speed")), faces_(std::move(faces)) {
+    const Eigen::Vector3d normal(p.at("plane_nx"), p.at("plane_ny"), p.at("plane_nz"));
+    if (!(normal.norm() > 0))
+      throw BadParameter("plane_nx", "parameters plane_nx, plane_ny, plane_nz: the ground plane's normal is zero");
+    ground_ = make_plane(p.at("plane_offset") * normal.normalized(), normal);
+    for (int i = 0; i < n_; ++i) {
+      events_.push_back(Event{fmt::format("particle {} ground", i), -1,
+                              [this, i](double, const Eigen::VectorXd& y) { return event_distance(y, i, ground_); },
+                              [this, i](double, Eigen::VectorXd& y) { return collide(y, i, ground_); }});
+      events_.push_back(Event{fmt::format("particle {} mesh", i), -1,
+                              [this, i](double, const Eigen::VectorXd& y) { return event_distance(y, i, nearest_face(position(y, i))); },
+                              [this, i](double, Eigen::VectorXd& y) { return collide(y, i, nearest_face(position(y, i))); }});
+    }
+  }
+
+  std::string_view name() const override { return "particle-mesh"; }
+  int size() const override { return 6 * n_; }
+  bool autonomous() const override { return true; }
+  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }
+  std::span<const Event> events() const override { return events_; }
+  // the shortest return to a surface: a rebound at rest_speed along gravity, up and down
+  double event_free_interval() const override { return g_ > 0 ? 2 * rest_speed_ / g_ : std::numeric_limits<double>::infinity(); }
+
+  std::vector<std::string> state_names() const override {
+    std::vector<std::string> names;
+    for (const char* c : {"", "v"})
+      for (int i = 0; i < n_; ++i)
+        for (const char* axis : {"x", "y", "z"}) names.push_back(fmt::format("{}{}[{}]", c, axis, i));
+    return names;
+  }
+  Eigen::VectorXd initial_state() const override {
+    std::mt19937_64 rng(seed_);
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(6 * n_);
+    for (int i = 0; i < n_; ++i) {
+      y[3 * i] = spread_ * (2 * uniform01(rng) - 1);
+      y[3 * i + 1] = spread_ * (2 * uniform01(rng) - 1);
+      y[3 * i + 2] = drop_ + spread_ * uniform01(rng);
+    }
+    return y;
+  }
+
+  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    dydt.head(3 * n_) = y.tail(3 * n_);
+    for (int i = 0; i < n_; ++i) {
+      Eigen::Vector3d a(0, 0, -g_);
+      // resting contact: the surface's normal force cancels what pushes into it
+      const Eigen::Vector3d p = position(y, i), v = velocity(y, i);
+      for (const Plane* face : {&ground_, &nearest_face(p)}) {
+        if (resting(p, v, *face) && a.dot(face->normal) < 0) a -= a.dot(face->normal) * face->normal;
+      }
+      dydt.segment<3>(3 * n_ + 3 * i) = a;
+    }
+  }
+
+  std::optional<double> energy(const Eigen::VectorXd& y) const override {
+    double e = 0.5 * y.tail(3 * n_).squaredNorm();
+    for (int i = 0; i < n_; ++i) e += g_ * y[3 * i + 2];
+    return e;
+  }
+
+  // the signed distance of particle i to the mesh: the largest over its face planes
+  double mesh_distance(const Eigen::VectorXd& y, int i) const { return signed_distance(nearest_face(position(y, i)), position(y, i)); }
+  double ground_distance(const Eigen::VectorXd& y, int i) const { return signed_distance(ground_, position(y, i)); }
+
+ private:
+  static Eigen::Vector3d position(const Eigen::Ref<const Eigen::VectorXd>& y, int i) { return y.segment<3>(3 * i); }
+  Eigen::Vector3d velocity(const Eigen::Ref<const Eigen::VectorXd>& y, int i) const { return y.segment<3>(3 * n_ + 3 * i); }
+
+  // the face whose plane p is farthest in front of (for a point inside: the nearest face)
+  const Plane& nearest_face(const Eigen::Vector3d& p) const {
+    size_t best = 0;
+    double d = signed_distance(faces_[0], p);
+    for (size_t f = 1; f < faces_.size(); ++f)
+      if (const double df = signed_distance(faces_[f], p); df > d) {
+        d = df;
+        best = f;
+      }
+    return faces_[best];
+  }
+
+  static bool resting(const Eigen::Vector3d& p, const Eigen::Vector3d& v, const Plane& face) {
+    return std::abs(signed_distance(face, p)) <= contact_tolerance && std::abs(v.dot(face.normal)) <= contact_tolerance;
+  }
+
+  // the event function: the distance to the surface, held at 1 while the particle rests on it
+  double event_distance(const Eigen::VectorXd& y, int i, const Plane& face) const {
+    const Eigen::Vector3d p = position(y, i);
+    return resting(p, velocity(y, i), face) ? 1.0 : signed_distance(face, p);
+  }
+
+  // particle i meets `face`: onto it, the plane response, and resting contact for a slow rebound
+  std::string collide(Eigen::VectorXd& y, int i, const Plane& face) const {
+    auto p = y.segment<3>(3 * i);
+    auto v = y.segment<3>(3 * n_ + 3 * i);
+    const double d = signed_distance(face, p);
+    // still in front and moving away: the crossing was estimated too early, nothing happens yet
+    if (d > 0 && v.dot(face.normal) >= 0) return "";
+    p -= d * face.normal;
+    if (v.dot(face.normal) < 0) v = collision_response(face, v, eps_, mu_);
+    if (v.dot(face.normal) < rest_speed_) {
+      v -= v.dot(face.normal) * face.normal;
+      return "rest";
+    }
+    return "impact";
+  }
+
+  int n_;
+  unsigned long seed_;
+  double spread_, drop_, eps_, mu_, g_, rest_speed_;
+  std::vector<Plane> faces_;
+  Plane ground_;
+  std::vector<Event> events_;
+};
+
+// the face planes of a closed convex mesh with outward faces, or BadParameter("mesh") naming what is wrong
+std::vector<Plane> convex_faces(const TriangleMesh& mesh) {
+  try {
+    validate(mesh);
+  } catch (const std::invalid_argument& e) {
+    throw BadParameter("mesh", e.what());
+  }
+  if (mesh.faces.rows() < 4) throw BadParameter("mesh", fmt::format("a closed mesh needs at least 4 triangles, got {}", mesh.faces.rows()));
+  // closed: every directed edge (a, b) is matched by exactly one (b, a) of another face
+  std::map<std::pair<int, int>, int> edges;
+  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++edges[{mesh.faces(f, k), mesh.faces(f, (k + 1) % 3)}];
+  for (const auto& [edge, count] : edges) {
+    const auto reverse = edges.find({edge.second, edge.first});
+    if (count != 1 || reverse == edges.end() || reverse->second != 1)
+      throw BadParameter("mesh", fmt::format("mesh is not closed and consistently oriented: edge {}-{} is not shared by exactly two "
+                                             "faces in opposite directions", edge.first, edge.second));
+  }
+  const Aabb box = bounding_box(mesh);
+  const double size = (box.hi - box.lo).norm();
+  std::vector<Plane> planes;
+  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f) {
+    const Triangle t = triangle(mesh, static_cast<int>(f));
+    const Eigen::Vector3d normal = area_normal(t);
+    if (!(normal.norm() > 1e-12 * size * size))
+      throw BadParameter("mesh", fmt::format("mesh triangle {} has zero area", f));
+    const Plane plane = make_plane(t.a, normal);
+    for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
+      if (signed_distance(plane, mesh.vertices.row(v).transpose()) > 1e-9 * size)
+        throw BadParameter("mesh", fmt::format("mesh is not convex with outward faces: vertex {} lies in front of triangle {}", v, f));
+    planes.push_back(plane);
+  }
+  return planes;
+}
+
+}  // namespace
+
+std::span<const ParamSpec> particle_mesh_params() { return params; }
+
+TriangleMesh default_obstacle() {
+  TriangleMesh mesh;
+  mesh.vertices.resize(6, 3);
+  mesh.vertices << 0, 0, 0, 0, 0, 1, 0.5, 0, 0.5, -0.5, 0, 0.5, 0, 0.5, 0.5, 0, -0.5, 0.5;
+  // vertices: 0 bottom, 1 top, 2 +x, 3 -x, 4 +y, 5 -y; faces counter-clockwise from outside
+  mesh.faces.resize(8, 3);
+  mesh.faces << 1, 2, 4, 1, 4, 3, 1, 3, 5, 1, 5, 2, 0, 4, 2, 0, 3, 4, 0, 5, 3, 0, 2, 5;
+  return mesh;
+}
+
+std::unique_ptr<Model> make_particle_mesh(const Params& params, const TriangleMesh& mesh) {
+  return std::make_unique<ParticleMesh>(params, convex_faces(mesh));
+}
+
+}  // namespace stepwise
