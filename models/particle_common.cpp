@@ -27,4 +27,19 @@ unsigned long particle_seed(const Params& params) {
   return static_cast<unsigned long>(seed);
 }
 
+std::vector<std::string> particle_state_names(int n) {
+  std::vector<std::string> names;
+  for (const char* c : {"", "v"})
+    for (int i = 0; i < n; ++i)
+      for (const char* axis : {"x", "y", "z"}) names.push_back(fmt::format("{}{}[{}]", c, axis, i));
+  return names;
+}
+
+double kinetic_and_gravity(const Eigen::VectorXd& y, double g) {
+  const Eigen::Index n = y.size() / 6;
+  double e = 0.5 * y.tail(3 * n).squaredNorm();
+  for (Eigen::Index i = 0; i < n; ++i) e += g * y[3 * i + 2];
+  return e;
+}
+
 }  // namespace stepwise

@@ -18,4 +18,10 @@ int particle_count(const Params& params, std::string_view key, double bytes_each
 // the parameter "seed" as a whole number below 2^53
 unsigned long particle_seed(const Params& params);
 
+// the state layout every particle model shares: x[i], y[i], z[i] for i < n, then vx[i], vy[i], vz[i]
+std::vector<std::string> particle_state_names(int n);
+
+// sum |v_i|^2 / 2 + g z_i over the particles of that layout (per unit mass)
+double kinetic_and_gravity(const Eigen::VectorXd& y, double g);
+
 }  // namespace stepwise

@@ -63,13 +63,7 @@ class ParticleMesh final : public Model {
   // the shortest return to a surface: a rebound at rest_speed along gravity, up and down
   double event_free_interval() const override { return g_ > 0 ? 2 * rest_speed_ / g_ : std::numeric_limits<double>::infinity(); }
 
-  std::vector<std::string> state_names() const override {
-    std::vector<std::string> names;
-    for (const char* c : {"", "v"})
-      for (int i = 0; i < n_; ++i)
-        for (const char* axis : {"x", "y", "z"}) names.push_back(fmt::format("{}{}[{}]", c, axis, i));
-    return names;
-  }
+  std::vector<std::string> state_names() const override { return particle_state_names(n_); }
   Eigen::VectorXd initial_state() const override {
     std::mt19937_64 rng(seed_);
     Eigen::VectorXd y = Eigen::VectorXd::Zero(6 * n_);
@@ -94,11 +88,7 @@ class ParticleMesh final : public Model {
     }
   }
 
-  std::optional<double> energy(const Eigen::VectorXd& y) const override {
-    double e = 0.5 * y.tail(3 * n_).squaredNorm();
-    for (int i = 0; i < n_; ++i) e += g_ * y[3 * i + 2];
-    return e;
-  }
+  std::optional<double> energy(const Eigen::VectorXd& y) const override { return kinetic_and_gravity(y, g_); }
 
   // the signed distance of particle i to the mesh: the largest over its face planes
   double mesh_distance(const Eigen::VectorXd& y, int i) const { return signed_distance(nearest_face(position(y, i)), position(y, i)); }
@@ -132,18 +122,7 @@ class ParticleMesh final : public Model {
 
   // particle i meets `face`: onto it, the plane response, and resting contact for a slow rebound
   std::string collide(Eigen::VectorXd& y, int i, const Plane& face) const {
-    auto p = y.segment<3>(3 * i);
-    auto v = y.segment<3>(3 * n_ + 3 * i);
-    const double d = signed_distance(face, p);
-    // still in front and moving away: the crossing was estimated too early, nothing happens yet
-    if (d > 0 && v.dot(face.normal) >= 0) return "";
-    p -= d * face.normal;
-    if (v.dot(face.normal) < 0) v = collision_response(face, v, eps_, mu_);
-    if (v.dot(face.normal) < rest_speed_) {
-      v -= v.dot(face.normal) * face.normal;
-      return "rest";
-    }
-    return "impact";
+    return plane_contact(face, y.segment<3>(3 * i), y.segment<3>(3 * n_ + 3 * i), eps_, mu_, rest_speed_);
   }
 
   int n_;

@@ -37,13 +37,7 @@ class ParticleSystem final : public Model {
   bool autonomous() const override { return true; }
   std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }
 
-  std::vector<std::string> state_names() const override {
-    std::vector<std::string> names;
-    for (const char* c : {"", "v"})
-      for (int i = 0; i < n_; ++i)
-        for (const char* axis : {"x", "y", "z"}) names.push_back(fmt::format("{}{}[{}]", c, axis, i));
-    return names;
-  }
+  std::vector<std::string> state_names() const override { return particle_state_names(n_); }
   Eigen::VectorXd initial_state() const override {
     std::mt19937_64 rng(seed_);
     Eigen::VectorXd y(6 * n_);
@@ -146,10 +140,7 @@ class ParticleSystem final : public Model {
 
   // kinetic energy and the trap's and gravity's potential energy
   double field_energy(const Eigen::VectorXd& y) const {
-    const auto x = y.head(3 * n_), v = y.segment(3 * n_, 3 * n_);
-    double e = 0.5 * v.squaredNorm() + 0.5 * k_ * x.squaredNorm();
-    for (int i = 0; i < n_; ++i) e += g_ * x[3 * i + 2];
-    return e;
+    return kinetic_and_gravity(y, g_) + 0.5 * k_ * y.head(3 * n_).squaredNorm();
   }
 
   // the repulsion's potential energy and the number of pairs within its reach

@@ -47,13 +47,7 @@ class ParticlesInBox final : public Model {
   std::string_view name() const override { return "particles-in-box"; }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
-  std::vector<std::string> state_names() const override {
-    std::vector<std::string> names;
-    for (const char* c : {"", "v"})
-      for (int i = 0; i < n_; ++i)
-        for (const char* axis : {"x", "y", "z"}) names.push_back(fmt::format("{}{}[{}]", c, axis, i));
-    return names;
-  }
+  std::vector<std::string> state_names() const override { return particle_state_names(n_); }
   Eigen::VectorXd initial_state() const override {
     std::mt19937_64 rng(seed_);
     auto uniform = [&rng] { return uniform01(rng); };
@@ -83,30 +77,14 @@ class ParticlesInBox final : public Model {
     dfdy.topRightCorner(3 * n_, 3 * n_).setIdentity();
   }
 
-  std::optional<double> energy(const Eigen::VectorXd& y) const override {
-    double e = 0.5 * y.tail(3 * n_).squaredNorm();
-    for (int i = 0; i < n_; ++i) e += g_ * y[3 * i + 2];
-    return e;
-  }
+  std::optional<double> energy(const Eigen::VectorXd& y) const override { return kinetic_and_gravity(y, g_); }
 
  private:
   // particle i meets `wall`: onto the plane, then the plane response; a slow rebound off the floor rests
+  // (exactly on it, z = 0 and vz = 0, which rhs reads as resting contact)
   std::string collide(int i, const Plane& wall, Eigen::VectorXd& y) const {
-    auto p = y.segment<3>(3 * i);
-    auto v = y.segment<3>(3 * n_ + 3 * i);
-    // still in front and moving away: the crossing was estimated too early, nothing happens yet
-    const double d = signed_distance(wall, p);
-    if (d > 0 && v.dot(wall.normal) >= 0) return "";
-    p -= d * wall.normal;
-    // only a particle moving into the wall is reflected
-    if (v.dot(wall.normal) < 0) v = collision_response(wall, v, eps_, mu_);
     const bool floor = wall.normal.z() > 0;
-    if (floor && v.dot(wall.normal) < rest_speed_) {
-      p.z() = 0;
-      v.z() = 0;
-      return "rest";
-    }
-    return "impact";
+    return plane_contact(wall, y.segment<3>(3 * i), y.segment<3>(3 * n_ + 3 * i), eps_, mu_, floor ? rest_speed_ : 0.0);
   }
 
   int n_;

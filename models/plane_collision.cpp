@@ -37,4 +37,17 @@ Eigen::Vector3d collision_response(const Plane& plane, const Eigen::Vector3d& v,
   return -restitution * vn * n + kept * tangential;
 }
 
+std::string plane_contact(const Plane& plane, Eigen::Ref<Eigen::Vector3d> p, Eigen::Ref<Eigen::Vector3d> v, double restitution,
+                          double friction, double rest_speed) {
+  const double d = signed_distance(plane, p);
+  if (d > 0 && v.dot(plane.normal) >= 0) return "";
+  p -= d * plane.normal;
+  if (v.dot(plane.normal) < 0) v = collision_response(plane, v, restitution, friction);
+  if (v.dot(plane.normal) < rest_speed) {
+    v -= v.dot(plane.normal) * plane.normal;
+    return "rest";
+  }
+  return "impact";
+}
+
 }  // namespace stepwise

@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 
 #include <optional>
+#include <string>
 
 namespace stepwise {
 
@@ -35,5 +36,13 @@ std::optional<double> segment_crossing(const Plane& plane, const Eigen::Vector3d
 
 // velocity after an impact with the plane: restitution eps in [0, 1], Coulomb friction coefficient mu >= 0
 Eigen::Vector3d collision_response(const Plane& plane, const Eigen::Vector3d& v, double restitution, double friction);
+
+// a particle at p with velocity v meets the plane (an event handler's whole work): "" when it is still in
+// front and moving away (the crossing was estimated too early); else it is moved onto the plane and, if
+// moving into it, given the response; a rebound slower than rest_speed (0: never) loses its normal velocity
+// and rests on the plane ("rest"), else "impact". On an axis-aligned plane through a grid value, p and v
+// land on it exactly (d n and (v . n) n have one non-zero component)
+std::string plane_contact(const Plane& plane, Eigen::Ref<Eigen::Vector3d> p, Eigen::Ref<Eigen::Vector3d> v, double restitution,
+                          double friction, double rest_speed);
 
 }  // namespace stepwise
