@@ -31,7 +31,8 @@ double number(const toml::node& node, const Scene& scene, const std::string& key
   return *value;
 }
 
-// an array of rows of three numbers, each element checked by `check(row, values)` ("" when fine)
+// an array of rows of three: finite numbers, or (T integral) non-negative whole numbers, each error naming
+// the row and its line
 template <class T>
 std::vector<std::array<T, 3>> rows_of_three(const toml::node& node, const Scene& scene, const std::string& key) {
   const auto* rows = node.as_array();

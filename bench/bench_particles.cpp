@@ -23,9 +23,10 @@ constexpr double bytes_per_particle_step = 96;  // 6 doubles read, 6 written
 // steps, so runs as long as a scene's keep it below a tenth of the time
 constexpr int steps = 400;
 
+// `steps` symplectic-Euler steps of range(0) particles, with the repulsion's stiffness range(1) (0: off)
 void BM_particle_step(benchmark::State& state) {
   const auto n = static_cast<double>(state.range(0));
-  const auto model = stepwise::make_model("particle-system", {{"count", n}, {"repulsion", 0}});
+  const auto model = stepwise::make_model("particle-system", {{"count", n}, {"repulsion", static_cast<double>(state.range(1))}});
   const auto integrator = stepwise::make_integrator("symplectic-euler", stepwise::StepControl::fixed(1e-3));
   const Eigen::VectorXd y0 = model->initial_state();
   for (auto _ : state) {
@@ -34,7 +35,7 @@ void BM_particle_step(benchmark::State& state) {
   }
   state.counters["particle_steps"] = benchmark::Counter(n * steps * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_particle_step)->Arg(100000)->Arg(4000000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_particle_step)->Args({100000, 0})->Args({4000000, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // a[i] = b[i] + s c[i] over arrays as large together as n particles' working set
 void BM_triad(benchmark::State& state) {
@@ -54,18 +55,7 @@ void BM_triad(benchmark::State& state) {
 BENCHMARK(BM_triad)->Arg(100000)->Arg(4000000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // with the repulsion on: the pairs dominate, and the cell list keeps them O(N)
-void BM_particle_step_repulsion(benchmark::State& state) {
-  const auto n = static_cast<double>(state.range(0));
-  const auto model = stepwise::make_model("particle-system", {{"count", n}, {"repulsion", 400}});
-  const auto integrator = stepwise::make_integrator("symplectic-euler", stepwise::StepControl::fixed(1e-3));
-  const Eigen::VectorXd y0 = model->initial_state();
-  for (auto _ : state) {
-    const auto r = integrator->integrate(*model, 0.0, y0, std::vector{5 * 1e-3});
-    benchmark::DoNotOptimize(r.y_stop[0]);
-  }
-  state.counters["particle_steps"] = benchmark::Counter(n * 5 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
-}
-BENCHMARK(BM_particle_step_repulsion)->Arg(100000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_particle_step)->Args({100000, 400})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // n points of the default scene's density (100 000 in [-1, 1]^3), radius 0.05
 std::vector<double> cloud(int n) {
@@ -106,6 +96,6 @@ int main(int argc, char** argv) {
   using stepwise::bench::RateBound;
   return stepwise::bench::run_with_ratios(
       argc, argv, {{"BM_pairs_all/5000", "BM_pairs_cell_list/5000"}},
-      {RateBound{"BM_particle_step/100000/real_time", "particle_steps", "BM_triad/100000/real_time", "bytes", bytes_per_particle_step},
-       RateBound{"BM_particle_step/4000000/real_time", "particle_steps", "BM_triad/4000000/real_time", "bytes", bytes_per_particle_step}});
+      {RateBound{"BM_particle_step/100000/0/real_time", "particle_steps", "BM_triad/100000/real_time", "bytes", bytes_per_particle_step},
+       RateBound{"BM_particle_step/4000000/0/real_time", "particle_steps", "BM_triad/4000000/real_time", "bytes", bytes_per_particle_step}});
 }

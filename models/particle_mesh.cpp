@@ -90,10 +90,6 @@ class ParticleMesh final : public Model {
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override { return kinetic_and_gravity(y, g_); }
 
-  // the signed distance of particle i to the mesh: the largest over its face planes
-  double mesh_distance(const Eigen::VectorXd& y, int i) const { return signed_distance(nearest_face(position(y, i)), position(y, i)); }
-  double ground_distance(const Eigen::VectorXd& y, int i) const { return signed_distance(ground_, position(y, i)); }
-
  private:
   static Eigen::Vector3d position(const Eigen::Ref<const Eigen::VectorXd>& y, int i) { return y.segment<3>(3 * i); }
   Eigen::Vector3d velocity(const Eigen::Ref<const Eigen::VectorXd>& y, int i) const { return y.segment<3>(3 * n_ + 3 * i); }

@@ -52,10 +52,9 @@ class ParticleSystem final : public Model {
   }
 
   // the field, then the pairs the cell list finds
-  void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
+  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
     const double* x = y.data();
     field(x, x + 3 * n_, a.data(), 0, 3L * n_);
-    (void)t;
     if (s_ == 0) return;
     CellList cells;
     cells.build(x, n_, rc_);

@@ -50,11 +50,10 @@ class ParticlesInBox final : public Model {
   std::vector<std::string> state_names() const override { return particle_state_names(n_); }
   Eigen::VectorXd initial_state() const override {
     std::mt19937_64 rng(seed_);
-    auto uniform = [&rng] { return uniform01(rng); };
     Eigen::VectorXd y(6 * n_);
     const double margin = size_ / 20;
-    for (int k = 0; k < 3 * n_; ++k) y[k] = margin + (size_ - 2 * margin) * uniform();
-    for (int k = 0; k < 3 * n_; ++k) y[3 * n_ + k] = speed_ * (2 * uniform() - 1);
+    for (int k = 0; k < 3 * n_; ++k) y[k] = margin + (size_ - 2 * margin) * uniform01(rng);
+    for (int k = 0; k < 3 * n_; ++k) y[3 * n_ + k] = speed_ * (2 * uniform01(rng) - 1);
     return y;
   }
   std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }

@@ -157,7 +157,7 @@ class GslAdaptiveIntegrator final : public Integrator {
     gsl_odeiv2_driver* d = session.driver();
     const double bound = divergence_bound(control_, y0);
 
-    Eigen::VectorXd y = y0, y_start;
+    Eigen::VectorXd y = y0, y_start;  // y_start: the step's start, for events and a failing step
     double t = t0;
     const auto events = system.events();
     Eigen::VectorXd g_start = event_values(events, t, y);
@@ -197,9 +197,11 @@ class GslAdaptiveIntegrator final : public Integrator {
           gsl_odeiv2_evolve_reset(d->e);
           gsl_odeiv2_step_reset(d->s);
         }
-        result.y_stop = y;
       }
-      if (result.status != Status::ok) break;
+      if (result.status != Status::ok) {
+        result.y_stop = y_start;  // the last finite state: the start of the step that failed
+        break;
+      }
       record_output(result, control_, t, y);
     }
     result.stats.cpu_seconds = thread_cpu_seconds() - start;

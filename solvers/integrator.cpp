@@ -32,7 +32,7 @@ constexpr std::array method_table{
     MethodInfo{"rk4", "explicit, fixed step", "4", "hand-written", 4, 4, true, false, false},
     MethodInfo{"implicit-euler", "implicit, fixed step, Newton + dense LU", "1", "hand-written", 1, 1, true, false, false, true},
     MethodInfo{"cvode-adams", "adaptive, variable order Adams-Moulton, fixed-point iteration", "1-12", "SUNDIALS CVODE", 1, 12, false, true, false},
-    MethodInfo{"cvode-bdf", "adaptive, variable order BDF, Newton + dense LU or KLU", "1-5", "SUNDIALS CVODE", 1, 5, false, true, false, true},
+    MethodInfo{"cvode-bdf", "adaptive, variable order BDF, Newton + dense LU or KLU", "1-5", "SUNDIALS CVODE", 1, 5, false, true, false, true, true},
     MethodInfo{"gsl-rk2", "explicit embedded Runge-Kutta (2,3), advances with the third-order solution", "3", "GSL odeiv2", 3, 3, true, true, false},
     MethodInfo{"gsl-rk4", "explicit classical Runge-Kutta, error by step doubling", "4", "GSL odeiv2", 4, 4, true, true, false},
     MethodInfo{"gsl-rkf45", "explicit embedded Runge-Kutta-Fehlberg (4,5)", "5", "GSL odeiv2", 5, 5, true, true, false},
@@ -81,7 +81,7 @@ double physical_memory_bytes() {
 }
 
 double dense_matrix_bytes(const MethodInfo& method, const OdeSystem& system) {
-  if (!method.dense_matrix || (method.name == "cvode-bdf" && system.has_sparse_jacobian())) return 0;
+  if (!method.dense_matrix || (method.sparse_newton && system.has_sparse_jacobian())) return 0;
   const double n = system.size();
   // the Jacobian and the Newton matrix (GSL's implicit steppers and Bulirsch-Stoer keep a few more)
   return 2 * n * n * sizeof(double);

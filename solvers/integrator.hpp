@@ -99,7 +99,8 @@ struct MethodInfo {
   bool fixed_step = false;  // accepts a fixed dt
   bool adaptive = false;    // accepts rtol/atol
   bool needs_second_order = false;  // needs y = (x, v)
-  bool dense_matrix = false;        // keeps a dense size() x size() Newton matrix (CVODE BDF: unless the system has a sparse Jacobian)
+  bool dense_matrix = false;        // keeps a dense size() x size() Newton matrix ...
+  bool sparse_newton = false;       // ... unless the system has a sparse Jacobian, which it solves with (KLU)
 };
 
 std::span<const MethodInfo> methods();

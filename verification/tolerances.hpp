@@ -109,6 +109,17 @@ inline constexpr double reordered_pair_sum = 1e-13;
 // fails at once if a pair force were one-sided (no energy to conserve)
 inline constexpr double particle_energy_adaptive = 1e-6;
 
+// energy of the particle system between samples 10 rk4 steps apart (h = 1e-3): drag only removes energy,
+// and rk4's local energy error per step is O((w h)^5) of it, w ~ sqrt(2 s) ~ 28 rad/s for the repulsion's
+// springs: (0.028)^5 / 120 ~ 1.5e-10 per step, and the force's kink at r_c costs a few orders there;
+// 1e-9 of E0 over ten steps. A one-sided pair force or a sign error in the drag would add energy at once
+inline constexpr double rk4_energy_per_sample = 1e-9;
+
+// rk4 on the damped oscillators of the particle system (w = 2 rad/s, h = 5e-3, 0.2 s): global error
+// ~ (w h)^4 w t / 120 times the amplitude (~3 m) ~ 1e-10 (measured 2.0e-10); 1e-8 leaves room for the
+// constant and still fails if `error` compared against the wrong time or state
+inline constexpr double rk4_oscillator_error = 1e-8;
+
 // symplectic Euler's energy error stays in a band of width O(h) around the true energy over long runs,
 // with no drift: the error over the run's second half exceeds that over its first half by no more than this
 // factor (a drifting method, explicit Euler, grows it by orders of magnitude)

@@ -1,6 +1,7 @@
 // The command-line contract of DESIGN.md, pinned against the built binary: names and shapes of
 // methods --json, trajectory.csv and summary.json, exit statuses, and one-line errors naming file, line and key.
 #include "solvers/integrator.hpp"
+#include "verification/tolerances.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -159,10 +160,10 @@ TEST_F(Cli, AParticleSystemWritesItsSummaryRatherThanEveryParticle) {
   EXPECT_EQ(s["final_state"].size(), 8u);
   EXPECT_GT(s["final_state"]["contacts"].get<double>(), 0);
   EXPECT_TRUE(s["error"].is_null()) << "no exact solution with repulsion";
-  // without repulsion every particle has an exact solution, and rk4 at dt = 5e-3 is within ~1e-9 of it
+  // without repulsion every particle has an exact solution, and rk4 at dt = 5e-3 is within 2e-10 of it
   const Output exact = run(fmt::format("run scenes/particle-system.toml --set count=2000 --set repulsion=0 --method rk4 --t-end 0.2 --out '{}'", out.string()));
   ASSERT_EQ(exact.status, 0) << exact.err;
-  EXPECT_LT(nlohmann::json::parse(slurp(out / "summary.json"))["error"].get<double>(), 1e-8);
+  EXPECT_LT(nlohmann::json::parse(slurp(out / "summary.json"))["error"].get<double>(), tolerance::rk4_oscillator_error);
 }
 
 TEST_F(Cli, ADivergedRunExitsOneWithItsSummaryWritten) {

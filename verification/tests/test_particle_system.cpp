@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <iostream>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -150,8 +152,11 @@ TEST(ParticleSystem, DragOnlyTakesEnergyAway) {
   const Measured m = run_and_measure(*model, "rk4", StepControl::fixed(1e-3), 3.0, 0.01);
   ASSERT_EQ(m.result.status, Status::ok);
   // dE/dt = -gamma sum |v|^2 <= 0: each sample at most the one before, up to rk4's error per interval
-  for (size_t k = 1; k < m.result.trajectory.y.size(); ++k)
-    EXPECT_LE(m.result.trajectory.y[k][0], m.result.trajectory.y[k - 1][0] + 1e-9 * std::abs(m.result.trajectory.y[0][0])) << "sample " << k;
+  const auto& samples = m.result.trajectory.y;
+  double rise = -std::numeric_limits<double>::infinity();
+  for (size_t k = 1; k < samples.size(); ++k) rise = std::max(rise, (samples[k][0] - samples[k - 1][0]) / std::abs(samples[0][0]));
+  std::cout << "drag: largest energy change between samples " << rise << " of E0\n";
+  EXPECT_LE(rise, tolerance::rk4_energy_per_sample);
 }
 
 TEST(ParticleSystem, SameSeedSameStateAndBadCountsAreRefusedByKey) {
