@@ -102,8 +102,8 @@ Prepared prepare(const RunOptions& o) {
                                  o.method ? "--method" : s.where("run.method"), p.method, p.model->size(), p.model->size(),
                                  bytes / 0x1p30, p.model->size(),
                                  p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
-  if (method->needs_second_order && !p.model->second_order())
-    throw InputError(fmt::format("--method: {} needs a second-order model y = (x, v); {} is first order", p.method, s.model));
+  if (!method_applies(*method, *p.model))
+    throw InputError(fmt::format("{}: {}; {} is not one", o.method ? "--method" : s.where("run.method"), method_requirement(*method), s.model));
 
   const std::string location = o.event_location.value_or(s.event_location.value_or("linear"));
   if (location == "restep") p.control.event_location = EventLocation::restep;

@@ -2,6 +2,7 @@
 
 #include "bouncing_ball.hpp"
 #include "flow_particle.hpp"
+#include "height_field.hpp"
 #include "particle_mesh.hpp"
 #include "particle_system.hpp"
 #include "particles_in_box.hpp"
@@ -41,6 +42,12 @@ const std::array model_table{
     ModelInfo{"particle-mesh", "particles falling on a convex triangle-mesh obstacle ([mesh]) and a ground plane of any normal",
               particle_mesh_params(), [](const Params& p) { return make_particle_mesh(p, default_obstacle()); },
               [](const Params& p, const TriangleMesh& mesh) { return make_particle_mesh(p, mesh); }},
+    ModelInfo{"water-drop", "height-field water: a drop starts a circular wave (damped wave equation on a grid)",
+              water_drop_params(), [](const Params& p) { return make_water_drop(p); }},
+    ModelInfo{"standing-wave", "height-field water in one mode sin(m pi x/L) sin(n pi y/L); exact solution",
+              standing_wave_params(), [](const Params& p) { return make_standing_wave(p); }},
+    ModelInfo{"pool", "height-field water with drops falling at seeded random places and times (events)",
+              pool_params(), [](const Params& p) { return make_pool(p); }},
 };
 
 }  // namespace

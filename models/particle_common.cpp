@@ -8,11 +8,11 @@
 
 namespace stepwise {
 
-int particle_count(const Params& params, std::string_view key, double bytes_each) {
+int particle_count(const Params& params, std::string_view key, double bytes_each, std::string_view what) {
   const double count = params.at(std::string(key));
   const double memory = physical_memory_bytes();
   if (count != std::floor(count) || count < 1)
-    throw BadParameter(std::string(key), fmt::format("parameter '{}' must be a whole number of particles, got {}", key, count));
+    throw BadParameter(std::string(key), fmt::format("parameter '{}' must be a whole number of {}, got {}", key, what, count));
   if (count * bytes_each > memory / 2 || count > 2e9)
     throw BadParameter(std::string(key), fmt::format("parameter '{}' = {:.0f} would not fit in memory: about {:.3g} GiB, "
                                                      "and this machine has {:.3g} GiB",

@@ -11,9 +11,10 @@ namespace stepwise {
 // unlike std's distributions, so a seed names one initial state everywhere
 inline double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
-// the parameter `key` as a whole number of particles whose run, at bytes_each per particle over the state
-// and the integrators' copies of it, fits in half this machine's memory; BadParameter naming the key if not
-int particle_count(const Params& params, std::string_view key, double bytes_each);
+// the parameter `key` as a whole number of `what` (particles, grid points) whose run, at bytes_each per item
+// over the state and the integrators' copies of it, fits in half this machine's memory; BadParameter
+// naming the key if not
+int particle_count(const Params& params, std::string_view key, double bytes_each, std::string_view what = "particles");
 
 // the parameter "seed" as a whole number below 2^53
 unsigned long particle_seed(const Params& params);

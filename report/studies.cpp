@@ -35,8 +35,6 @@ std::vector<StudyScene> ode_scenes() {
           {"particle-system", "particle-system", {{"count", 1}, {"repulsion", 0}}, 2.0, 0.5}};
 }
 
-bool applies(const MethodInfo& method, const Model& model) { return !method.needs_second_order || model.second_order(); }
-
 std::string sci(double v) { return std::isfinite(v) ? fmt::format("{:.2e}", v) : "—"; }
 
 // ---- convergence: error against dt for every fixed-step method, with the fitted order
@@ -53,7 +51,7 @@ StudyOutput convergence(bool quick) {
     const auto model = make_model(scene.model, scene.params);
     md += fmt::format("### {}\n\n| method | order (method table) | observed order | error at coarsest dt | error at finest dt |\n|---|---|---|---|---|\n", scene.label);
     for (const auto& method : methods()) {
-      if (!method.fixed_step || !applies(method, *model)) continue;
+      if (!method.fixed_step || !method_applies(method, *model)) continue;
       const ConvergenceSweep sweep = convergence_sweep(*model, method, scene.t_end, halvings, coarse_dt(method, scene.time_scale));
       for (size_t k = 0; k < sweep.runs.size(); ++k) {
         const Measured& m = sweep.runs[k];
@@ -112,7 +110,7 @@ StudyOutput work_precision(bool quick) {
       }
     };
     for (const auto& method : methods()) {
-      if (!applies(method, *model)) continue;
+      if (!method_applies(method, *model)) continue;
       if (method.fixed_step) {
         for (int k = 0; k <= halvings; ++k) {
           StepControl control;

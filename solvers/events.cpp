@@ -93,6 +93,9 @@ std::optional<double> settle_step_events(std::span<const Event> events, Eigen::V
   handle_event(result, events, crossing->index, t_event, y_event);
   y = std::move(y_event);
   g_start = event_values(events, t_event, y);
+  // an undirected event just handled (a drop at a given time) sits on its zero: rounding may leave its g a
+  // hair behind, and the next step would see the same crossing again
+  if (events[crossing->index].direction == 0) g_start[static_cast<Eigen::Index>(crossing->index)] = 0;
   return t_event;
 }
 

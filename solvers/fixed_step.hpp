@@ -45,5 +45,7 @@ std::unique_ptr<FixedStepper> make_euler(const CountedSystem& system);
 std::unique_ptr<FixedStepper> make_symplectic_euler(const CountedSystem& system);
 std::unique_ptr<FixedStepper> make_rk4(const CountedSystem& system);
 std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system);
+// the seeds' three-level scheme for a wave equation on a grid (wave_step.hpp); the system has a wave_grid()
+std::unique_ptr<FixedStepper> make_wave_fd(const CountedSystem& system);
 
 }  // namespace stepwise

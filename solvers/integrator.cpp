@@ -44,6 +44,8 @@ constexpr std::array method_table{
     MethodInfo{"gsl-bsimp", "implicit Bulirsch-Stoer (Bader-Deuflhard)", "variable", "GSL odeiv2", 1, 12, true, true, false, true},
     MethodInfo{"gsl-msadams", "variable order Adams, functional iteration", "1-12", "GSL odeiv2", 1, 12, true, true, false},
     MethodInfo{"gsl-msbdf", "variable order BDF, Newton iteration", "1-5", "GSL odeiv2", 1, 5, true, true, false, true},
+    MethodInfo{"wave-fd", "explicit three-level finite differences for the damped wave equation (the seeds' scheme), fixed step",
+               "2", "hand-written", 2, 2, true, false, false, false, false, true},
 };
 
 }  // namespace
@@ -54,6 +56,18 @@ const MethodInfo* find_method(std::string_view name) {
   for (const auto& m : method_table)
     if (m.name == name) return &m;
   return nullptr;
+}
+
+bool method_applies(const MethodInfo& method, const OdeSystem& system) {
+  if (method.needs_second_order && !system.second_order()) return false;
+  if (method.needs_wave_grid && !system.wave_grid()) return false;
+  return true;
+}
+
+std::string method_requirement(const MethodInfo& method) {
+  if (method.needs_wave_grid) return fmt::format("{} needs a wave equation on a grid (a water scene)", method.name);
+  if (method.needs_second_order) return fmt::format("{} needs a second-order model y = (x, v)", method.name);
+  return {};
 }
 
 std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control) {
@@ -72,6 +86,7 @@ std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepC
   if (method == "symplectic-euler") return std::make_unique<FixedStepIntegrator>(name, control, make_symplectic_euler);
   if (method == "rk4") return std::make_unique<FixedStepIntegrator>(name, control, make_rk4);
   if (method == "implicit-euler") return std::make_unique<FixedStepIntegrator>(name, control, make_implicit_euler);
+  if (method == "wave-fd") return std::make_unique<FixedStepIntegrator>(name, control, make_wave_fd);
   if (info->source == "SUNDIALS CVODE") return make_cvode_integrator(method, control);
   return make_gsl_integrator(method, control);
 }

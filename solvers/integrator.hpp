@@ -101,10 +101,16 @@ struct MethodInfo {
   bool needs_second_order = false;  // needs y = (x, v)
   bool dense_matrix = false;        // keeps a dense size() x size() Newton matrix ...
   bool sparse_newton = false;       // ... unless the system has a sparse Jacobian, which it solves with (KLU)
+  bool needs_wave_grid = false;     // only for a wave equation on a grid (OdeSystem::wave_grid)
 };
 
 std::span<const MethodInfo> methods();
 const MethodInfo* find_method(std::string_view name);
+
+// whether the method can run this system at all (the structure it needs: y = (x, v), a wave grid), and
+// if not, why, in words naming the structure
+bool method_applies(const MethodInfo& method, const OdeSystem& system);
+std::string method_requirement(const MethodInfo& method);
 
 // thrown for an unknown method or a step control the method cannot use
 struct BadMethod : std::invalid_argument {

@@ -19,6 +19,16 @@ struct SecondOrderView {
   int positions = 0;  // number of position coordinates n; y has 2n entries, x = y[0..n), v = y[n..2n)
 };
 
+// y = (z, v) on a square grid of points (boundary included, held at z = v = 0) for the damped wave
+// equation d2z/dt2 = c^2 (5-point Laplacian of z) - mu dz/dt: the structure the seeds' three-level
+// finite-difference scheme (wave_step.hpp) needs
+struct WaveGridView {
+  int points = 0;       // grid points per side; z = y[0..points^2) row-major, v = y[points^2..2 points^2)
+  double spacing = 0;   // d (m)
+  double c = 0;         // wave speed (m/s)
+  double mu = 0;        // damping (1/s)
+};
+
 // An event g(t, y) = 0 (a collision, a plane crossing) and what happens at it.
 struct Event {
   std::string name;                                                      // what the event is ("ground")
@@ -64,6 +74,9 @@ class OdeSystem {
   virtual bool has_local_acceleration() const { return false; }
   virtual void local_acceleration(double t, const double* x, const double* v, double* a, Eigen::Index first,
                                   Eigen::Index count) const;
+
+  // optional wave-equation structure for the finite-difference scheme
+  virtual std::optional<WaveGridView> wave_grid() const { return std::nullopt; }
 
   // optional events; an empty span means none
   virtual std::span<const Event> events() const { return {}; }

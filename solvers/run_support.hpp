@@ -39,6 +39,7 @@ class CountedSystem final : public OdeSystem {
                           Eigen::Index count) const override {
     inner_.local_acceleration(t, x, v, a, first, count);
   }
+  std::optional<WaveGridView> wave_grid() const override { return inner_.wave_grid(); }
   std::span<const Event> events() const override { return inner_.events(); }
   double event_free_interval() const override { return inner_.event_free_interval(); }
   Stats& stats() const { return stats_; }

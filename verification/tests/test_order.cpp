@@ -24,7 +24,7 @@ TEST_P(Order, FixedStepMethodsConvergeAtTheirDocumentedOrder) {
   const Scene& scene = GetParam();
   const auto model = make_model(scene.model, scene.params);
   for (const auto& method : methods()) {
-    if (!method.fixed_step || (method.needs_second_order && !model->second_order())) continue;
+    if (!method.fixed_step || !method_applies(method, *model)) continue;
     const ConvergenceSweep sweep = convergence_sweep(*model, method, scene.t_end, 6, coarse_dt(method, scene.time_scale));
     // an order-p error falls 2^(4p)-fold over four halvings: for p > 5 more than the window between the
     // asymptotic range and round-off; rk8pd has its own test below on a longer run

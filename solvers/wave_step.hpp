@@ -1,0 +1,57 @@
+// The seeds' explicit finite-difference scheme for the damped wave equation (height-field water)
+//
+//   d2z/dt2 = c^2 (d2z/dx2 + d2z/dy2) - mu dz/dt,   z = 0 on the boundary,
+//
+// on a square grid of spacing d, time step dt, z^k the heights at t = k dt:
+//
+//   z(i,j,k+1) = [ (4 - 8 c^2 dt^2/d^2) z(i,j,k) + (mu dt - 2) z(i,j,k-1)
+//                  + 2 c^2 dt^2/d^2 (z(i+1,j,k) + z(i-1,j,k) + z(i,j+1,k) + z(i,j-1,k)) ] / (mu dt + 2)
+//
+// which is the centred second difference in time, (z^{k+1} - 2 z^k + z^{k-1}) / dt^2, equal to the
+// 5-point Laplacian at k times c^2 less mu times the centred velocity (z^{k+1} - z^{k-1}) / (2 dt),
+// multiplied by 2 dt^2 and solved for z^{k+1}. The division by (mu dt + 2) is folded into the three
+// coefficients once (wave_coefficients), so a cell costs three multiplies and four adds.
+//
+// Stability (von Neumann, derived in docs/verification.md): a mode with 5-point Laplacian eigenvalue
+// -lambda obeys (2 + mu dt) r^2 - (4 - 2 c^2 dt^2 lambda) r + (2 - mu dt) = 0, whose roots lie in the unit
+// disc (Jury) iff c^2 dt^2 lambda <= 4, whatever mu >= 0. With the largest eigenvalue
+// lambda_max = (8/d^2) cos^2(pi / 2N) on N intervals per side: dt <= d / (sqrt(2) c cos(pi / 2N)).
+#pragma once
+
+#include "ode_system.hpp"
+
+namespace stepwise {
+
+// the bracket's three factors, each divided by (mu dt + 2)
+struct WaveCoefficients {
+  double self = 0;        // (4 - 8 c^2 dt^2/d^2) / (mu dt + 2)
+  double previous = 0;    // (mu dt - 2) / (mu dt + 2)
+  double neighbours = 0;  // 2 c^2 dt^2/d^2 / (mu dt + 2)
+};
+
+WaveCoefficients wave_coefficients(const WaveGridView& grid, double dt);
+
+// the largest dt the scheme survives on this grid (the derivation above)
+double wave_stable_dt(const WaveGridView& grid);
+
+// one cell of the update: the one formula every loop below shares
+inline double wave_cell(const WaveCoefficients& k, double z, double z_prev, double neighbour_sum) {
+  return k.self * z + k.previous * z_prev + k.neighbours * neighbour_sum;
+}
+
+// z_next = z^{k+1} on the interior of an n x n row-major grid from z = z^k and z_prev = z^{k-1} (each n^2
+// values); z_next's boundary is left as it is. Three streams per cell: memory-bound on large grids
+void wave_step(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next);
+
+// the same, its rows shared among `threads` OpenMP threads: the same bits
+void wave_step_threads(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next, int threads);
+
+// `steps` steps at once by temporal blocking: each tile of the grid is copied with a halo `steps` cells
+// wide into buffers that stay in cache, stepped `steps` times there (the valid region shrinking by a cell
+// per step), and its centre written back; (z_prev_out, z_out) = (z^{k+steps-1}, z^{k+steps}) on the interior,
+// bitwise what `steps` calls of wave_step give (outputs' boundary left as it is; outputs must not alias
+// inputs); tiles shared among `threads`
+void wave_steps_blocked(const WaveCoefficients& k, int n, int steps, const double* z_prev, const double* z,
+                        double* z_prev_out, double* z_out, int threads = 1);
+
+}  // namespace stepwise
