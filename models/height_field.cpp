@@ -157,19 +157,18 @@ class HeightField final : public Model {
         a[j] = c2 * ((z[j - n_] + z[j + n_]) + (z[j - 1] + z[j + 1]) - 4 * z[j]) - grid_.mu * v[j];
   }
 
-  // rows of dz'/dv = I and dv'/dz = c^2 Lap, dv'/dv = -mu I on the interior; boundary rows empty
+  // dz'/dv = I; dv'/dz = c^2 Lap (boundary neighbours included) and dv'/dv = -mu I on the interior rows
   bool has_sparse_jacobian() const override { return true; }
   void sparse_jacobian(double, Eigen::Ref<const Eigen::VectorXd>, Eigen::SparseMatrix<double>& dfdy) const override {
     const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
     std::vector<Eigen::Triplet<double>> entries;
     entries.reserve(7 * static_cast<size_t>(cells_));
+    for (Eigen::Index j = 0; j < cells_; ++j) entries.emplace_back(j, cells_ + j, 1.0);
     for (int i = 1; i < n_ - 1; ++i)
       for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j) {
         const Eigen::Index row = cells_ + j;
-        entries.emplace_back(j, cells_ + j, 1.0);
         entries.emplace_back(row, j, -4 * c2);
-        for (const int nb : {j - n_, j + n_, j - 1, j + 1})
-          if (interior(nb)) entries.emplace_back(row, nb, c2);
+        for (const int nb : {j - n_, j + n_, j - 1, j + 1}) entries.emplace_back(row, nb, c2);
         entries.emplace_back(row, cells_ + j, -grid_.mu);
       }
     dfdy.resize(size(), size());
@@ -212,11 +211,6 @@ class HeightField final : public Model {
   }
 
  private:
-  bool interior(int k) const {
-    const int i = k / n_, j = k % n_;
-    return i > 0 && i < n_ - 1 && j > 0 && j < n_ - 1;
-  }
-
   // z += h (1 + cos(pi r / R)) / 2 inside radius R of the drop's centre
   void add_drop(const Drop& d, Eigen::VectorXd& y) const {
     for (int i = 1; i < n_ - 1; ++i)

@@ -15,9 +15,21 @@ WaveCoefficients wave_coefficients(const WaveGridView& grid, double dt) {
   return {(4 - 8 * r) / denominator, (grid.mu * dt - 2) / denominator, 2 * r / denominator};
 }
 
-double wave_stable_dt(const WaveGridView& grid) {
-  const int intervals = grid.points - 1;
-  return grid.spacing / (std::numbers::sqrt2 * grid.c * std::cos(std::numbers::pi / (2 * intervals)));
+namespace {
+
+// c^2 lambda_max, lambda_max = (8/d^2) cos^2(pi/2N) on N intervals
+double highest_w2(const WaveGridView& grid) {
+  const double cosine = std::cos(std::numbers::pi / (2 * (grid.points - 1)));
+  return grid.c * grid.c * 8 / (grid.spacing * grid.spacing) * cosine * cosine;
+}
+
+}  // namespace
+
+double wave_stable_dt(const WaveGridView& grid) { return 2 / std::sqrt(highest_w2(grid)); }
+
+double symplectic_euler_wave_dt(const WaveGridView& grid) {
+  const double w2 = highest_w2(grid);
+  return std::min((-grid.mu + std::sqrt(grid.mu * grid.mu + 4 * w2)) / w2, 2 / std::max(grid.mu, 1e-300));
 }
 
 namespace {

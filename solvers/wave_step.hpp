@@ -34,6 +34,12 @@ WaveCoefficients wave_coefficients(const WaveGridView& grid, double dt);
 // the largest dt the scheme survives on this grid (the derivation above)
 double wave_stable_dt(const WaveGridView& grid);
 
+// the same for the second seed's scheme, v += (c^2 Lap z - mu v) dt, z += v dt: symplectic Euler with the
+// damping explicit. Its amplification matrix for a mode of frequency w has trace 2 - dt^2 w^2 - mu dt and
+// determinant 1 - mu dt; Jury's conditions give dt^2 w_max^2 + 2 mu dt <= 4 (and mu dt <= 2):
+// dt <= (-mu + sqrt(mu^2 + 4 w_max^2)) / w_max^2, shorter the more damping
+double symplectic_euler_wave_dt(const WaveGridView& grid);
+
 // one cell of the update: the one formula every loop below shares
 inline double wave_cell(const WaveCoefficients& k, double z, double z_prev, double neighbour_sum) {
   return k.self * z + k.previous * z_prev + k.neighbours * neighbour_sum;

@@ -1,0 +1,266 @@
+// Height-field water: the seeds' three-level scheme against the exact evolution of its modes (closed form,
+// and every mode of a random state through FFTW's DST-I), the continuous solution at second order, the
+// discrete dispersion relation, the stability limit found by bisection against its derivation (and the
+// seeds' condition), the scheme's energy, and the fast kernels bitwise against the plain loop.
+#include "models/height_field.hpp"
+#include "solvers/fd_jacobian.hpp"
+#include "solvers/wave_step.hpp"
+#include "verification/measure.hpp"
+#include "verification/order_fit.hpp"
+#include "verification/stability.hpp"
+#include "verification/tolerances.hpp"
+#include "verification/wave_modes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <iostream>
+#include <numbers>
+#include <random>
+#include <tuple>
+
+namespace stepwise {
+namespace {
+
+// a field uniform in [-scale, scale] on the interior, zero on the boundary
+Eigen::VectorXd random_field(int points, double scale, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-scale, scale);
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(points) * points);
+  for (int i = 1; i < points - 1; ++i)
+    for (int j = 1; j < points - 1; ++j) z[i * points + j] = u(rng);
+  return z;
+}
+
+double relative_max(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).lpNorm<Eigen::Infinity>() / b.lpNorm<Eigen::Infinity>();
+}
+
+Params wave(int size, double spacing, double c, double mu) {
+  return {{"size", size}, {"spacing", spacing}, {"c", c}, {"mu", mu}};
+}
+
+TEST(Wave, SchemeMatchesTheExactDiscreteModeToRoundOff) {
+  // mu = 10 overdamps the slowest mode (1, 1), which tests the closed form's real roots; a faster mode
+  // there would decay below the round-off left in the slowest
+  for (const auto& [mu, m, n] : {std::tuple{0.0, 3, 2}, {0.5, 3, 2}, {10.0, 1, 1}}) {
+    Params p = wave(33, 0.03, 1.0, mu);
+    p["mode_m"] = m;
+    p["mode_n"] = n;
+    p["amplitude"] = 0.01;
+    const auto model = make_model("standing-wave", p);
+    const WaveGridView grid = *model->wave_grid();
+    const double dt = 0.9 * wave_stable_dt(grid);
+    const long steps = 1000;
+    // through `wave-fd` as `run` steps it: z^1 by Taylor from the mode at rest, then the three-level update
+    const Measured run = run_and_measure(*model, "wave-fd", StepControl::fixed(dt), steps * dt, steps * dt);
+    ASSERT_EQ(run.result.status, Status::ok) << run.result.message;
+    const double lambda = laplacian_eigenvalue(32, grid.spacing, m, n);
+    const SchemeMode mode = scheme_mode(grid, dt, lambda);
+    const double a0 = 0.01, a1 = a0 * (1 - 0.5 * dt * dt * grid.c * grid.c * lambda);
+    const Eigen::VectorXd expected = scheme_mode_amplitude(mode, a0, a1, steps) * wave_mode(33, m, n);
+    const double error = relative_max(run.result.y_stop.head(33 * 33), expected);
+    std::cout << "mu " << mu << ": " << steps << " steps, relative error against the exact discrete mode " << error << '\n';
+    EXPECT_LT(error, tolerance::wave_modal) << "mu " << mu;
+  }
+}
+
+TEST(Wave, SchemeConvergesToTheContinuousModeAtSecondOrder) {
+  // the unit square, mode (1, 2), dt = d / (2c): error in z at t = 1 s against A sin sin a(t), a'' + mu a' + c^2 k^2 a = 0
+  const double mu = 0.5, c = 1.0, t_end = 1.0;
+  std::vector<double> spacings, errors;
+  for (const int intervals : {16, 32, 64, 128}) {
+    const double d = 1.0 / intervals;
+    Params p = wave(intervals + 1, d, c, mu);
+    p["mode_m"] = 1;
+    p["mode_n"] = 2;
+    p["amplitude"] = 1.0;
+    const auto model = make_model("standing-wave", p);
+    const Measured m = run_and_measure(*model, "wave-fd", StepControl::fixed(d / (2 * c)), t_end, t_end);
+    ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+    const double k2 = std::numbers::pi * std::numbers::pi * 5;
+    const Eigen::VectorXd continuous = mode_amplitude(c * c * k2, mu, 1.0, t_end).first * wave_mode(intervals + 1, 1, 2);
+    const double error = (m.result.y_stop.head(continuous.size()) - continuous).lpNorm<Eigen::Infinity>();
+    std::cout << "N " << intervals << ": error against the continuous mode " << error << '\n';
+    spacings.push_back(d);
+    errors.push_back(error);
+  }
+  const double order = loglog_slope(spacings, errors);
+  std::cout << "observed order in d (dt = d/2c) " << order << '\n';
+  EXPECT_NEAR(order, 2.0, tolerance::order_band);
+}
+
+TEST(Wave, EveryModeOfARandomStateEvolvesExactlyThroughTheFft) {
+  const int points = 49;
+  const Eigen::VectorXd z0 = random_field(points, 1.0, 7);
+  // the DST-I round trip scales by (2N)^2, which sine_coefficients / from_sine_coefficients divide out
+  EXPECT_LT(relative_max(from_sine_coefficients(points, sine_coefficients(points, z0)), z0), 1e-14);
+  for (const double mu : {0.0, 2.0}) {
+    const WaveGridView grid{points, 0.02, 1.0, mu};
+    const double dt = 0.95 * wave_stable_dt(grid);
+    const Eigen::VectorXd z1 = z0 + random_field(points, 0.1, 8);
+    const long steps = 3000;
+    Eigen::VectorXd z_prev = z0, z = z1;
+    run_wave_scheme(grid, dt, steps - 1, z_prev, z);
+    const double error = relative_max(z, evolve_modes(grid, dt, z0, z1, steps));
+    std::cout << "mu " << mu << ": " << steps << " steps, " << (points - 2) * (points - 2)
+              << " modes, relative error of the scheme against the modes evolved exactly " << error << '\n';
+    EXPECT_LT(error, tolerance::wave_modal) << "mu " << mu;
+  }
+}
+
+TEST(Wave, EachModeOscillatesAtTheDiscreteDispersionRelation) {
+  const int points = 33, N = 32;
+  const WaveGridView grid{points, 0.02, 1.0, 0.0};
+  const double dt = 0.8 * wave_stable_dt(grid);
+  const int samples = 200;
+  // every mode's amplitude over 200 steps of a random state
+  std::vector<Eigen::VectorXd> a;
+  Eigen::VectorXd z_prev = random_field(points, 1.0, 3), z = random_field(points, 1.0, 4);
+  a.push_back(sine_coefficients(points, z_prev));
+  for (int k = 0; k < samples; ++k) {
+    a.push_back(sine_coefficients(points, z));
+    run_wave_scheme(grid, dt, 1, z_prev, z);
+  }
+  double worst = 0, worst_continuous = 0;
+  for (int m = 1; m < N; ++m)
+    for (int n = 1; n < N; ++n) {
+      const int index = (m - 1) * (N - 1) + (n - 1);
+      double num = 0, den = 0;
+      for (int k = 1; k + 1 < static_cast<int>(a.size()); ++k) {
+        num += a[k][index] * (a[k + 1][index] + a[k - 1][index]);
+        den += 2 * a[k][index] * a[k][index];
+      }
+      const double measured = std::acos(num / den) / dt;
+      const double formula = scheme_mode_frequency(scheme_mode(grid, dt, laplacian_eigenvalue(N, grid.spacing, m, n)), dt);
+      const double continuous = grid.c * std::numbers::pi * std::hypot(m, n) / (N * grid.spacing);
+      worst = std::max(worst, std::abs(measured - formula) / formula);
+      worst_continuous = std::max(worst_continuous, std::abs(formula - continuous) / continuous);
+    }
+  std::cout << "largest relative difference, measured against discrete dispersion " << worst
+            << "; discrete against continuous frequency (numerical dispersion) " << worst_continuous << '\n';
+  EXPECT_LT(worst, tolerance::wave_dispersion);
+}
+
+TEST(Wave, StabilityLimitMatchesTheDerivationAndTheSeedsConditionOnlyWithoutDamping) {
+  const int points = 32;
+  for (const auto& [c, d] : {std::pair{1.0, 0.02}, {2.0, 0.05}, {0.5, 0.01}})
+    for (const double mu : {0.0, 0.5, 2.0, 10.0}) {
+      Params p = wave(points, d, c, mu);
+      p["drop_x"] = p["drop_y"] = d * (points - 1) / 2;
+      const auto model = make_model("water-drop", p);
+      const WaveGridView grid = *model->wave_grid();
+      Eigen::VectorXd y0 = Eigen::VectorXd::Zero(model->size());
+      y0.head(points * points) = random_field(points, 1e-3, 11);
+      auto stable = [&](const char* method) {
+        return [&, method](double dt) { return stays_bounded(*model, method, y0, dt, 3000); };
+      };
+      const double derived = wave_stable_dt(grid);
+      const double measured = bisect_stability(stable("wave-fd"), 0.5 * derived, 2 * derived, tolerance::stability_bisection_width);
+      const double seeds = seeds_wave_condition(grid);
+      std::cout << "c " << c << " d " << d << " mu " << mu << ": wave-fd limit measured " << measured << " s, derived " << derived
+                << " s, seeds' condition " << seeds << " s";
+      EXPECT_NEAR(measured / derived, 1.0, tolerance::stability_match) << "c " << c << " d " << d << " mu " << mu;
+      // the seeds' condition promises more than the scheme gives once there is damping: a run at it diverges
+      if (seeds > derived * (1 + 2 * tolerance::stability_match)) {
+        EXPECT_FALSE(stable("wave-fd")(seeds * 0.999));
+      }
+      if (c == 1.0) {
+        // the second seed's scheme (symplectic Euler, damping explicit): limit shorter with damping
+        const double se_derived = symplectic_euler_wave_dt(grid);
+        const double se = bisect_stability(stable("symplectic-euler"), 0.5 * se_derived, 2 * se_derived, tolerance::stability_bisection_width);
+        std::cout << "; symplectic-euler measured " << se << " s, derived " << se_derived << " s";
+        EXPECT_NEAR(se / se_derived, 1.0, tolerance::stability_match) << "symplectic-euler mu " << mu;
+      }
+      std::cout << '\n';
+    }
+}
+
+TEST(Wave, SchemeEnergyIsConservedWithoutDampingAndDecaysAsItsModesPredict) {
+  const int points = 33;
+  for (const double mu : {0.0, 2.0}) {
+    const WaveGridView grid{points, 0.02, 1.0, mu};
+    const double dt = 0.9 * wave_stable_dt(grid);
+    const Eigen::VectorXd z0 = random_field(points, 1.0, 5), z1 = z0 + random_field(points, 0.1, 6);
+    const double e0 = scheme_energy(grid, dt, z0, z1);
+    Eigen::VectorXd z_prev = z0, z = z1;
+    double previous = e0;
+    bool rose = false;
+    // undamped: long, to see any drift; damped: 4 s, the energy down to ~1e-4 of its start
+    const long steps = mu == 0 ? 10000 : 300;
+    for (long k = 0; k < steps; ++k) {
+      run_wave_scheme(grid, dt, 1, z_prev, z);
+      const double e = scheme_energy(grid, dt, z_prev, z);
+      rose = rose || e > previous * (1 + tolerance::wave_energy_roundoff);
+      previous = e;
+    }
+    if (mu == 0) {
+      std::cout << "mu 0: relative energy change over " << steps << " steps " << (previous - e0) / e0 << '\n';
+      EXPECT_LT(std::abs(previous - e0) / e0, tolerance::wave_energy_roundoff);
+    } else {
+      // the energy of the exactly evolved modes, at the same two levels
+      const double predicted = scheme_energy(grid, dt, evolve_modes(grid, dt, z0, z1, steps), evolve_modes(grid, dt, z0, z1, steps + 1));
+      std::cout << "mu " << mu << ": energy fell to " << previous / e0 << " of its start, the modes predict " << predicted / e0 << '\n';
+      EXPECT_NEAR(previous / predicted, 1.0, tolerance::wave_modal * 1e3);
+      EXPECT_FALSE(rose) << "the damped scheme's energy may only fall";
+    }
+  }
+}
+
+TEST(Wave, BlockedAndThreadedStepsAreBitwiseThePlainLoop) {
+  // 300 points: tiles of 128 that do not divide the interior, so every edge case of the halo is met
+  const int points = 300, steps = 8;
+  const WaveGridView grid{points, 0.02, 1.0, 0.5};
+  const WaveCoefficients k = wave_coefficients(grid, 0.9 * wave_stable_dt(grid));
+  const Eigen::VectorXd z0 = random_field(points, 1.0, 1), z1 = random_field(points, 1.0, 2);
+  Eigen::VectorXd plain_prev = z0, plain = z1, next = Eigen::VectorXd::Zero(z0.size());
+  for (int s = 0; s < steps; ++s) {
+    wave_step(k, points, plain_prev.data(), plain.data(), next.data());
+    plain_prev.swap(plain);
+    plain.swap(next);
+  }
+  const size_t bytes = sizeof(double) * static_cast<size_t>(z0.size());
+  for (const int threads : {1, 2}) {
+    Eigen::VectorXd out_prev = Eigen::VectorXd::Zero(z0.size()), out = out_prev;
+    wave_steps_blocked(k, points, steps, z0.data(), z1.data(), out_prev.data(), out.data(), threads);
+    EXPECT_EQ(std::memcmp(out.data(), plain.data(), bytes), 0) << "blocked, " << threads << " threads";
+    EXPECT_EQ(std::memcmp(out_prev.data(), plain_prev.data(), bytes), 0) << "blocked, " << threads << " threads";
+    Eigen::VectorXd a = z0, b = z1, c = Eigen::VectorXd::Zero(z0.size());
+    for (int s = 0; s < steps; ++s) {
+      wave_step_threads(k, points, a.data(), b.data(), c.data(), threads);
+      a.swap(b);
+      b.swap(c);
+    }
+    EXPECT_EQ(std::memcmp(b.data(), plain.data(), bytes), 0) << threads << " threads";
+  }
+}
+
+TEST(Wave, SparseJacobianMatchesCentralDifferences) {
+  const auto model = make_model("water-drop", {{"size", 7}, {"drop_x", 0.06}, {"drop_y", 0.06}, {"mu", 0.7}});
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(model->size());
+  y.head(49) = random_field(7, 1.0, 9);
+  y.tail(49) = random_field(7, 1.0, 10);
+  Eigen::SparseMatrix<double> sparse;
+  model->sparse_jacobian(0, y, sparse);
+  Eigen::MatrixXd fd(model->size(), model->size());
+  fd_jacobian(*model, 0, y, fd);
+  const double scale = fd.cwiseAbs().maxCoeff();
+  EXPECT_LT((Eigen::MatrixXd(sparse) - fd).cwiseAbs().maxCoeff(), 1e-6 * scale);
+}
+
+TEST(Wave, MethodOfLinesThroughCvodeAgreesWithTheExactSemiDiscreteMode) {
+  Params p = wave(33, 0.03, 1.0, 0.5);
+  p["amplitude"] = 0.01;
+  const auto model = make_model("standing-wave", p);
+  for (const char* method : {"cvode-adams", "cvode-bdf"}) {
+    const Measured m = run_and_measure(*model, method, StepControl::adaptive(1e-10, 1e-14), 2.0, 2.0);
+    ASSERT_EQ(m.result.status, Status::ok) << method << ": " << m.result.message;
+    std::cout << method << " rtol 1e-10: error " << *m.error << " (amplitude 0.01, rate ~0.1), " << m.result.stats.steps << " steps\n";
+    // the global error of a tolerance-controlled run is a modest multiple of rtol times the solution
+    EXPECT_LT(*m.error, 1e-6 * 0.1) << method;
+  }
+}
+
+}  // namespace
+}  // namespace stepwise
