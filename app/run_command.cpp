@@ -3,6 +3,7 @@
 #include "report/atomic_write.hpp"
 #include "report/csv.hpp"
 #include "scene.hpp"
+#include "solvers/wave_step.hpp"
 #include "verification/measure.hpp"
 
 #include <fmt/format.h>
@@ -114,6 +115,12 @@ Prepared prepare(const RunOptions& o) {
   p.t_end = o.t_end.value_or(s.t_end.value_or(10.0));
   if (p.control.dt && *p.control.dt > p.t_end)
     throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.t_end));
+  // a step past the method's stability limit is the user's to try: said, then run, and reported diverged
+  if (const auto grid = p.model->wave_grid(); grid && p.control.dt)
+    if (const auto limit = wave_method_stable_dt(p.method, *grid); limit && *p.control.dt > *limit)
+      fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s on this grid (d = {} m, c = {} m/s, "
+                 "mu = {} 1/s); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method, *limit,
+                 grid->spacing, grid->c, grid->mu);
   p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
   // a fixed-step run samples on its own step grid: an output time between grid points would shorten a step
   // and change the very run being sampled (a dt beyond the stability limit would be hidden by short steps)

@@ -32,6 +32,12 @@ double symplectic_euler_wave_dt(const WaveGridView& grid) {
   return std::min((-grid.mu + std::sqrt(grid.mu * grid.mu + 4 * w2)) / w2, 2 / std::max(grid.mu, 1e-300));
 }
 
+std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid) {
+  if (method == "wave-fd") return wave_stable_dt(grid);
+  if (method == "symplectic-euler") return symplectic_euler_wave_dt(grid);
+  return std::nullopt;
+}
+
 namespace {
 
 // cells [first, last) of one row; every pointer at the row's start, rows `n` apart

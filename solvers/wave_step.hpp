@@ -20,6 +20,9 @@
 
 #include "ode_system.hpp"
 
+#include <optional>
+#include <string_view>
+
 namespace stepwise {
 
 // the bracket's three factors, each divided by (mu dt + 2)
@@ -39,6 +42,9 @@ double wave_stable_dt(const WaveGridView& grid);
 // determinant 1 - mu dt; Jury's conditions give dt^2 w_max^2 + 2 mu dt <= 4 (and mu dt <= 2):
 // dt <= (-mu + sqrt(mu^2 + 4 w_max^2)) / w_max^2, shorter the more damping
 double symplectic_euler_wave_dt(const WaveGridView& grid);
+
+// the limit above for a method that has one derived here (wave-fd, symplectic-euler), else none
+std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid);
 
 // one cell of the update: the one formula every loop below shares
 inline double wave_cell(const WaveCoefficients& k, double z, double z_prev, double neighbour_sum) {

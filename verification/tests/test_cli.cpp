@@ -128,6 +128,13 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run scenes/particle-system.toml --set count=1e12 --out '{}'", out.string()), "--set count"},
       {fmt::format("run scenes/particle-system.toml --set count=-5 --out '{}'", out.string()), "--set count"},
       {fmt::format("run scenes/particle-system.toml --method implicit-euler --out '{}'", out.string()), "--method: implicit-euler keeps dense"},
+      {fmt::format("run scenes/water-drop.toml --set size=2 --out '{}'", out.string()), "--set size: parameter 'size' must be at least 3"},
+      {fmt::format("run scenes/water-drop.toml --set c=0 --out '{}'", out.string()), "--set c"},
+      {fmt::format("run scenes/water-drop.toml --set spacing=-0.1 --out '{}'", out.string()), "--set spacing"},
+      {fmt::format("run scenes/water-drop.toml --set mu=-1 --out '{}'", out.string()), "--set mu"},
+      {fmt::format("run scenes/water-drop.toml --set drop_x=5 --out '{}'", out.string()), "--set drop_x: parameter 'drop_x' = 5 m puts the drop outside the grid"},
+      {fmt::format("run scenes/water-drop.toml --dt 0 --out '{}'", out.string()), "--dt"},
+      {fmt::format("run scenes/pendulum.toml --method wave-fd --dt 1e-3 --out '{}'", out.string()), "--method: wave-fd needs a wave equation on a grid"},
   };
   for (const auto& [args, expected] : cases) {
     const Output o = run(args);
@@ -176,6 +183,23 @@ TEST_F(Cli, ADivergedRunExitsOneWithItsSummaryWritten) {
   EXPECT_LT(s["t_stop"].get<double>(), s["t_end"].get<double>());
   EXPECT_NE(s["message"].get<std::string>().find("diverged at t ="), std::string::npos);
   for (const auto& [name, value] : s["final_state"].items()) EXPECT_TRUE(value.is_number()) << name;
+}
+
+TEST_F(Cli, AWaveStepPastTheStabilityLimitIsWarnedRunAndReportedDiverged) {
+  // water-drop's grid: d = 0.02 m, c = 1 m/s, N = 63: limit d / (sqrt(2) c cos(pi/126)) = 0.0141465 s
+  const fs::path out = dir_ / "past";
+  const Output o = run(fmt::format("run scenes/water-drop.toml --dt 0.015 --out '{}'", out.string()));
+  EXPECT_EQ(o.status, 1) << o.err;
+  EXPECT_NE(o.err.find("--dt: warning: dt = 0.015 s is past wave-fd's stability limit 0.0141465 s"), std::string::npos) << o.err;
+  const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+  EXPECT_EQ(summary["status"], "diverged");
+  EXPECT_NE(summary["message"].get<std::string>().find("diverged at t = "), std::string::npos) << summary["message"];
+  // and below it: ok, energy and max_abs_z in final_state as the issue names them
+  const fs::path ok = dir_ / "below";
+  ASSERT_EQ(run(fmt::format("run scenes/water-drop.toml --dt 0.014 --out '{}'", ok.string())).status, 0);
+  const auto fine = nlohmann::json::parse(slurp(ok / "summary.json"));
+  EXPECT_EQ(fine["status"], "ok");
+  for (const char* key : {"energy", "max_abs_z"}) EXPECT_TRUE(fine["final_state"].contains(key)) << key;
 }
 
 TEST_F(Cli, ARerunReplacesOutputsWholeAndLeavesNoTemporaryFiles) {
