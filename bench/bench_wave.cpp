@@ -1,0 +1,141 @@
+// The seeds' height-field update against the memory bandwidth it is bound by, measured in the same run;
+// its OpenMP and temporally blocked forms against it; the method of lines through CVODE against the
+// three-level scheme at equal accuracy.
+//
+// A step reads z^k and z^{k-1} and writes z^{k+1}: 24 bytes per cell as STREAM counts them (McCalpin
+// 1995: the triad a = b + s c moves 24 bytes per element), so the bound is the triad's bandwidth over 24
+// bytes, with the triad's three arrays as large as the three grids: 256^2 (1.5 MB, in L2 and L3), 1024^2
+// (24 MB, in this machine's 32 MB L3), 4096^2 (384 MB, main memory). Temporal blocking does 8 steps per
+// pass over tiles that stay in cache, so it can pass the streaming bound; it is bitwise the plain loop
+// (test_wave).
+#include "models/height_field.hpp"
+#include "ratio_reporter.hpp"
+#include "solvers/wave_step.hpp"
+#include "verification/measure.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <random>
+
+namespace {
+
+constexpr double bytes_per_cell = 24;
+constexpr int steps = 8;  // steps per iteration, the blocked kernel's steps per pass
+
+struct Grids {
+  explicit Grids(int n) : n(n), z_prev(field(n, 1)), z(field(n, 2)), z_next(Eigen::VectorXd::Zero(z.size())) {}
+  static Eigen::VectorXd field(int n, unsigned seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1, 1);
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n) * n);
+    for (int i = 1; i < n - 1; ++i)
+      for (int j = 1; j < n - 1; ++j) f[static_cast<Eigen::Index>(i) * n + j] = u(rng);
+    return f;
+  }
+  int n;
+  Eigen::VectorXd z_prev, z, z_next;
+  stepwise::WaveCoefficients k = stepwise::wave_coefficients({n, 0.01, 1.0, 0.0}, 0.005);  // neutral: |r| = 1
+};
+
+void count_cells(benchmark::State& state, int n) {
+  const double interior = static_cast<double>(n - 2) * (n - 2);
+  state.counters["cells"] = benchmark::Counter(interior * steps * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+// range(0)^2 grid, range(1) threads: the plain three-level loop
+void BM_wave_step(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0)), threads = static_cast<int>(state.range(1));
+  Grids g(n);
+  for (auto _ : state) {
+    for (int s = 0; s < steps; ++s) {
+      if (threads == 1) stepwise::wave_step(g.k, n, g.z_prev.data(), g.z.data(), g.z_next.data());
+      else stepwise::wave_step_threads(g.k, n, g.z_prev.data(), g.z.data(), g.z_next.data(), threads);
+      g.z_prev.swap(g.z);
+      g.z.swap(g.z_next);
+    }
+    benchmark::DoNotOptimize(g.z.data());
+  }
+  count_cells(state, n);
+}
+
+// the same 8 steps in one pass of temporal blocking
+void BM_wave_blocked(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0)), threads = static_cast<int>(state.range(1));
+  Grids g(n);
+  Eigen::VectorXd out_prev = Eigen::VectorXd::Zero(g.z.size()), out = out_prev;
+  for (auto _ : state) {
+    stepwise::wave_steps_blocked(g.k, n, steps, g.z_prev.data(), g.z.data(), out_prev.data(), out.data(), threads);
+    g.z_prev.swap(out_prev);
+    g.z.swap(out);
+    benchmark::DoNotOptimize(g.z.data());
+  }
+  count_cells(state, n);
+}
+
+// a[i] = b[i] + s c[i] over three arrays of range(0)^2, eight times an iteration
+void BM_triad(benchmark::State& state) {
+  const auto length = state.range(0) * state.range(0);
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(length), b = Eigen::VectorXd::Constant(length, 1.0), c = Eigen::VectorXd::Constant(length, 2.0);
+  for (auto _ : state) {
+    for (int k = 0; k < steps; ++k) {
+      a = b + 3.0 * c;
+      benchmark::DoNotOptimize(a.data());
+      benchmark::ClobberMemory();
+    }
+  }
+  state.counters["bytes"] = benchmark::Counter(24.0 * static_cast<double>(length) * steps * static_cast<double>(state.iterations()),
+                                               benchmark::Counter::kIsRate);
+}
+
+#define STEPWISE_GRIDS(b) b->Args({256, 1})->Args({1024, 1})->Args({4096, 1})->Args({256, 2})->Args({1024, 2})->Args({4096, 2})
+BENCHMARK(BM_wave_step)->Apply([](benchmark::internal::Benchmark* b) { STEPWISE_GRIDS(b); })->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_wave_blocked)->Apply([](benchmark::internal::Benchmark* b) { STEPWISE_GRIDS(b); })->Unit(benchmark::kMillisecond)->UseRealTime();
+#undef STEPWISE_GRIDS
+BENCHMARK(BM_triad)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// the standing wave (65^2, mu = 0.5, 2 s) by `run`'s path: wave-fd at dt = limit/2, and CVODE at the
+// loosest rtol (decades) whose error is no larger
+// (made on first use: the model table is another file's static)
+const stepwise::Model& standing() {
+  static const auto model = stepwise::make_model("standing-wave", {{"size", 65}, {"spacing", 1.0 / 64}, {"mode_m", 1}, {"mode_n", 2}, {"amplitude", 1.0}});
+  return *model;
+}
+double fd_dt() { return stepwise::wave_stable_dt(*standing().wave_grid()) / 2; }
+
+stepwise::StepControl equal_accuracy(const std::string& method) {
+  const double target = *stepwise::run_and_measure(standing(), "wave-fd", stepwise::StepControl::fixed(fd_dt()), 2.0, 2.0).error;
+  for (double rtol = 1e-3;; rtol /= 10) {
+    const auto control = stepwise::StepControl::adaptive(rtol, rtol * 1e-3);
+    if (*stepwise::run_and_measure(standing(), method, control, 2.0, 2.0).error <= target || rtol < 1e-12) return control;
+  }
+}
+
+void BM_standing_wave(benchmark::State& state, const std::string& method) {
+  const auto control = method == "wave-fd" ? stepwise::StepControl::fixed(fd_dt()) : equal_accuracy(method);
+  double error = 0;
+  for (auto _ : state) error = *stepwise::run_and_measure(standing(), method, control, 2.0, 2.0).error;
+  state.counters["error"] = error;
+  state.counters["rtol"] = control.dt ? 0 : control.rtol;
+}
+BENCHMARK_CAPTURE(BM_standing_wave, wave_fd, std::string("wave-fd"))->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_standing_wave, cvode_adams, std::string("cvode-adams"))->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_standing_wave, cvode_bdf, std::string("cvode-bdf"))->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using stepwise::bench::RateBound;
+  std::vector<RateBound> bounds;
+  std::vector<std::pair<std::string, std::string>> pairs{{"BM_standing_wave/cvode_adams", "BM_standing_wave/wave_fd"},
+                                                         {"BM_standing_wave/cvode_bdf", "BM_standing_wave/wave_fd"}};
+  for (const char* n : {"256", "1024", "4096"}) {
+    const std::string triad = fmt::format("BM_triad/{}/real_time", n);
+    for (const char* kernel : {"BM_wave_step", "BM_wave_blocked"})
+      for (const char* threads : {"1", "2"})
+        bounds.push_back({fmt::format("{}/{}/{}/real_time", kernel, n, threads), "cells", triad, "bytes", bytes_per_cell});
+    pairs.push_back({fmt::format("BM_wave_step/{}/1/real_time", n), fmt::format("BM_wave_step/{}/2/real_time", n)});
+    pairs.push_back({fmt::format("BM_wave_step/{}/1/real_time", n), fmt::format("BM_wave_blocked/{}/1/real_time", n)});
+  }
+  return stepwise::bench::run_with_ratios(argc, argv, pairs, bounds);
+}
