@@ -15,7 +15,6 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <random>
 
 namespace {
@@ -49,8 +48,7 @@ void BM_wave_step(benchmark::State& state) {
   Grids g(n);
   for (auto _ : state) {
     for (int s = 0; s < steps; ++s) {
-      if (threads == 1) stepwise::wave_step(g.k, n, g.z_prev.data(), g.z.data(), g.z_next.data());
-      else stepwise::wave_step_threads(g.k, n, g.z_prev.data(), g.z.data(), g.z_next.data(), threads);
+      stepwise::wave_step(g.k, n, g.z_prev.data(), g.z.data(), g.z_next.data(), threads);
       g.z_prev.swap(g.z);
       g.z.swap(g.z_next);
     }
@@ -88,10 +86,13 @@ void BM_triad(benchmark::State& state) {
                                                benchmark::Counter::kIsRate);
 }
 
-#define STEPWISE_GRIDS(b) b->Args({256, 1})->Args({1024, 1})->Args({4096, 1})->Args({256, 2})->Args({1024, 2})->Args({4096, 2})
-BENCHMARK(BM_wave_step)->Apply([](benchmark::internal::Benchmark* b) { STEPWISE_GRIDS(b); })->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_wave_blocked)->Apply([](benchmark::internal::Benchmark* b) { STEPWISE_GRIDS(b); })->Unit(benchmark::kMillisecond)->UseRealTime();
-#undef STEPWISE_GRIDS
+// every grid with one and two threads
+void grids(benchmark::internal::Benchmark* b) {
+  for (const int threads : {1, 2})
+    for (const int n : {256, 1024, 4096}) b->Args({n, threads});
+}
+BENCHMARK(BM_wave_step)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_wave_blocked)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_triad)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // the standing wave (65^2, mu = 0.5, 2 s) by `run`'s path: wave-fd at dt = limit/2, and CVODE at the

@@ -10,7 +10,6 @@
 #include "run_support.hpp"
 #include "wave_step.hpp"
 
-#include <algorithm>
 #include <cmath>
 
 namespace stepwise {
@@ -28,28 +27,25 @@ class WaveFd final : public FixedStepper {
     const double* v = z + cells_;
     double* z1 = y_next.data();
     double* v1 = z1 + cells_;
-    // the boundary holds still
-    std::fill_n(z1, cells_, 0.0);
-    std::fill_n(v1, cells_, 0.0);
+    // the boundary holds still (y_next may hold anything: only the interior is written below)
+    for (int b = 0; b < n_; ++b)
+      for (const Eigen::Index cell : {Eigen::Index(b), Eigen::Index(n_ - 1) * n_ + b, Eigen::Index(b) * n_, Eigen::Index(b) * n_ + n_ - 1})
+        z1[cell] = v1[cell] = 0;
     // a step the loop shortened by rounding alone to land on an output time (1e-9 dt, its snap) continues
     const bool continuing = history_ && std::abs(h - h_) <= 1e-9 * h_ && std::abs(t - t_last_) <= 1e-9 * h_ && y.data() == last_;
     if (continuing) {
-      if (h_ != k_dt_) {
-        k_ = wave_coefficients(grid_, h_);
-        k_dt_ = h_;
-      }
       for (int i = 1; i < n_ - 1; ++i)
         for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j) {
           const double z_prev = z_prev_[j];
           z_prev_[j] = z[j];
-          z1[j] = wave_cell(k_, z[j], z_prev, (z[j - n_] + z[j + n_]) + (z[j - 1] + z[j + 1]));
+          z1[j] = wave_cell(k_, z[j], z_prev, neighbour_sum(z, j, n_));
           v1[j] = (3 * z1[j] - 4 * z[j] + z_prev) / (2 * h_);
         }
     } else {
       // velocity Verlet: z^1 = z + h v + h^2/2 a(z, v), v^1 = v + h/2 (a(z, v) + a(z^1, v^1)), the damping
       // in a(z^1, v^1) solved for (a first-order v^1 = v + h a would make a restart at every step grow)
       const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
-      auto laplacian = [&](const double* u, int j) { return c2 * ((u[j - n_] + u[j + n_]) + (u[j - 1] + u[j + 1]) - 4 * u[j]); };
+      auto laplacian = [&](const double* u, int j) { return c2 * (neighbour_sum(u, j, n_) - 4 * u[j]); };
       for (int i = 1; i < n_ - 1; ++i)
         for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j) {
           const double a = laplacian(z, j) - grid_.mu * v[j];
@@ -60,7 +56,10 @@ class WaveFd final : public FixedStepper {
       for (int i = 1; i < n_ - 1; ++i)
         for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j) v1[j] = (v1[j] + (h / 2) * laplacian(z1, j)) / (1 + grid_.mu * h / 2);
     }
-    if (!continuing) h_ = h;
+    if (!continuing) {
+      h_ = h;
+      k_ = wave_coefficients(grid_, h);
+    }
     history_ = true;
     t_last_ = t + h;
     last_ = y_next.data();
@@ -77,8 +76,7 @@ class WaveFd final : public FixedStepper {
   bool history_ = false;          // the last step's end is where the next one starts
   double h_ = 0, t_last_ = 0;     // the last step's size and end
   const double* last_ = nullptr;  // the buffer it wrote
-  WaveCoefficients k_;
-  double k_dt_ = 0;               // the step k_ was made for
+  WaveCoefficients k_;            // for h_
 };
 
 }  // namespace

@@ -1,7 +1,5 @@
 #include "wave_step.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -29,7 +27,8 @@ double wave_stable_dt(const WaveGridView& grid) { return 2 / std::sqrt(highest_w
 
 double symplectic_euler_wave_dt(const WaveGridView& grid) {
   const double w2 = highest_w2(grid);
-  return std::min((-grid.mu + std::sqrt(grid.mu * grid.mu + 4 * w2)) / w2, 2 / std::max(grid.mu, 1e-300));
+  const double limit = (-grid.mu + std::sqrt(grid.mu * grid.mu + 4 * w2)) / w2;
+  return grid.mu > 0 ? std::min(limit, 2 / grid.mu) : limit;
 }
 
 std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid) {
@@ -43,21 +42,13 @@ namespace {
 // cells [first, last) of one row; every pointer at the row's start, rows `n` apart
 inline void wave_row(const WaveCoefficients& k, int n, int first, int last, const double* __restrict z_prev,
                      const double* __restrict z, double* __restrict z_next) {
-  for (int j = first; j < last; ++j)
-    z_next[j] = wave_cell(k, z[j], z_prev[j], (z[j - n] + z[j + n]) + (z[j - 1] + z[j + 1]));
+  for (int j = first; j < last; ++j) z_next[j] = wave_cell(k, z[j], z_prev[j], neighbour_sum(z, j, n));
 }
 
 }  // namespace
 
-void wave_step(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next) {
-  for (int i = 1; i < n - 1; ++i) {
-    const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(i) * n;
-    wave_row(k, n, 1, n - 1, z_prev + row, z + row, z_next + row);
-  }
-}
-
-void wave_step_threads(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next, int threads) {
-#pragma omp parallel for num_threads(threads) schedule(static)
+void wave_step(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
   for (int i = 1; i < n - 1; ++i) {
     const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(i) * n;
     wave_row(k, n, 1, n - 1, z_prev + row, z + row, z_next + row);

@@ -12,7 +12,7 @@
 // multiplied by 2 dt^2 and solved for z^{k+1}. The division by (mu dt + 2) is folded into the three
 // coefficients once (wave_coefficients), so a cell costs three multiplies and four adds.
 //
-// Stability (von Neumann, derived in docs/verification.md): a mode with 5-point Laplacian eigenvalue
+// Stability (von Neumann): a mode with 5-point Laplacian eigenvalue
 // -lambda obeys (2 + mu dt) r^2 - (4 - 2 c^2 dt^2 lambda) r + (2 - mu dt) = 0, whose roots lie in the unit
 // disc (Jury) iff c^2 dt^2 lambda <= 4, whatever mu >= 0. With the largest eigenvalue
 // lambda_max = (8/d^2) cos^2(pi / 2N) on N intervals per side: dt <= d / (sqrt(2) c cos(pi / 2N)).
@@ -46,17 +46,18 @@ double symplectic_euler_wave_dt(const WaveGridView& grid);
 // the limit above for a method that has one derived here (wave-fd, symplectic-euler), else none
 std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid);
 
-// one cell of the update: the one formula every loop below shares
-inline double wave_cell(const WaveCoefficients& k, double z, double z_prev, double neighbour_sum) {
-  return k.self * z + k.previous * z_prev + k.neighbours * neighbour_sum;
+// the four neighbours of cell j of a row-major grid with rows `n` apart, summed in one fixed order
+inline double neighbour_sum(const double* u, std::ptrdiff_t j, std::ptrdiff_t n) { return (u[j - n] + u[j + n]) + (u[j - 1] + u[j + 1]); }
+
+// one cell of the update: the one formula every loop shares (the kernels below, the wave-fd stepper)
+inline double wave_cell(const WaveCoefficients& k, double z, double z_prev, double neighbours) {
+  return k.self * z + k.previous * z_prev + k.neighbours * neighbours;
 }
 
 // z_next = z^{k+1} on the interior of an n x n row-major grid from z = z^k and z_prev = z^{k-1} (each n^2
-// values); z_next's boundary is left as it is. Three streams per cell: memory-bound on large grids
-void wave_step(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next);
-
-// the same, its rows shared among `threads` OpenMP threads: the same bits
-void wave_step_threads(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next, int threads);
+// values), its rows shared among `threads` OpenMP threads (the same bits for any count); z_next's boundary
+// is left as it is. Three streams per cell: memory-bound on large grids
+void wave_step(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next, int threads = 1);
 
 // `steps` steps at once by temporal blocking: each tile of the grid is copied with a halo `steps` cells
 // wide into buffers that stay in cache, stepped `steps` times there (the valid region shrinking by a cell

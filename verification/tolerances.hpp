@@ -151,6 +151,20 @@ inline constexpr double wave_modal = 1e-12;
 // ulp in lambda would still show at 1e-16, so this checks the relation, not the digits
 inline constexpr double wave_dispersion = 1e-9;
 
+// FFTW's DST-I there and back: ~ eps log2 N per transform; 1e-14 for N = 48
+inline constexpr double dst_round_trip = 1e-14;
+
+// the damped scheme's energy against that of the exactly evolved modes after 300 steps (mu = 2, 3.8 s):
+// both fields agree to wave_modal of the initial field, which has decayed by e^{-mu t/2} ~ 0.02, so relatively
+// 5e-11, and energy is quadratic in the field: ~ 1e-10; 1e-9
+inline constexpr double wave_energy_modal = 1e-9;
+
+// CVODE's method of lines on a mode of frequency w over t: a tolerance-proportional code's global error is
+// rtol times the solution's size times a factor that grows with the Lipschitz constant over the interval
+// (CVODE's guide: "a factor of 10 or so" per unit; here w t ~ 24): at most 1e3 rtol |y|. Measured at
+// rtol 1e-10: Adams 9 rtol |y|, BDF 250 rtol |y|
+inline constexpr double method_of_lines_rtol_multiple = 1e3;
+
 // the stability limit found by bisection (to 1e-3) against the derivation: the 1%
 inline constexpr double stability_match = 0.01;
 inline constexpr double stability_bisection_width = 1e-3;
