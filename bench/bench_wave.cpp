@@ -12,10 +12,9 @@
 #include "ratio_reporter.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/measure.hpp"
+#include "verification/wave_modes.hpp"
 
 #include <fmt/format.h>
-
-#include <random>
 
 namespace {
 
@@ -23,15 +22,8 @@ constexpr double bytes_per_cell = 24;
 constexpr int steps = 8;  // steps per iteration, the blocked kernel's steps per pass
 
 struct Grids {
-  explicit Grids(int n) : n(n), z_prev(field(n, 1)), z(field(n, 2)), z_next(Eigen::VectorXd::Zero(z.size())) {}
-  static Eigen::VectorXd field(int n, unsigned seed) {
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(-1, 1);
-    Eigen::VectorXd f = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n) * n);
-    for (int i = 1; i < n - 1; ++i)
-      for (int j = 1; j < n - 1; ++j) f[static_cast<Eigen::Index>(i) * n + j] = u(rng);
-    return f;
-  }
+  explicit Grids(int n)
+      : n(n), z_prev(stepwise::random_wave_field(n, 1, 1)), z(stepwise::random_wave_field(n, 1, 2)), z_next(Eigen::VectorXd::Zero(z.size())) {}
   int n;
   Eigen::VectorXd z_prev, z, z_next;
   stepwise::WaveCoefficients k = stepwise::wave_coefficients({n, 0.01, 1.0, 0.0}, 0.005);  // neutral: |r| = 1

@@ -39,8 +39,11 @@ std::optional<double> wave_method_stable_dt(std::string_view method, const WaveG
 
 namespace {
 
-// cells [first, last) of one row; every pointer at the row's start, rows `n` apart
-inline void wave_row(const WaveCoefficients& k, int n, int first, int last, const double* __restrict z_prev,
+// cells [first, last) of one row; every pointer at the row's start, rows `n` apart. Built for AVX2 and
+// for plain x86-64, the one chosen at load time: the same IEEE operations in either (no fused
+// multiply-adds: -ffp-contract=off), so the same bits; AVX2's four-wide loads and adds lift the in-core
+// limit that held the SSE2 loop below the memory bound (bench_wave)
+__attribute__((target_clones("avx2", "default"))) void wave_row(const WaveCoefficients& k, int n, int first, int last, const double* __restrict z_prev,
                      const double* __restrict z, double* __restrict z_next) {
   for (int j = first; j < last; ++j) z_next[j] = wave_cell(k, z[j], z_prev[j], neighbour_sum(z, j, n));
 }

@@ -5,6 +5,7 @@
 #include "solvers/integrator.hpp"
 
 #include <functional>
+#include <string>
 #include <string_view>
 
 namespace stepwise {
@@ -22,5 +23,16 @@ bool stays_bounded(const OdeSystem& system, std::string_view method, const Eigen
 // determinant 1/(1 + mu dt), condition dt^2 w^2 <= 4 + 2 mu dt) at lambda_max = 8/d^2: right at mu = 0, too
 // large at mu > 0 for both seeds' schemes (wave_stable_dt, symplectic_euler_wave_dt)
 double seeds_wave_condition(const WaveGridView& grid);
+
+// One height-field grid's stability limit for `method` (wave-fd or symplectic-euler): measured by bisection
+// (to tolerance::stability_bisection_width) between half and twice the derived limit, each run `steps`
+// steps of a water-drop grid started from a random interior field (every mode, the highest included,
+// excited); beside it the derived limit and the seeds' condition. The test and the report's table both
+// come from here; wave_stays_bounded is the probe (whether a run at dt stays bounded).
+std::function<bool(double dt)> wave_stays_bounded(std::string_view method, int points, double spacing, double c, double mu, long steps);
+struct WaveStability {
+  double measured = 0, derived = 0, seeds = 0;
+};
+WaveStability wave_stability(std::string_view method, int points, double spacing, double c, double mu, long steps);
 
 }  // namespace stepwise

@@ -9,10 +9,20 @@
 #include <cmath>
 #include <complex>
 #include <memory>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
 namespace stepwise {
+
+Eigen::VectorXd random_wave_field(int points, double scale, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-scale, scale);
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(points) * points);
+  for (int i = 1; i < points - 1; ++i)
+    for (int j = 1; j < points - 1; ++j) z[static_cast<Eigen::Index>(i) * points + j] = u(rng);
+  return z;
+}
 
 namespace {
 

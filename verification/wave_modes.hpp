@@ -16,6 +16,9 @@
 
 namespace stepwise {
 
+// a field uniform in [-scale, scale] on the interior of points^2, zero on the boundary (seeded, reproducible)
+Eigen::VectorXd random_wave_field(int points, double scale, unsigned seed);
+
 // a_mn for m, n = 1..N-1, row-major ((N-1)^2 values) from z on (N+1)^2 points
 Eigen::VectorXd sine_coefficients(int points, const Eigen::VectorXd& z);
 // z on (N+1)^2 points (zero boundary) from the (N-1)^2 coefficients

@@ -23,16 +23,6 @@
 namespace stepwise {
 namespace {
 
-// a field uniform in [-scale, scale] on the interior, zero on the boundary
-Eigen::VectorXd random_field(int points, double scale, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-scale, scale);
-  Eigen::VectorXd z = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(points) * points);
-  for (int i = 1; i < points - 1; ++i)
-    for (int j = 1; j < points - 1; ++j) z[i * points + j] = u(rng);
-  return z;
-}
-
 double relative_max(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return (a - b).lpNorm<Eigen::Infinity>() / b.lpNorm<Eigen::Infinity>();
 }
@@ -93,13 +83,13 @@ TEST(Wave, SchemeConvergesToTheContinuousModeAtSecondOrder) {
 
 TEST(Wave, EveryModeOfARandomStateEvolvesExactlyThroughTheFft) {
   const int points = 49;
-  const Eigen::VectorXd z0 = random_field(points, 1.0, 7);
+  const Eigen::VectorXd z0 = random_wave_field(points, 1.0, 7);
   // the DST-I round trip scales by (2N)^2, which sine_coefficients / from_sine_coefficients divide out
   EXPECT_LT(relative_max(from_sine_coefficients(points, sine_coefficients(points, z0)), z0), tolerance::dst_round_trip);
   for (const double mu : {0.0, 2.0}) {
     const WaveGridView grid{points, 0.02, 1.0, mu};
     const double dt = 0.95 * wave_stable_dt(grid);
-    const Eigen::VectorXd z1 = z0 + random_field(points, 0.1, 8);
+    const Eigen::VectorXd z1 = z0 + random_wave_field(points, 0.1, 8);
     const long steps = 3000;
     Eigen::VectorXd z_prev = z0, z = z1;
     run_wave_scheme(grid, dt, steps - 1, z_prev, z);
@@ -117,7 +107,7 @@ TEST(Wave, EachModeOscillatesAtTheDiscreteDispersionRelation) {
   const int samples = 200;
   // every mode's amplitude over 200 steps of a random state
   std::vector<Eigen::VectorXd> a;
-  Eigen::VectorXd z_prev = random_field(points, 1.0, 3), z = random_field(points, 1.0, 4);
+  Eigen::VectorXd z_prev = random_wave_field(points, 1.0, 3), z = random_wave_field(points, 1.0, 4);
   a.push_back(sine_coefficients(points, z_prev));
   for (int k = 0; k < samples; ++k) {
     a.push_back(sine_coefficients(points, z));
@@ -145,33 +135,22 @@ TEST(Wave, EachModeOscillatesAtTheDiscreteDispersionRelation) {
 
 TEST(Wave, StabilityLimitMatchesTheDerivationAndTheSeedsConditionOnlyWithoutDamping) {
   const int points = 32;
+  const long steps = 3000;
   for (const auto& [c, d] : {std::pair{1.0, 0.02}, {2.0, 0.05}, {0.5, 0.01}})
     for (const double mu : {0.0, 0.5, 2.0, 10.0}) {
-      Params p = wave(points, d, c, mu);
-      p["drop_x"] = p["drop_y"] = d * (points - 1) / 2;
-      const auto model = make_model("water-drop", p);
-      const WaveGridView grid = *model->wave_grid();
-      Eigen::VectorXd y0 = Eigen::VectorXd::Zero(model->size());
-      y0.head(points * points) = random_field(points, 1e-3, 11);
-      auto stable = [&](const char* method) {
-        return [&, method](double dt) { return stays_bounded(*model, method, y0, dt, 3000); };
-      };
-      const double derived = wave_stable_dt(grid);
-      const double measured = bisect_stability(stable("wave-fd"), 0.5 * derived, 2 * derived, tolerance::stability_bisection_width);
-      const double seeds = seeds_wave_condition(grid);
-      std::cout << "c " << c << " d " << d << " mu " << mu << ": wave-fd limit measured " << measured << " s, derived " << derived
-                << " s, seeds' condition " << seeds << " s";
-      EXPECT_NEAR(measured / derived, 1.0, tolerance::stability_match) << "c " << c << " d " << d << " mu " << mu;
+      const WaveStability fd = wave_stability("wave-fd", points, d, c, mu, steps);
+      std::cout << "c " << c << " d " << d << " mu " << mu << ": wave-fd limit measured " << fd.measured << " s, derived " << fd.derived
+                << " s, seeds' condition " << fd.seeds << " s";
+      EXPECT_NEAR(fd.measured / fd.derived, 1.0, tolerance::stability_match) << "c " << c << " d " << d << " mu " << mu;
       // the seeds' condition promises more than the scheme gives once there is damping: a run at it diverges
-      if (seeds > derived * (1 + 2 * tolerance::stability_match)) {
-        EXPECT_FALSE(stable("wave-fd")(seeds * 0.999));
+      if (fd.seeds > fd.derived * (1 + 2 * tolerance::stability_match)) {
+        EXPECT_FALSE(wave_stays_bounded("wave-fd", points, d, c, mu, steps)(fd.seeds * 0.999));
       }
       if (c == 1.0) {
         // the second seed's scheme (symplectic Euler, damping explicit): limit shorter with damping
-        const double se_derived = symplectic_euler_wave_dt(grid);
-        const double se = bisect_stability(stable("symplectic-euler"), 0.5 * se_derived, 2 * se_derived, tolerance::stability_bisection_width);
-        std::cout << "; symplectic-euler measured " << se << " s, derived " << se_derived << " s";
-        EXPECT_NEAR(se / se_derived, 1.0, tolerance::stability_match) << "symplectic-euler mu " << mu;
+        const WaveStability se = wave_stability("symplectic-euler", points, d, c, mu, steps);
+        std::cout << "; symplectic-euler measured " << se.measured << " s, derived " << se.derived << " s";
+        EXPECT_NEAR(se.measured / se.derived, 1.0, tolerance::stability_match) << "symplectic-euler mu " << mu;
       }
       std::cout << '\n';
     }
@@ -182,7 +161,7 @@ TEST(Wave, SchemeEnergyIsConservedWithoutDampingAndDecaysAsItsModesPredict) {
   for (const double mu : {0.0, 2.0}) {
     const WaveGridView grid{points, 0.02, 1.0, mu};
     const double dt = 0.9 * wave_stable_dt(grid);
-    const Eigen::VectorXd z0 = random_field(points, 1.0, 5), z1 = z0 + random_field(points, 0.1, 6);
+    const Eigen::VectorXd z0 = random_wave_field(points, 1.0, 5), z1 = z0 + random_wave_field(points, 0.1, 6);
     const double e0 = scheme_energy(grid, dt, z0, z1);
     Eigen::VectorXd z_prev = z0, z = z1;
     double previous = e0;
@@ -213,7 +192,7 @@ TEST(Wave, BlockedAndThreadedStepsAreBitwiseThePlainLoop) {
   const int points = 300, steps = 8;
   const WaveGridView grid{points, 0.02, 1.0, 0.5};
   const WaveCoefficients k = wave_coefficients(grid, 0.9 * wave_stable_dt(grid));
-  const Eigen::VectorXd z0 = random_field(points, 1.0, 1), z1 = random_field(points, 1.0, 2);
+  const Eigen::VectorXd z0 = random_wave_field(points, 1.0, 1), z1 = random_wave_field(points, 1.0, 2);
   Eigen::VectorXd plain_prev = z0, plain = z1, next = Eigen::VectorXd::Zero(z0.size());
   for (int s = 0; s < steps; ++s) {
     wave_step(k, points, plain_prev.data(), plain.data(), next.data());
@@ -239,8 +218,8 @@ TEST(Wave, BlockedAndThreadedStepsAreBitwiseThePlainLoop) {
 TEST(Wave, SparseJacobianMatchesCentralDifferences) {
   const auto model = make_model("water-drop", {{"size", 7}, {"drop_x", 0.06}, {"drop_y", 0.06}, {"mu", 0.7}});
   Eigen::VectorXd y = Eigen::VectorXd::Zero(model->size());
-  y.head(49) = random_field(7, 1.0, 9);
-  y.tail(49) = random_field(7, 1.0, 10);
+  y.head(49) = random_wave_field(7, 1.0, 9);
+  y.tail(49) = random_wave_field(7, 1.0, 10);
   Eigen::SparseMatrix<double> sparse;
   model->sparse_jacobian(0, y, sparse);
   Eigen::MatrixXd fd(model->size(), model->size());
