@@ -132,20 +132,9 @@ class ParticleMesh final : public Model {
 // the face planes of a closed convex mesh with outward faces, or BadParameter("mesh") naming what is wrong
 std::vector<Plane> convex_faces(const TriangleMesh& mesh) {
   try {
-    validate(mesh);
+    validate_closed(mesh);
   } catch (const std::invalid_argument& e) {
     throw BadParameter("mesh", e.what());
-  }
-  if (mesh.faces.rows() < 4) throw BadParameter("mesh", fmt::format("a closed mesh needs at least 4 triangles, got {}", mesh.faces.rows()));
-  // closed: every directed edge (a, b) is matched by exactly one (b, a) of another face
-  std::map<std::pair<int, int>, int> edges;
-  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++edges[{mesh.faces(f, k), mesh.faces(f, (k + 1) % 3)}];
-  for (const auto& [edge, count] : edges) {
-    const auto reverse = edges.find({edge.second, edge.first});
-    if (count != 1 || reverse == edges.end() || reverse->second != 1)
-      throw BadParameter("mesh", fmt::format("mesh is not closed and consistently oriented: edge {}-{} is not shared by exactly two "
-                                             "faces in opposite directions", edge.first, edge.second));
   }
   const Aabb box = bounding_box(mesh);
   const double size = (box.hi - box.lo).norm();

@@ -24,7 +24,20 @@ struct TriangleMesh {
 // throws std::invalid_argument naming the first face index out of range or the first non-finite vertex
 void validate(const TriangleMesh& mesh);
 
+// validate, and closed and consistently oriented: every directed edge (a, b) of a face is matched by
+// exactly one (b, a) of another, so the surface bounds a volume (a mass, a signed distance); throws
+// std::invalid_argument naming the first edge that is not
+void validate_closed(const TriangleMesh& mesh);
+
 Triangle triangle(const TriangleMesh& mesh, int face);
+
+// closed meshes of simple solids, centred on the origin, faces counter-clockwise from outside:
+// a box of half-extents h (12 triangles); a sphere of radius r inscribed as an icosahedron subdivided
+// `subdivisions` times (20 * 4^s triangles, vertices on the sphere); a cylinder along z of radius r and
+// half-height h with `segments` sides (an inscribed prism, vertices on the cylinder)
+TriangleMesh box_mesh(const Eigen::Vector3d& h);
+TriangleMesh sphere_mesh(double r, int subdivisions);
+TriangleMesh cylinder_mesh(double r, double h, int segments);
 
 struct Aabb {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());

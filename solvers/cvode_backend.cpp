@@ -15,6 +15,7 @@
 #include "run_support.hpp"
 
 #include <cvode/cvode.h>
+#include <cvode/cvode_proj.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
@@ -57,6 +58,7 @@ struct Callbacks {
   std::string last_error;          // CVODE's own message for the last failure
   Eigen::MatrixXd jac;             // dense df/dy scratch (n x n), sized by the first dense Jacobian call
   Eigen::SparseMatrix<double> sparse_jac;  // sparse df/dy scratch, fixed pattern
+  Eigen::VectorXd projected;       // projection scratch
 };
 
 int cvode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
@@ -115,6 +117,17 @@ int cvode_roots(sunrealtype t, N_Vector y, sunrealtype* gout, void* user_data) {
   return 0;
 }
 
+// CVODE's projection: corr takes ycur onto the system's manifold (the error estimate is not projected)
+int cvode_projection(sunrealtype, N_Vector ycur, N_Vector corr, sunrealtype, N_Vector, void* user_data) {
+  auto& c = *static_cast<Callbacks*>(user_data);
+  const auto n = static_cast<Eigen::Index>(N_VGetLength(ycur));
+  const Eigen::Map<const Eigen::VectorXd> y(N_VGetArrayPointer(ycur), n);
+  c.projected = y;
+  c.system->project(c.projected);
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(corr), n) = c.projected - y;
+  return 0;
+}
+
 void cvode_error_handler(int, const char* module, const char* function, char* msg, void* user_data) {
   static_cast<Callbacks*>(user_data)->last_error = fmt::format("{}:{}: {}", module, function, msg);
 }
@@ -130,7 +143,7 @@ class CvodeIntegrator final : public Integrator {
     const double start = thread_cpu_seconds();
     CountedSystem counted(system, result.stats);
     const int n = system.size();
-    Callbacks callbacks{&counted, false, {}, {}, {}};
+    Callbacks callbacks{&counted, false, {}, {}, {}, {}};
 
     // a failing setup call ends the run with its name and code
     auto setup_failed = [&](std::string_view call, long code) {
@@ -178,6 +191,12 @@ class CvodeIntegrator final : public Integrator {
       if (system.has_jacobian()) {
         if (const int code = CVodeSetJacFn(mem.get(), cvode_dense_jacobian)) return setup_failed("CVodeSetJacFn", code);
       }
+    }
+
+    // projection after each step, where the system has one: CVODE supports it for BDF only
+    if (Eigen::VectorXd probe = y0; bdf_ && system.project(probe)) {
+      if (const int code = CVodeSetProjFn(mem.get(), cvode_projection)) return setup_failed("CVodeSetProjFn", code);
+      if (const int code = CVodeSetProjErrEst(mem.get(), SUNFALSE)) return setup_failed("CVodeSetProjErrEst", code);
     }
 
     // events: CVODE's rootfinding with each event's direction; after a root, the handler and a re-initialisation

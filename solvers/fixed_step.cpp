@@ -36,6 +36,7 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
         break;
       }
       ++result.stats.steps;
+      if (counted.project(y_next)) stepper->reset();  // a stepper's history (FSAL, past levels) is off the manifold
       const auto norm = stepper->last_norm();
       if (norm ? !(*norm <= bound) : has_diverged(y_next, bound)) {
         mark_diverged(result, t_next);

@@ -179,6 +179,11 @@ class GslAdaptiveIntegrator final : public Integrator {
           break;
         }
         ++result.stats.steps;
+        if (counted.project(y)) {
+          // the derivative GSL keeps for the next step (FSAL) and a multistep history belong to the unprojected state
+          gsl_odeiv2_evolve_reset(d->e);
+          gsl_odeiv2_step_reset(d->s);
+        }
         if (has_diverged(y, bound)) {
           mark_diverged(result, t);
           break;

@@ -52,6 +52,7 @@ struct Stats {
   long linear_solves = 0;   // solves with a factorised Newton matrix
   long factorizations = 0;  // factorisations of a Newton matrix
   long events = 0;          // events handled
+  long projections = 0;     // projections onto the system's manifold (OdeSystem::project)
   double cpu_seconds = 0;   // thread CPU time of the integration
 };
 

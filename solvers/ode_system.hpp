@@ -78,6 +78,11 @@ class OdeSystem {
   // optional wave-equation structure for the finite-difference scheme
   virtual std::optional<WaveGridView> wave_grid() const { return std::nullopt; }
 
+  // optional projection onto the manifold the exact flow keeps (a rigid body's unit quaternion): the
+  // integrators apply it after every accepted step (hand-written and GSL steppers; CVODE BDF through
+  // CVodeSetProjFn; CVODE Adams has no projection) and count it; returns false for a system without one
+  virtual bool project(Eigen::Ref<Eigen::VectorXd> y) const { (void)y; return false; }
+
   // optional events; an empty span means none
   virtual std::span<const Event> events() const { return {}; }
 

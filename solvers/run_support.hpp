@@ -41,6 +41,11 @@ class CountedSystem final : public OdeSystem {
   }
   std::optional<WaveGridView> wave_grid() const override { return inner_.wave_grid(); }
   std::span<const Event> events() const override { return inner_.events(); }
+  bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
+    const bool projected = inner_.project(y);
+    if (projected) ++stats_.projections;
+    return projected;
+  }
   double event_free_interval() const override { return inner_.event_free_interval(); }
   Stats& stats() const { return stats_; }
   // the wrapped system, for a backend's hot path that counts its calls itself
