@@ -8,6 +8,7 @@
 #include "particles_in_box.hpp"
 #include "pendulum.hpp"
 #include "projectile.hpp"
+#include "rigid_body.hpp"
 
 #include <fmt/format.h>
 
@@ -48,6 +49,8 @@ const std::array model_table{
               standing_wave_params(), [](const Params& p) { return make_standing_wave(p); }},
     ModelInfo{"pool", "height-field water with drops falling at seeded random places and times (events)",
               pool_params(), [](const Params& p) { return make_pool(p); }},
+    ModelInfo{"rigid-body", "one rigid body: Euler's equations, unit quaternion, gravity, drag, a force at a point",
+              rigid_body_params(), [](const Params& p) { return make_rigid_body(p); }},
 };
 
 }  // namespace

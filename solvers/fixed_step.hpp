@@ -47,5 +47,7 @@ std::unique_ptr<FixedStepper> make_rk4(const CountedSystem& system);
 std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system);
 // the seeds' three-level scheme for a wave equation on a grid (wave_step.hpp); the system has a wave_grid()
 std::unique_ptr<FixedStepper> make_wave_fd(const CountedSystem& system);
+// the free rigid body's splitting into exact rotations; the system has a free_rigid_body()
+std::unique_ptr<FixedStepper> make_rigid_splitting(const CountedSystem& system);
 
 }  // namespace stepwise

@@ -46,6 +46,8 @@ constexpr std::array method_table{
     MethodInfo{"gsl-msbdf", "variable order BDF, Newton iteration", "1-5", "GSL odeiv2", 1, 5, true, true, false, true},
     MethodInfo{"wave-fd", "explicit three-level finite differences for the damped wave equation (the seeds' scheme), fixed step",
                "2", "hand-written", 2, 2, true, false, false, false, false, true},
+    MethodInfo{"rigid-splitting", "the free rigid body split into exact rotations about its principal axes, Strang-composed (symplectic, fixed step)",
+               "2", "hand-written", 2, 2, true, false, false, false, false, false, true},
 };
 
 }  // namespace
@@ -61,11 +63,14 @@ const MethodInfo* find_method(std::string_view name) {
 bool method_applies(const MethodInfo& method, const OdeSystem& system) {
   if (method.needs_second_order && !system.second_order()) return false;
   if (method.needs_wave_grid && !system.wave_grid()) return false;
+  if (method.needs_free_rigid_body && !system.free_rigid_body()) return false;
   return true;
 }
 
 std::string method_requirement(const MethodInfo& method) {
   if (method.needs_wave_grid) return fmt::format("{} needs a wave equation on a grid (a water scene)", method.name);
+  if (method.needs_free_rigid_body)
+    return fmt::format("{} needs a torque-free rigid body (a rigid-body scene without drag or torque)", method.name);
   if (method.needs_second_order) return fmt::format("{} needs a second-order model y = (x, v)", method.name);
   return {};
 }
@@ -87,6 +92,7 @@ std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepC
   if (method == "rk4") return std::make_unique<FixedStepIntegrator>(name, control, make_rk4);
   if (method == "implicit-euler") return std::make_unique<FixedStepIntegrator>(name, control, make_implicit_euler);
   if (method == "wave-fd") return std::make_unique<FixedStepIntegrator>(name, control, make_wave_fd);
+  if (method == "rigid-splitting") return std::make_unique<FixedStepIntegrator>(name, control, make_rigid_splitting);
   if (info->source == "SUNDIALS CVODE") return make_cvode_integrator(method, control);
   return make_gsl_integrator(method, control);
 }

@@ -103,6 +103,7 @@ struct MethodInfo {
   bool dense_matrix = false;        // keeps a dense size() x size() Newton matrix ...
   bool sparse_newton = false;       // ... unless the system has a sparse Jacobian, which it solves with (KLU)
   bool needs_wave_grid = false;     // only for a wave equation on a grid (OdeSystem::wave_grid)
+  bool needs_free_rigid_body = false;  // only for a torque-free rigid body (OdeSystem::free_rigid_body)
 };
 
 std::span<const MethodInfo> methods();

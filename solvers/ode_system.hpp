@@ -29,6 +29,15 @@ struct WaveGridView {
   double mu = 0;        // damping (1/s)
 };
 
+// y = (x, v, q, w) of one rigid body, 13 entries: position (3, m), velocity (3, m/s), orientation as a
+// unit quaternion (w, x, y, z; body to world) and the angular velocity in the body's principal frame (3,
+// rad/s); no torque, and a constant linear acceleration: the structure the splitting of the free rigid
+// body into exact rotations needs (rigid_splitting.cpp)
+struct RigidBodyView {
+  Eigen::Vector3d inertia;       // principal moments I1, I2, I3 (kg m^2)
+  Eigen::Vector3d acceleration;  // constant linear acceleration (m/s^2)
+};
+
 // An event g(t, y) = 0 (a collision, a plane crossing) and what happens at it.
 struct Event {
   std::string name;                                                      // what the event is ("ground")
@@ -82,6 +91,9 @@ class OdeSystem {
   // integrators apply it after every accepted step (hand-written and GSL steppers; CVODE BDF through
   // CVodeSetProjFn; CVODE Adams has no projection) and count it; returns false for a system without one
   virtual bool project(Eigen::Ref<Eigen::VectorXd> y) const { (void)y; return false; }
+
+  // optional free-rigid-body structure for the splitting method
+  virtual std::optional<RigidBodyView> free_rigid_body() const { return std::nullopt; }
 
   // optional events; an empty span means none
   virtual std::span<const Event> events() const { return {}; }

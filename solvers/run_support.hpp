@@ -40,6 +40,7 @@ class CountedSystem final : public OdeSystem {
     inner_.local_acceleration(t, x, v, a, first, count);
   }
   std::optional<WaveGridView> wave_grid() const override { return inner_.wave_grid(); }
+  std::optional<RigidBodyView> free_rigid_body() const override { return inner_.free_rigid_body(); }
   std::span<const Event> events() const override { return inner_.events(); }
   bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
     const bool projected = inner_.project(y);

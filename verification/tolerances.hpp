@@ -173,4 +173,8 @@ inline constexpr double stability_bisection_width = 1e-3;
 // (~ eps per cell, random-walked over K = 10^4 steps) moves it by ~ eps sqrt(K) ~ 2e-14 of E
 inline constexpr double wave_energy_roundoff = 1e-12;
 
+// polyhedral mass properties: sums over at most ~1000 faces of cubic and quartic products of the
+// coordinates, each a few ulps; 1000 faces x 4 ulps x a factor 20 for the shift to the centre of mass
+inline constexpr double mass_properties_roundoff = 1e-12;
+
 }  // namespace stepwise::tolerance

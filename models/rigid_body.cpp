@@ -1,0 +1,193 @@
+#include "rigid_body.hpp"
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_sf_ellint.h>
+#include <gsl/gsl_sf_elljac.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+namespace stepwise {
+namespace {
+
+const ParamSpec params[] = {
+    {"mass", 1.0, "kg", "mass", Bound::positive},
+    {"I1", 1.0, "kg m^2", "principal moment about the body x axis", Bound::positive},
+    {"I2", 2.0, "kg m^2", "principal moment about the body y axis", Bound::positive},
+    {"I3", 3.0, "kg m^2", "principal moment about the body z axis", Bound::positive},
+    {"x0", 0.0, "m", "initial centre of mass x"},
+    {"y0", 0.0, "m", "initial centre of mass y"},
+    {"z0", 0.0, "m", "initial centre of mass z (height)"},
+    {"vx0", 0.0, "m/s", "initial velocity x"},
+    {"vy0", 0.0, "m/s", "initial velocity y"},
+    {"vz0", 0.0, "m/s", "initial velocity z"},
+    {"qw0", 1.0, "", "initial orientation quaternion, scalar part (normalised; not all four zero)"},
+    {"qx0", 0.0, "", "initial orientation quaternion, x"},
+    {"qy0", 0.0, "", "initial orientation quaternion, y"},
+    {"qz0", 0.0, "", "initial orientation quaternion, z"},
+    {"wx0", 0.01, "rad/s", "initial angular velocity about the body x axis"},
+    {"wy0", 1.0, "rad/s", "initial angular velocity about the body y axis"},
+    {"wz0", 0.0, "rad/s", "initial angular velocity about the body z axis"},
+    {"g", 0.0, "m/s^2", "gravitational acceleration, along -z", Bound::nonnegative},
+    {"drag", 0.0, "1/s", "linear drag per unit mass", Bound::nonnegative},
+    {"angular_drag", 0.0, "1/s", "angular damping: torque -angular_drag I w", Bound::nonnegative},
+    {"fx", 0.0, "N", "constant applied force, world x"},
+    {"fy", 0.0, "N", "constant applied force, world y"},
+    {"fz", 0.0, "N", "constant applied force, world z"},
+    {"px", 0.0, "m", "body point the force acts at, body x (torque r x f)"},
+    {"py", 0.0, "m", "body point the force acts at, body y"},
+    {"pz", 0.0, "m", "body point the force acts at, body z"},
+};
+
+Eigen::Quaterniond orientation(const Eigen::VectorXd& y) { return Eigen::Quaterniond(y[6], y[7], y[8], y[9]).normalized(); }
+
+class RigidBody final : public Model {
+ public:
+  explicit RigidBody(const Params& p)
+      : mass_(p.at("mass")), inertia_(p.at("I1"), p.at("I2"), p.at("I3")), gravity_(0, 0, -p.at("g")), drag_(p.at("drag")),
+        angular_drag_(p.at("angular_drag")), force_(p.at("fx"), p.at("fy"), p.at("fz")), point_(p.at("px"), p.at("py"), p.at("pz")) {
+    // every real body has each moment at most the sum of the other two (I3 = int x^2 + y^2 <= I1 + I2)
+    for (int k = 0; k < 3; ++k)
+      if (inertia_[k] > (inertia_[(k + 1) % 3] + inertia_[(k + 2) % 3]) * (1 + 1e-12))
+        throw BadParameter(fmt::format("I{}", k + 1), fmt::format("principal moment I{} = {:g} exceeds the sum of the other two ({:g}): no body has "
+                                                                  "these moments", k + 1, inertia_[k], inertia_[(k + 1) % 3] + inertia_[(k + 2) % 3]));
+    const Eigen::Vector4d q(p.at("qw0"), p.at("qx0"), p.at("qy0"), p.at("qz0"));
+    if (!(q.norm() > 0)) throw BadParameter("qw0", "initial orientation quaternion (qw0, qx0, qy0, qz0) is zero");
+    y0_.resize(13);
+    y0_ << p.at("x0"), p.at("y0"), p.at("z0"), p.at("vx0"), p.at("vy0"), p.at("vz0"), q.normalized(), p.at("wx0"), p.at("wy0"), p.at("wz0");
+  }
+
+  std::string_view name() const override { return "rigid-body"; }
+  int size() const override { return 13; }
+  bool autonomous() const override { return true; }
+  std::vector<std::string> state_names() const override {
+    return {"x", "y", "z", "vx", "vy", "vz", "qw", "qx", "qy", "qz", "wx", "wy", "wz"};
+  }
+  Eigen::VectorXd initial_state() const override { return y0_; }
+
+  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    const Eigen::Quaterniond q(y[6], y[7], y[8], y[9]);
+    const Eigen::Vector3d v = y.segment<3>(3), w = y.segment<3>(10);
+    dydt.segment<3>(0) = v;
+    dydt.segment<3>(3) = gravity_ - drag_ * v + force_ / mass_;
+    const Eigen::Quaterniond dq = q * Eigen::Quaterniond(0, w.x(), w.y(), w.z());
+    dydt.segment<4>(6) << dq.w() / 2, dq.x() / 2, dq.y() / 2, dq.z() / 2;
+    const Eigen::Vector3d momentum = inertia_.cwiseProduct(w);
+    Eigen::Vector3d torque = momentum.cross(w) - angular_drag_ * momentum;
+    if (!point_.isZero()) torque += point_.cross(q.normalized().conjugate() * force_);
+    dydt.segment<3>(10) = torque.cwiseQuotient(inertia_);
+  }
+
+  bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
+    y.segment<4>(6).normalize();
+    return true;
+  }
+
+  std::optional<RigidBodyView> free_rigid_body() const override {
+    if (drag_ != 0 || angular_drag_ != 0 || !point_.cross(force_).isZero()) return std::nullopt;
+    return RigidBodyView{inertia_, gravity_ + force_ / mass_};
+  }
+
+  std::optional<double> energy(const Eigen::VectorXd& y) const override {
+    const Eigen::Vector3d v = y.segment<3>(3), w = y.segment<3>(10);
+    return mass_ * v.squaredNorm() / 2 + w.dot(inertia_.cwiseProduct(w)) / 2 - mass_ * gravity_.dot(y.segment<3>(0));
+  }
+
+  std::vector<std::string> summary_names() const override {
+    auto names = state_names();
+    names.insert(names.end(), {"energy", "Lx", "Ly", "Lz"});
+    return names;
+  }
+  Eigen::VectorXd summary(const Eigen::VectorXd& y) const override {
+    Eigen::VectorXd s(17);
+    const Eigen::Vector3d momentum = orientation(y) * inertia_.cwiseProduct(y.segment<3>(10));
+    s << y, *energy(y), momentum;
+    return s;
+  }
+
+ private:
+  double mass_;
+  Eigen::Vector3d inertia_, gravity_;
+  double drag_, angular_drag_;
+  Eigen::Vector3d force_, point_;
+  Eigen::VectorXd y0_;
+};
+
+// F(phi, k) for phi in [-pi, pi], through F(pi - phi) = 2K - F(phi) and oddness
+double elliptic_f(double phi, double k, double K) {
+  const double magnitude = std::abs(phi);
+  const double f = magnitude <= std::numbers::pi / 2 ? gsl_sf_ellint_F(magnitude, k, GSL_PREC_DOUBLE)
+                                                     : 2 * K - gsl_sf_ellint_F(std::numbers::pi - magnitude, k, GSL_PREC_DOUBLE);
+  return std::copysign(f, phi);
+}
+
+}  // namespace
+
+std::span<const ParamSpec> rigid_body_params() { return params; }
+std::unique_ptr<Model> make_rigid_body(const Params& p) { return std::make_unique<RigidBody>(p); }
+
+TorqueFreeRotation::TorqueFreeRotation(const Eigen::Vector3d& I, const Eigen::Vector3d& w0) : w0_(w0) {
+  std::array<int, 3> order{0, 1, 2};
+  std::sort(order.begin(), order.end(), [&](int i, int j) { return I[i] < I[j]; });
+  const Eigen::Vector3d momentum = I.cwiseProduct(w0);
+  const double two_e = w0.dot(momentum), m2 = momentum.squaredNorm();
+  // a body with equal moments, or spinning about a principal axis: w stays w0
+  if (I[order[2]] - I[order[0]] <= 1e-14 * I[order[2]] || momentum.cross(w0).norm() <= 1e-15 * momentum.norm() * w0.norm()) {
+    steady_ = true;
+    period_ = std::numeric_limits<double>::infinity();
+    return;
+  }
+  if (m2 > two_e * I[order[1]]) std::tie(a_, b_, c_) = std::tuple{order[0], order[1], order[2]};
+  else std::tie(a_, b_, c_) = std::tuple{order[2], order[1], order[0]};
+  const double Ia = I[a_], Ib = I[b_], Ic = I[c_];
+  const double Aa = std::sqrt((two_e * Ic - m2) / (Ia * (Ic - Ia))), Ab = std::sqrt((two_e * Ic - m2) / (Ib * (Ic - Ib))),
+               Ac = std::sqrt((m2 - two_e * Ia) / (Ic * (Ic - Ia)));
+  s_ = std::sqrt((Ic - Ib) * (m2 - two_e * Ia) / (Ia * Ib * Ic));
+  m_ = (Ib - Ia) * (two_e * Ic - m2) / ((Ic - Ib) * (m2 - two_e * Ia));
+  if (!(m_ < 1)) throw std::domain_error("torque-free rotation on the separatrix (k = 1): not periodic");
+  const double k = std::sqrt(m_);
+  quarter_ = gsl_sf_ellint_Kcomp(k, GSL_PREC_DOUBLE);
+  period_ = 4 * quarter_ / s_;
+  // signs: w_c keeps its sign (dn > 0); of the pairs (sign of w_b, direction of time) the one whose
+  // derivative at t = 0 is Euler's
+  const double sc = w0[c_] < 0 ? -1 : 1;
+  const Eigen::Vector3d euler = momentum.cross(w0).cwiseQuotient(I);
+  double best = std::numeric_limits<double>::infinity();
+  for (const double sb : {1.0, -1.0})
+    for (const double direction : {1.0, -1.0}) {
+      const double sn = w0[b_] / (sb * Ab), cn = w0[a_] / Aa, dn = w0[c_] / (sc * Ac);
+      // d/dtau: sn' = cn dn, cn' = -sn dn, dn' = -k^2 sn cn
+      const double rate = direction * s_;
+      const double mismatch = std::hypot(Aa * (-sn * dn) * rate - euler[a_], sb * Ab * (cn * dn) * rate - euler[b_]) +
+                              std::abs(sc * Ac * (-m_ * sn * cn) * rate - euler[c_]);
+      if (mismatch < best) {
+        best = mismatch;
+        amp_[0] = Aa;
+        amp_[1] = sb * Ab;
+        amp_[2] = sc * Ac;
+        tau0_ = elliptic_f(std::atan2(sn, cn), k, quarter_);
+        s_ = std::abs(s_) * direction;
+      }
+    }
+}
+
+Eigen::Vector3d TorqueFreeRotation::omega(double t) const {
+  if (steady_) return w0_;
+  // Jacobi's functions have period 4K in tau: reduce first, so a long run keeps its accuracy
+  const double tau = std::remainder(tau0_ + s_ * t, 4 * quarter_);
+  double sn = 0, cn = 0, dn = 0;
+  gsl_sf_elljac_e(tau, m_, &sn, &cn, &dn);
+  Eigen::Vector3d w;
+  w[a_] = amp_[0] * cn;
+  w[b_] = amp_[1] * sn;
+  w[c_] = amp_[2] * dn;
+  return w;
+}
+
+}  // namespace stepwise
