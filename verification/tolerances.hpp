@@ -177,4 +177,19 @@ inline constexpr double wave_energy_roundoff = 1e-12;
 // coordinates, each a few ulps; 1000 faces x 4 ulps x a factor 20 for the shift to the centre of mass
 inline constexpr double mass_properties_roundoff = 1e-12;
 
+// the torque-free angular velocity: rk8pd at dt = 0.01 on rates <= 1 rad/s truncates by ~1e-18 per
+// step, so what is left is round-off over 2e4 steps (~1e-12, measured 1.6e-12) and GSL's elliptic
+// functions (~1e-15): 1e-10 leaves a factor 60
+inline constexpr double elliptic_closed_form = 1e-10;
+
+// the flip period from zero crossings interpolated linearly between steps of 1e-3 s: the chord's error at
+// a crossing is h^2 |w''| / (8 |w'|) ~ 1e-7 s for |w''| ~ |w'| ~ 1, and the methods' own phase errors
+// (rk4: ~1e-12; the splitting, order 2: ~(w h)^2 t / 24 ~ 1e-7 s over 60 s): 1e-5 relative of a 20 s
+// period holds both with a factor 100
+inline constexpr double flip_period = 1e-5;
+
+// rk4 at dt = 1e-3 against the projectile with drag: truncation (k dt)^4 ~ 1e-14 of the motion, round-off
+// 2000 steps x a few ulps of |x| ~ 5 m: ~1e-12 m; 1e-10 m leaves a factor 100
+inline constexpr double falling_body = 1e-10;
+
 }  // namespace stepwise::tolerance

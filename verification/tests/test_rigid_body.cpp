@@ -4,6 +4,7 @@
 // period; the stable axes; a falling body against the projectile's exact solution.
 #include "models/mass_properties.hpp"
 #include "models/rigid_body.hpp"
+#include "solvers/integrator.hpp"
 #include "verification/measure.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/tolerances.hpp"
@@ -137,6 +138,179 @@ TEST(MassProperties, MeshesAndTensorsWithoutAMassAreRefusedByName) {
   Eigen::Matrix3d skew = Eigen::Matrix3d::Identity();
   skew(0, 1) = 0.1;
   EXPECT_THROW(principal_frame(skew), std::invalid_argument);
+}
+
+
+// ---- dynamics
+
+Params body(double wx, double wy, double wz) { return {{"I1", 1}, {"I2", 2}, {"I3", 3}, {"wx0", wx}, {"wy0", wy}, {"wz0", wz}}; }
+
+std::vector<double> times(double dt, double t_end) {
+  std::vector<double> t;
+  for (long k = 1; k * dt <= t_end * (1 + 1e-12); ++k) t.push_back(static_cast<double>(k) * dt);
+  return t;
+}
+
+Eigen::Vector3d world_momentum(const Model& m, const Eigen::VectorXd& y) { return m.summary(y).tail<3>(); }
+
+// largest |E/E0 - 1| and |L - L0|/|L0| over the first and the second half of a trajectory
+struct Drift {
+  double energy[2] = {0, 0}, momentum[2] = {0, 0};
+};
+Drift drift(const Model& m, const RunResult& r) {
+  const Eigen::VectorXd y0 = m.initial_state();
+  const double e0 = *m.energy(y0);
+  const Eigen::Vector3d l0 = world_momentum(m, y0);
+  Drift d;
+  const size_t n = r.trajectory.t.size();
+  for (size_t i = 0; i < n; ++i) {
+    const int half = 2 * i < n ? 0 : 1;
+    d.energy[half] = std::max(d.energy[half], std::abs(*m.energy(r.trajectory.y[i]) / e0 - 1));
+    d.momentum[half] = std::max(d.momentum[half], (world_momentum(m, r.trajectory.y[i]) - l0).norm() / l0.norm());
+  }
+  return d;
+}
+
+TEST(RigidBody, TorqueFreeInvariantsPerMethodAndWhatTheSplittingBuys) {
+  // a generic tumble (not near a separatrix), ten periods of its angular velocity (21.0 s each), dt = 0.05
+  const auto model = make_model("rigid-body", body(0.3, 1.0, 0.2));
+  const double dt = 0.05, t_end = 200;
+  const auto t_out = times(0.5, t_end);
+  auto run = [&](const char* method) { return make_integrator(method, StepControl::fixed(dt))->integrate(*model, 0, model->initial_state(), t_out); };
+  const RunResult split = run("rigid-splitting"), rk4 = run("rk4"), euler = run("euler"), implicit = run("implicit-euler");
+  for (const auto* r : {&split, &rk4, &euler, &implicit}) {
+    ASSERT_EQ(r->status, Status::ok);
+    EXPECT_EQ(r->stats.projections, r->stats.steps) << "the quaternion is renormalised after every step";
+    EXPECT_LT(std::abs(r->y_stop.segment<4>(6).norm() - 1), tolerance::roundoff_per_step * eps);
+  }
+  const Drift s = drift(*model, split), r4 = drift(*model, rk4);
+  std::cout << "max |dE/E| first/second half: rigid-splitting " << s.energy[0] << " / " << s.energy[1] << ", rk4 " << r4.energy[0] << " / "
+            << r4.energy[1] << "; |dL|/|L|: rigid-splitting " << s.momentum[1] << ", rk4 " << r4.momentum[1] << '\n';
+  // the splitting: each sub-step an exact rotation, so L to round-off; symplectic, so the energy error bounded
+  EXPECT_LT(s.momentum[1], tolerance::roundoff_per_step * eps * static_cast<double>(split.stats.steps));
+  EXPECT_LT(s.energy[1], tolerance::bounded_energy_growth * s.energy[0]);
+  // rk4 is far more accurate over a short run but drifts: its energy error grows with time (secularly,
+  // about twice over the second half) where the splitting's does not
+  EXPECT_GT(r4.energy[1], tolerance::bounded_energy_growth * r4.energy[0]);
+  // explicit Euler feeds a rotation energy (|1 + h i w| > 1), implicit Euler drains it
+  EXPECT_GT(*model->energy(euler.y_stop), *model->energy(model->initial_state()));
+  EXPECT_LT(*model->energy(implicit.y_stop), *model->energy(model->initial_state()));
+}
+
+TEST(RigidBody, CvodeAdamsHasNoProjectionAndItsQuaternionDriftsWhereBdfsDoesNot) {
+  const auto model = make_model("rigid-body", body(0.3, 1.0, 0.2));
+  const std::vector<double> t_out{100.0};
+  const StepControl control = StepControl::adaptive(1e-8, 1e-11);
+  const RunResult adams = make_integrator("cvode-adams", control)->integrate(*model, 0, model->initial_state(), t_out);
+  const RunResult bdf = make_integrator("cvode-bdf", control)->integrate(*model, 0, model->initial_state(), t_out);
+  ASSERT_EQ(adams.status, Status::ok);
+  ASSERT_EQ(bdf.status, Status::ok);
+  const double adams_drift = std::abs(adams.y_stop.segment<4>(6).norm() - 1), bdf_drift = std::abs(bdf.y_stop.segment<4>(6).norm() - 1);
+  std::cout << "|q| - 1 after 100 s at rtol 1e-8: cvode-adams " << adams_drift << " (no projection), cvode-bdf " << bdf_drift << " ("
+            << bdf.stats.projections << " projections)\n";
+  EXPECT_EQ(adams.stats.projections, 0);
+  EXPECT_GE(bdf.stats.projections, bdf.stats.steps);
+  EXPECT_GT(adams_drift, 100 * bdf_drift);
+}
+
+TEST(RigidBody, TorqueFreeAngularVelocityMatchesTheEllipticClosedForm) {
+  for (const Eigen::Vector3d& w0 : {Eigen::Vector3d(0.3, 1.0, 0.2), Eigen::Vector3d(0.05, 1.0, 0.0), Eigen::Vector3d(1.0, 0.1, 0.5), Eigen::Vector3d(-0.2, 0.3, -1.0)}) {
+    const auto model = make_model("rigid-body", body(w0.x(), w0.y(), w0.z()));
+    const TorqueFreeRotation exact(Eigen::Vector3d(1, 2, 3), w0);
+    const RunResult r = make_integrator("gsl-rk8pd", StepControl::fixed(0.01))->integrate(*model, 0, model->initial_state(), times(10, 200));
+    ASSERT_EQ(r.status, Status::ok);
+    double worst = 0;
+    for (size_t i = 0; i < r.trajectory.t.size(); ++i)
+      worst = std::max(worst, (exact.omega(r.trajectory.t[i]) - r.trajectory.y[i].segment<3>(10)).norm() / w0.norm());
+    std::cout << "w0 " << w0.transpose() << ": period " << exact.period() << " s, largest difference rk8pd/closed form " << worst << '\n';
+    EXPECT_LT(worst, tolerance::elliptic_closed_form);
+  }
+}
+
+// times of the upward zero crossings of w_y, by linear interpolation between steps
+std::vector<double> upward_crossings(const RunResult& r) {
+  std::vector<double> t;
+  for (size_t i = 1; i < r.trajectory.t.size(); ++i) {
+    const double a = r.trajectory.y[i - 1][11], b = r.trajectory.y[i][11];
+    if (a < 0 && b >= 0) t.push_back(r.trajectory.t[i - 1] + (r.trajectory.t[i] - r.trajectory.t[i - 1]) * a / (a - b));
+  }
+  return t;
+}
+
+TEST(RigidBody, IntermediateAxisFlipsWithTheEllipticPeriodAndTheOuterAxesAreStable) {
+  // spun 5% off the intermediate axis: w_y turns over twice a period 4 K(k) / s
+  const Eigen::Vector3d w0(0.05, 1.0, 0.0);
+  const auto model = make_model("rigid-body", body(w0.x(), w0.y(), w0.z()));
+  const double period = TorqueFreeRotation(Eigen::Vector3d(1, 2, 3), w0).period();
+  for (const char* method : {"rigid-splitting", "rk4"}) {
+    const double dt = 1e-3;
+    const RunResult r = make_integrator(method, StepControl::fixed(dt))->integrate(*model, 0, model->initial_state(), times(dt, 3.2 * period));
+    ASSERT_EQ(r.status, Status::ok);
+    const auto up = upward_crossings(r);
+    ASSERT_GE(up.size(), 3u) << method;
+    const double measured = (up.back() - up.front()) / static_cast<double>(up.size() - 1);
+    std::cout << method << ": flip period measured " << measured << " s, closed form " << period << " s\n";
+    EXPECT_NEAR(measured / period, 1, tolerance::flip_period) << method;
+  }
+  // about the smallest and the largest axis, 2% off: the other components stay as small as the closed form
+  // says (an elliptic oscillation about the axis), where about the intermediate axis w_y reverses
+  for (const Eigen::Vector3d& w : {Eigen::Vector3d(1.0, 0.02, 0.02), Eigen::Vector3d(0.02, 0.02, 1.0)}) {
+    const auto spun = make_model("rigid-body", body(w.x(), w.y(), w.z()));
+    const TorqueFreeRotation exact(Eigen::Vector3d(1, 2, 3), w);
+    int axis = 0;
+    w.cwiseAbs().maxCoeff(&axis);
+    const RunResult r = make_integrator("rk4", StepControl::fixed(0.01))->integrate(*spun, 0, spun->initial_state(), times(0.01, 100));
+    double simulated = 0, predicted = 0;
+    for (size_t i = 0; i < r.trajectory.t.size(); ++i) {
+      Eigen::Vector3d a = r.trajectory.y[i].segment<3>(10), b = exact.omega(r.trajectory.t[i]);
+      a[axis] = b[axis] = 0;
+      simulated = std::max(simulated, a.norm());
+      predicted = std::max(predicted, b.norm());
+    }
+    std::cout << "spun about axis " << axis + 1 << ": largest off-axis |w| " << simulated << " (closed form " << predicted << ")\n";
+    EXPECT_NEAR(simulated / predicted, 1, tolerance::flip_period);
+    EXPECT_LT(predicted, 0.1 * w.norm()) << "stable: stays near the axis";
+  }
+}
+
+TEST(RigidBody, AFallingBodyWithoutRotationIsTheProjectile) {
+  const auto falling = make_model("rigid-body", {{"g", 9.81}, {"drag", 0.3}, {"x0", 0}, {"z0", 1}, {"vx0", 2}, {"vz0", 5}, {"wx0", 0}, {"wy0", 0}, {"wz0", 0}});
+  const auto projectile = make_model("projectile", {{"x0", 0}, {"y0", 1}, {"vx0", 2}, {"vy0", 5}, {"g", 9.81}, {"drag", 0.3}});
+  const RunResult r = make_integrator("rk4", StepControl::fixed(1e-3))->integrate(*falling, 0, falling->initial_state(), times(0.1, 2));
+  ASSERT_EQ(r.status, Status::ok);
+  double worst = 0;
+  for (size_t i = 0; i < r.trajectory.t.size(); ++i) {
+    const Eigen::VectorXd& y = r.trajectory.y[i];
+    const Eigen::VectorXd p = projectile->exact(r.trajectory.t[i]);
+    worst = std::max({worst, std::abs(y[0] - p[0]), std::abs(y[2] - p[1]), std::abs(y[3] - p[2]), std::abs(y[5] - p[3])});
+    EXPECT_EQ(y[1], 0);
+    EXPECT_EQ(y.segment<4>(6), falling->initial_state().segment<4>(6)) << "no rotation";
+  }
+  std::cout << "falling body against the projectile's exact solution: " << worst << '\n';
+  EXPECT_LT(worst, tolerance::falling_body);
+}
+
+TEST(RigidBody, TheSplittingAppliesOnlyToATorqueFreeBody) {
+  const MethodInfo& split = *find_method("rigid-splitting");
+  EXPECT_TRUE(method_applies(split, *make_model("rigid-body", {{"g", 9.81}})));
+  EXPECT_FALSE(method_applies(split, *make_model("rigid-body", {{"angular_drag", 0.1}})));
+  EXPECT_FALSE(method_applies(split, *make_model("rigid-body", {{"fx", 1}, {"pz", 0.5}}))) << "a force off the centre of mass is a torque";
+  EXPECT_FALSE(method_applies(split, *make_model("pendulum")));
+}
+
+TEST(RigidBody, ImpossibleMomentsAndAZeroQuaternionAreRefusedByName) {
+  try {
+    make_model("rigid-body", {{"I1", 1}, {"I2", 1}, {"I3", 3}});
+    FAIL();
+  } catch (const BadParameter& e) {
+    EXPECT_EQ(e.key, "I3");
+  }
+  try {
+    make_model("rigid-body", {{"qw0", 0}});
+    FAIL();
+  } catch (const BadParameter& e) {
+    EXPECT_EQ(e.key, "qw0");
+  }
 }
 
 }  // namespace
