@@ -32,9 +32,16 @@ class RigidSplitting final : public FixedStepper {
     Eigen::Vector3d pi = body_.inertia.cwiseProduct(y.segment<3>(10));
     for (const auto& [axis, fraction] : {std::pair{0, 0.5}, {1, 0.5}, {2, 1.0}, {1, 0.5}, {0, 0.5}}) {
       const double angle = fraction * h * pi[axis] / body_.inertia[axis];
-      const Eigen::Vector3d e = Eigen::Vector3d::Unit(axis);
-      pi = Eigen::AngleAxisd(-angle, e) * pi;
-      q = q * Eigen::Quaterniond(Eigen::AngleAxisd(angle, e));
+      // Pi turns by -angle in the plane of the other two axes (i, j) = (axis + 1, axis + 2), cyclic; the
+      // body by +angle: q (x) (cos(angle/2), sin(angle/2) e_axis). One sine and cosine each, no matrices
+      const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+      const double c = std::cos(angle), s = std::sin(angle);
+      const double pi_i = pi[i], pi_j = pi[j];
+      pi[i] = c * pi_i + s * pi_j;
+      pi[j] = -s * pi_i + c * pi_j;
+      Eigen::Quaterniond turn(std::cos(angle / 2), 0, 0, 0);
+      turn.vec()[axis] = std::sin(angle / 2);
+      q = q * turn;
     }
     y_next[6] = q.w();
     y_next[7] = q.x();

@@ -5,6 +5,7 @@
 #include "models/mass_properties.hpp"
 #include "models/rigid_body.hpp"
 #include "solvers/integrator.hpp"
+#include "verification/invariants.hpp"
 #include "verification/measure.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/tolerances.hpp"
@@ -151,26 +152,6 @@ std::vector<double> times(double dt, double t_end) {
   return t;
 }
 
-Eigen::Vector3d world_momentum(const Model& m, const Eigen::VectorXd& y) { return m.summary(y).tail<3>(); }
-
-// largest |E/E0 - 1| and |L - L0|/|L0| over the first and the second half of a trajectory
-struct Drift {
-  double energy[2] = {0, 0}, momentum[2] = {0, 0};
-};
-Drift drift(const Model& m, const RunResult& r) {
-  const Eigen::VectorXd y0 = m.initial_state();
-  const double e0 = *m.energy(y0);
-  const Eigen::Vector3d l0 = world_momentum(m, y0);
-  Drift d;
-  const size_t n = r.trajectory.t.size();
-  for (size_t i = 0; i < n; ++i) {
-    const int half = 2 * i < n ? 0 : 1;
-    d.energy[half] = std::max(d.energy[half], std::abs(*m.energy(r.trajectory.y[i]) / e0 - 1));
-    d.momentum[half] = std::max(d.momentum[half], (world_momentum(m, r.trajectory.y[i]) - l0).norm() / l0.norm());
-  }
-  return d;
-}
-
 TEST(RigidBody, TorqueFreeInvariantsPerMethodAndWhatTheSplittingBuys) {
   // a generic tumble (not near a separatrix), ten periods of its angular velocity (21.0 s each), dt = 0.05
   const auto model = make_model("rigid-body", body(0.3, 1.0, 0.2));
@@ -183,7 +164,7 @@ TEST(RigidBody, TorqueFreeInvariantsPerMethodAndWhatTheSplittingBuys) {
     EXPECT_EQ(r->stats.projections, r->stats.steps) << "the quaternion is renormalised after every step";
     EXPECT_LT(std::abs(r->y_stop.segment<4>(6).norm() - 1), tolerance::roundoff_per_step * eps);
   }
-  const Drift s = drift(*model, split), r4 = drift(*model, rk4);
+  const InvariantDrift s = rigid_body_drift(*model, split), r4 = rigid_body_drift(*model, rk4);
   std::cout << "max |dE/E| first/second half: rigid-splitting " << s.energy[0] << " / " << s.energy[1] << ", rk4 " << r4.energy[0] << " / "
             << r4.energy[1] << "; |dL|/|L|: rigid-splitting " << s.momentum[1] << ", rk4 " << r4.momentum[1] << '\n';
   // the splitting: each sub-step an exact rotation, so L to round-off; symplectic, so the energy error bounded
