@@ -36,7 +36,9 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
         break;
       }
       ++result.stats.steps;
-      if (counted.project(y_next)) stepper->reset();  // a stepper's history (FSAL, past levels) is off the manifold
+      // back onto the manifold; a multistep history is kept (the correction is of the order of the local
+      // error: restarting would drop GSL's multistep methods to order 1 for good, measured)
+      counted.project(y_next);
       const auto norm = stepper->last_norm();
       if (norm ? !(*norm <= bound) : has_diverged(y_next, bound)) {
         mark_diverged(result, t_next);

@@ -179,11 +179,9 @@ class GslAdaptiveIntegrator final : public Integrator {
           break;
         }
         ++result.stats.steps;
-        if (counted.project(y)) {
-          // the derivative GSL keeps for the next step (FSAL) and a multistep history belong to the unprojected state
-          gsl_odeiv2_evolve_reset(d->e);
-          gsl_odeiv2_step_reset(d->s);
-        }
+        // back onto the manifold, keeping GSL's state: the correction is of the order of the local error, and
+        // resetting the stepper after it dropped msadams/msbdf to order 1 (491 457 steps for 946, measured)
+        counted.project(y);
         if (has_diverged(y, bound)) {
           mark_diverged(result, t);
           break;

@@ -89,7 +89,8 @@ class OdeSystem {
 
   // optional projection onto the manifold the exact flow keeps (a rigid body's unit quaternion): the
   // integrators apply it after every accepted step (hand-written and GSL steppers; CVODE BDF through
-  // CVodeSetProjFn; CVODE Adams has no projection) and count it; returns false for a system without one
+  // CVodeSetProjFn; CVODE Adams has no projection) and count it, keeping any multistep history (the
+  // correction is of the order of the local error); returns false for a system without one
   virtual bool project(Eigen::Ref<Eigen::VectorXd> y) const { (void)y; return false; }
 
   // optional free-rigid-body structure for the splitting method

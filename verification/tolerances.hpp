@@ -192,4 +192,9 @@ inline constexpr double flip_period = 1e-5;
 // 2000 steps x a few ulps of |x| ~ 5 m: ~1e-12 m; 1e-10 m leaves a factor 100
 inline constexpr double falling_body = 1e-10;
 
+// a projection's correction is of the order of the local error, so an adaptive method's step count with
+// it may differ from the count without only as much as a perturbation of that size moves the controller:
+// within a factor 1.5 (a restart after every projection, the fault this guards against, costs x500)
+inline constexpr double projection_step_ratio = 1.5;
+
 }  // namespace stepwise::tolerance
