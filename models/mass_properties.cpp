@@ -51,7 +51,8 @@ MassProperties mass_properties(const TriangleMesh& mesh, double density) {
   }
   constexpr std::array<double, 10> factor{1.0 / 6, 1.0 / 24, 1.0 / 24, 1.0 / 24, 1.0 / 60, 1.0 / 60, 1.0 / 60, 1.0 / 120, 1.0 / 120, 1.0 / 120};
   for (size_t k = 0; k < in.size(); ++k) in[k] *= factor[k];
-  const double scale = (bounding_box(mesh).hi - bounding_box(mesh).lo).prod();
+  const Aabb box = bounding_box(mesh);
+  const double scale = (box.hi - box.lo).prod();
   if (!(std::abs(in[0]) > 1e-12 * scale)) throw std::invalid_argument("mesh encloses no volume");
   if (in[0] < 0) throw std::invalid_argument("mesh is inside out: its faces are clockwise seen from outside (negative volume)");
   MassProperties m;
@@ -72,6 +73,12 @@ Eigen::Matrix3d shifted_inertia(const Eigen::Matrix3d& inertia, double mass, con
   return inertia + mass * (offset.squaredNorm() * Eigen::Matrix3d::Identity() - offset * offset.transpose());
 }
 
+int moment_beyond_the_others(const Eigen::Vector3d& moments) {
+  for (int k = 0; k < 3; ++k)
+    if (moments[k] > (moments.sum() - moments[k]) * (1 + 1e-12)) return k;
+  return -1;
+}
+
 PrincipalFrame principal_frame(const Eigen::Matrix3d& inertia) {
   const double size = inertia.cwiseAbs().maxCoeff();
   if (!inertia.allFinite() || !(size > 0)) throw std::invalid_argument("inertia tensor is zero or not finite");
@@ -79,7 +86,7 @@ PrincipalFrame principal_frame(const Eigen::Matrix3d& inertia) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(inertia);  // eigenvalues ascending
   PrincipalFrame frame{eigen.eigenvalues(), eigen.eigenvectors()};
   if (!(frame.moments[0] > 1e-12 * size)) throw std::invalid_argument(fmt::format("inertia tensor is not positive definite (smallest moment {:g})", frame.moments[0]));
-  if (frame.moments[0] + frame.moments[1] < frame.moments[2] * (1 - 1e-12))
+  if (moment_beyond_the_others(frame.moments) >= 0)
     throw std::invalid_argument(fmt::format("principal moments {:g}, {:g}, {:g} break I1 + I2 >= I3: no body has them", frame.moments[0],
                                             frame.moments[1], frame.moments[2]));
   if (frame.axes.determinant() < 0) frame.axes.col(2) *= -1;

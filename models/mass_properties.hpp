@@ -29,6 +29,10 @@ MassProperties mass_properties(const TriangleMesh& mesh, double density);
 // Steiner): I + m (|a|^2 1 - a a^T)
 Eigen::Matrix3d shifted_inertia(const Eigen::Matrix3d& inertia, double mass, const Eigen::Vector3d& offset);
 
+// the index of a principal moment larger than the sum of the other two (no body has such moments: I3 =
+// rho int x^2 + y^2 <= I1 + I2), or -1 when there is none
+int moment_beyond_the_others(const Eigen::Vector3d& moments);
+
 struct PrincipalFrame {
   Eigen::Vector3d moments;   // I1 <= I2 <= I3 (kg m^2)
   Eigen::Matrix3d axes;      // columns: the principal axes in the mesh frame, a proper rotation (det +1)

@@ -1,5 +1,7 @@
 #include "rigid_body.hpp"
 
+#include "mass_properties.hpp"
+
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <gsl/gsl_errno.h>
@@ -52,11 +54,9 @@ class RigidBody final : public Model {
   explicit RigidBody(const Params& p)
       : mass_(p.at("mass")), inertia_(p.at("I1"), p.at("I2"), p.at("I3")), gravity_(0, 0, -p.at("g")), drag_(p.at("drag")),
         angular_drag_(p.at("angular_drag")), force_(p.at("fx"), p.at("fy"), p.at("fz")), point_(p.at("px"), p.at("py"), p.at("pz")) {
-    // every real body has each moment at most the sum of the other two (I3 = int x^2 + y^2 <= I1 + I2)
-    for (int k = 0; k < 3; ++k)
-      if (inertia_[k] > (inertia_[(k + 1) % 3] + inertia_[(k + 2) % 3]) * (1 + 1e-12))
-        throw BadParameter(fmt::format("I{}", k + 1), fmt::format("principal moment I{} = {:g} exceeds the sum of the other two ({:g}): no body has "
-                                                                  "these moments", k + 1, inertia_[k], inertia_[(k + 1) % 3] + inertia_[(k + 2) % 3]));
+    if (const int k = moment_beyond_the_others(inertia_); k >= 0)
+      throw BadParameter(fmt::format("I{}", k + 1), fmt::format("principal moment I{} = {:g} exceeds the sum of the other two ({:g}): no body has "
+                                                                "these moments", k + 1, inertia_[k], inertia_.sum() - inertia_[k]));
     const Eigen::Vector4d q(p.at("qw0"), p.at("qx0"), p.at("qy0"), p.at("qz0"));
     if (!(q.norm() > 0)) throw BadParameter("qw0", "initial orientation quaternion (qw0, qx0, qy0, qz0) is zero");
     y0_.resize(13);
