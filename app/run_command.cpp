@@ -104,7 +104,7 @@ Prepared prepare(const RunOptions& o) {
                                  bytes / 0x1p30, p.model->size(),
                                  p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
   if (!method_applies(*method, *p.model))
-    throw InputError(fmt::format("{}: {}; {} is not one", o.method ? "--method" : s.where("run.method"), method_requirement(*method), s.model));
+    throw InputError(fmt::format("{}: {} (model {})", o.method ? "--method" : s.where("run.method"), method_requirement(*method, *p.model), s.model));
 
   const std::string location = o.event_location.value_or(s.event_location.value_or("linear"));
   if (location == "restep") p.control.event_location = EventLocation::restep;
@@ -186,7 +186,8 @@ nlohmann::json summary_json(const Prepared& p, const Measured& m) {
   }
   j["events"] = nlohmann::json::array();
   const auto events = p.model->events();
-  for (const auto& e : r.events) j["events"].push_back({{"t", e.t}, {"kind", e.kind}, {"event", events[e.event].name}});
+  for (const auto& e : r.events)
+    j["events"].push_back({{"t", e.t}, {"kind", e.kind}, {"event", e.event < events.size() ? events[e.event].name : "contacts"}});
   j["parameters"] = nlohmann::json::object();
   for (const auto& [key, value] : p.params) j["parameters"][key] = value;
   return j;

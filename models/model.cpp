@@ -9,6 +9,7 @@
 #include "pendulum.hpp"
 #include "projectile.hpp"
 #include "rigid_body.hpp"
+#include "rigid_contact.hpp"
 
 #include <fmt/format.h>
 
@@ -51,6 +52,11 @@ const std::array model_table{
               pool_params(), [](const Params& p) { return make_pool(p); }},
     ModelInfo{"rigid-body", "one rigid body: Euler's equations, unit quaternion, gravity, drag, a force at a point",
               rigid_body_params(), [](const Params& p) { return make_rigid_body(p); }},
+    ModelInfo{"dropped-body", "a box (or the scene's convex [mesh]) dropped with a spin on the ground: contacts, restitution, friction",
+              dropped_body_params(), [](const Params& p) { return make_dropped_body(p, nullptr); },
+              [](const Params& p, const TriangleMesh& mesh) { return make_dropped_body(p, &mesh); }},
+    ModelInfo{"box-stack", "a wall of boxes on the ground hit by a projectile (seeds: collapse in angry birds); deterministic",
+              box_stack_params(), [](const Params& p) { return make_box_stack(p); }},
 };
 
 }  // namespace

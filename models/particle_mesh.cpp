@@ -129,30 +129,6 @@ class ParticleMesh final : public Model {
   std::vector<Event> events_;
 };
 
-// the face planes of a closed convex mesh with outward faces, or BadParameter("mesh") naming what is wrong
-std::vector<Plane> convex_faces(const TriangleMesh& mesh) {
-  try {
-    validate_closed(mesh);
-  } catch (const std::invalid_argument& e) {
-    throw BadParameter("mesh", e.what());
-  }
-  const Aabb box = bounding_box(mesh);
-  const double size = (box.hi - box.lo).norm();
-  std::vector<Plane> planes;
-  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f) {
-    const Triangle t = triangle(mesh, static_cast<int>(f));
-    const Eigen::Vector3d normal = area_normal(t);
-    if (!(normal.norm() > 1e-12 * size * size))
-      throw BadParameter("mesh", fmt::format("mesh triangle {} has zero area", f));
-    const Plane plane = make_plane(t.a, normal);
-    for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
-      if (signed_distance(plane, mesh.vertices.row(v).transpose()) > 1e-9 * size)
-        throw BadParameter("mesh", fmt::format("mesh is not convex with outward faces: vertex {} lies in front of triangle {}", v, f));
-    planes.push_back(plane);
-  }
-  return planes;
-}
-
 }  // namespace
 
 std::span<const ParamSpec> particle_mesh_params() { return params; }
@@ -168,7 +144,13 @@ TriangleMesh default_obstacle() {
 }
 
 std::unique_ptr<Model> make_particle_mesh(const Params& params, const TriangleMesh& mesh) {
-  return std::make_unique<ParticleMesh>(params, convex_faces(mesh));
+  std::vector<Plane> faces;
+  try {
+    faces = convex_faces(mesh);
+  } catch (const std::invalid_argument& e) {
+    throw BadParameter("mesh", e.what());
+  }
+  return std::make_unique<ParticleMesh>(params, std::move(faces));
 }
 
 }  // namespace stepwise

@@ -1,5 +1,7 @@
 #include "plane_collision.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <stdexcept>
 
@@ -48,6 +50,24 @@ std::string plane_contact(const Plane& plane, Eigen::Ref<Eigen::Vector3d> p, Eig
     return "rest";
   }
   return "impact";
+}
+
+std::vector<Plane> convex_faces(const TriangleMesh& mesh) {
+  validate_closed(mesh);
+  const Aabb box = bounding_box(mesh);
+  const double size = (box.hi - box.lo).norm();
+  std::vector<Plane> planes;
+  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f) {
+    const Triangle t = triangle(mesh, static_cast<int>(f));
+    const Eigen::Vector3d normal = area_normal(t);
+    if (!(normal.norm() > 1e-12 * size * size)) throw std::invalid_argument(fmt::format("mesh triangle {} has zero area", f));
+    const Plane plane = make_plane(t.a, normal);
+    for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
+      if (signed_distance(plane, mesh.vertices.row(v).transpose()) > 1e-9 * size)
+        throw std::invalid_argument(fmt::format("mesh is not convex with outward faces: vertex {} lies in front of triangle {}", v, f));
+    planes.push_back(plane);
+  }
+  return planes;
 }
 
 }  // namespace stepwise

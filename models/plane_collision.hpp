@@ -8,10 +8,13 @@
 //                     by mu J, but never below zero (friction stops sliding, it does not reverse it)
 #pragma once
 
+#include "triangle_mesh.hpp"
+
 #include <Eigen/Dense>
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace stepwise {
 
@@ -44,5 +47,9 @@ Eigen::Vector3d collision_response(const Plane& plane, const Eigen::Vector3d& v,
 // land on it exactly (d n and (v . n) n have one non-zero component)
 std::string plane_contact(const Plane& plane, Eigen::Ref<Eigen::Vector3d> p, Eigen::Ref<Eigen::Vector3d> v, double restitution,
                           double friction, double rest_speed);
+
+// the face planes of a closed convex mesh with outward faces, in face order; throws std::invalid_argument
+// naming the first open edge, zero-area triangle, or vertex in front of a face
+std::vector<Plane> convex_faces(const TriangleMesh& mesh);
 
 }  // namespace stepwise

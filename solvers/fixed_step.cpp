@@ -26,6 +26,7 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
   double t = t0;
   std::string failure;
   const auto events = system.events();
+  std::vector<std::string> handled;
   Eigen::VectorXd g_start = event_values(events, t, y);
   for (const double target : t_out) {
     while (t < target) {
@@ -36,6 +37,9 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
         break;
       }
       ++result.stats.steps;
+      stepper->take_events(handled);
+      for (auto& kind : handled) result.events.push_back(EventRecord{t_next, std::move(kind), EventRecord::by_method});
+      result.stats.events += static_cast<long>(handled.size());
       // back onto the manifold; a multistep history is kept (the correction is of the order of the local
       // error: restarting would drop GSL's multistep methods to order 1 for good, measured)
       counted.project(y_next);

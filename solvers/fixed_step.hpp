@@ -5,6 +5,8 @@
 
 #include <functional>
 #include <optional>
+#include <string>
+#include <vector>
 
 namespace stepwise {
 
@@ -20,6 +22,9 @@ class FixedStepper {
   // |y_next|inf of the last step, +inf if any entry is not finite, when the stepper measured it on its way
   // through the state: the loop's divergence test then needs no pass of its own
   virtual std::optional<double> last_norm() const { return std::nullopt; }
+  // events the step handled itself (a contact method's impacts), as summary.json writes them ("impact"),
+  // since the last call: the loop records them at the step's end
+  virtual void take_events(std::vector<std::string>& kinds) { kinds.clear(); }
   // forget any history: the next step starts afresh (after an event changed the state, or to re-step)
   virtual void reset() {}
 };
@@ -49,5 +54,7 @@ std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system);
 std::unique_ptr<FixedStepper> make_wave_fd(const CountedSystem& system);
 // the free rigid body's splitting into exact rotations; the system has a free_rigid_body()
 std::unique_ptr<FixedStepper> make_rigid_splitting(const CountedSystem& system);
+// kick, contact impulses, drift for rigid bodies in contact; the system has contact_bodies()
+std::unique_ptr<FixedStepper> make_contact_stepping(const CountedSystem& system);
 
 }  // namespace stepwise

@@ -48,6 +48,9 @@ constexpr std::array method_table{
                "2", "hand-written", 2, 2, true, false, false, false, false, true},
     MethodInfo{"rigid-splitting", "the free rigid body split into exact rotations about its principal axes, Strang-composed (symplectic, fixed step)",
                "2", "hand-written", 2, 2, true, false, false, false, false, false, true},
+    MethodInfo{"sequential-impulses", "rigid bodies in contact: kick, contact impulses by projected Gauss-Seidel (restitution, Coulomb "
+               "friction), drift (velocity-level time stepping, fixed step)", "1", "hand-written", 1, 1, true, false, false, false, false,
+               false, false, true},
 };
 
 }  // namespace
@@ -64,10 +67,14 @@ bool method_applies(const MethodInfo& method, const OdeSystem& system) {
   if (method.needs_second_order && !system.second_order()) return false;
   if (method.needs_wave_grid && !system.wave_grid()) return false;
   if (method.needs_free_rigid_body && !system.free_rigid_body()) return false;
+  if (method.resolves_contacts != system.contact_bodies().has_value()) return false;
   return true;
 }
 
-std::string method_requirement(const MethodInfo& method) {
+std::string method_requirement(const MethodInfo& method, const OdeSystem& system) {
+  if (system.contact_bodies() && !method.resolves_contacts)
+    return fmt::format("{} has no contact response, and these bodies touch: they need a method that resolves contacts (sequential-impulses)", method.name);
+  if (method.resolves_contacts) return fmt::format("{} needs rigid bodies in contact (a contact scene)", method.name);
   if (method.needs_wave_grid) return fmt::format("{} needs a wave equation on a grid (a water scene)", method.name);
   if (method.needs_free_rigid_body)
     return fmt::format("{} needs a torque-free rigid body (a rigid-body scene without drag or torque)", method.name);
@@ -93,6 +100,7 @@ std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepC
   if (method == "implicit-euler") return std::make_unique<FixedStepIntegrator>(name, control, make_implicit_euler);
   if (method == "wave-fd") return std::make_unique<FixedStepIntegrator>(name, control, make_wave_fd);
   if (method == "rigid-splitting") return std::make_unique<FixedStepIntegrator>(name, control, make_rigid_splitting);
+  if (method == "sequential-impulses") return std::make_unique<FixedStepIntegrator>(name, control, make_contact_stepping);
   if (info->source == "SUNDIALS CVODE") return make_cvode_integrator(method, control);
   return make_gsl_integrator(method, control);
 }

@@ -68,7 +68,9 @@ struct Trajectory {
 struct EventRecord {
   double t = 0;
   std::string kind;  // what the handler reported ("impact", "rest")
-  size_t event = 0;  // which of the system's events
+  size_t event = 0;  // which of the system's events; none of them (by_method) for what the method handled
+                     // itself (a contact method's impacts)
+  static constexpr size_t by_method = static_cast<size_t>(-1);
 };
 
 struct RunResult {
@@ -104,15 +106,16 @@ struct MethodInfo {
   bool sparse_newton = false;       // ... unless the system has a sparse Jacobian, which it solves with (KLU)
   bool needs_wave_grid = false;     // only for a wave equation on a grid (OdeSystem::wave_grid)
   bool needs_free_rigid_body = false;  // only for a torque-free rigid body (OdeSystem::free_rigid_body)
+  bool resolves_contacts = false;   // steps rigid bodies in contact (OdeSystem::contact_bodies), and only them
 };
 
 std::span<const MethodInfo> methods();
 const MethodInfo* find_method(std::string_view name);
 
-// whether the method can run this system at all (the structure it needs: y = (x, v), a wave grid), and
-// if not, why, in words naming the structure
+// whether the method can run this system at all (the structure it needs: y = (x, v), a wave grid; bodies
+// in contact need a method that resolves contacts), and if not, why, in words naming the structure
 bool method_applies(const MethodInfo& method, const OdeSystem& system);
-std::string method_requirement(const MethodInfo& method);
+std::string method_requirement(const MethodInfo& method, const OdeSystem& system);
 
 // thrown for an unknown method or a step control the method cannot use
 struct BadMethod : std::invalid_argument {

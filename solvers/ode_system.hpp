@@ -6,11 +6,14 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
+#include <array>
 #include <functional>
 #include <limits>
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace stepwise {
 
@@ -36,6 +39,29 @@ struct WaveGridView {
 struct RigidBodyView {
   Eigen::Vector3d inertia;       // principal moments I1, I2, I3 (kg m^2)
   Eigen::Vector3d acceleration;  // constant linear acceleration (m/s^2)
+};
+
+// y = `bodies` rigid bodies, each laid out as RigidBodyView's 13 entries (x, v, q, w with w in the body's
+// principal frame), one after another, that touch: their contacts are resolved at the velocity level by
+// impulses (OdeSystem::resolve_contacts), the structure a contact time-stepping method needs
+struct ContactBodiesView {
+  int bodies = 0;
+};
+
+// what one resolution of contacts found and did
+struct ContactOutcome {
+  int contacts = 0;                // contact points found
+  int impacts = 0;                 // pairs of bodies (or body and ground) meeting faster than a resting approach
+  int sweeps = 0;                  // Gauss-Seidel sweeps over the contacts
+  bool energy_guard = false;       // the frictional impulses would have raised the kinetic energy (measured):
+                                   // the frictionless ones, which cannot, were applied instead
+};
+
+// the impulses of the last resolution of contacts, by contact (a key the system chooses: the bodies and
+// the feature that touches), which the next resolution starts from (warm start: resting contact changes
+// little from step to step); the method keeps it between steps
+struct ContactMemory {
+  std::vector<std::pair<std::array<int, 4>, Eigen::Vector3d>> impulses;  // sorted by key
 };
 
 // An event g(t, y) = 0 (a collision, a plane crossing) and what happens at it.
@@ -95,6 +121,20 @@ class OdeSystem {
 
   // optional free-rigid-body structure for the splitting method
   virtual std::optional<RigidBodyView> free_rigid_body() const { return std::nullopt; }
+
+  // optional rigid bodies in contact, resolved by impulses rather than by forces in f (which then holds
+  // only the smooth forces: gravity, Euler's equations)
+  virtual std::optional<ContactBodiesView> contact_bodies() const { return std::nullopt; }
+  // the impulses at every contact of y's configuration that stop the bodies approaching there (with
+  // restitution at impacts, Coulomb friction), applied to y's velocities, then y's positions moved out of
+  // any penetration beyond a tolerance; dt is the step the velocities were advanced by (it sets what
+  // approach counts as resting); memory carries the impulses from one call to the next
+  virtual ContactOutcome resolve_contacts(Eigen::Ref<Eigen::VectorXd> y, double dt, ContactMemory& memory) const {
+    (void)y;
+    (void)dt;
+    (void)memory;
+    return {};
+  }
 
   // optional events; an empty span means none
   virtual std::span<const Event> events() const { return {}; }

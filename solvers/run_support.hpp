@@ -41,6 +41,10 @@ class CountedSystem final : public OdeSystem {
   }
   std::optional<WaveGridView> wave_grid() const override { return inner_.wave_grid(); }
   std::optional<RigidBodyView> free_rigid_body() const override { return inner_.free_rigid_body(); }
+  std::optional<ContactBodiesView> contact_bodies() const override { return inner_.contact_bodies(); }
+  ContactOutcome resolve_contacts(Eigen::Ref<Eigen::VectorXd> y, double dt, ContactMemory& memory) const override {
+    return inner_.resolve_contacts(y, dt, memory);
+  }
   std::span<const Event> events() const override { return inner_.events(); }
   bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
     const bool projected = inner_.project(y);
