@@ -309,8 +309,6 @@ Eigen::Vector2d coulomb_friction(const Eigen::Matrix2d& Q, const Eigen::Vector2d
   return Q * (lambda * (limit / lambda.norm()));
 }
 constexpr int max_sweeps = contact_max_sweeps;
-// a kinetic energy rise below this fraction is round-off of the sums, not a rise
-constexpr double energy_roundoff = 1e-12;
 
 }  // namespace
 
@@ -390,7 +388,7 @@ ContactOutcome resolve(std::span<const ContactBody> bodies, std::span<const Cont
     if (change <= velocity_tolerance) break;
   }
   outcome.sweeps = std::min(outcome.sweeps, max_sweeps);
-  if (motion.kinetic() > start.kinetic() * (1 + energy_roundoff)) {
+  if (motion.kinetic() > start.kinetic() * (1 + contact_energy_roundoff)) {
     // Gauss-Seidel with restitution and friction raised the energy: frictionless impulses, one contact at
     // a time, each of which cannot
     outcome.energy_guard = true;

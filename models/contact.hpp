@@ -102,6 +102,9 @@ inline constexpr double contact_velocity_tolerance = 1e-10;
 // and after this many at most: Gauss-Seidel converges linearly, as slowly as 0.993 a sweep in a collapsing
 // stack (measured), where 200 sweeps leave about 1e-6 m/s; a resting stack's warm start needs 1 to 40
 inline constexpr int contact_max_sweeps = 200;
+// a kinetic energy rise from the impulses below this fraction is round-off of the sums, not a rise (the
+// guard acts above it)
+inline constexpr double contact_energy_roundoff = 1e-12;
 
 // kinetic energy of the bodies, sum m |v|^2 / 2 + w . I w / 2 (J)
 double kinetic_energy(std::span<const ContactBody> bodies, const Eigen::VectorXd& y);

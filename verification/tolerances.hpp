@@ -1,6 +1,8 @@
 // Every tolerance the verification suite asserts, in one place, each with where it comes from.
 #pragma once
 
+#include "models/contact.hpp"
+
 namespace stepwise::tolerance {
 
 // observed order (least-squares slope of log error against log dt over >= 4 halvings) may differ from
@@ -196,5 +198,24 @@ inline constexpr double falling_body = 1e-10;
 // it may differ from the count without only as much as a perturbation of that size moves the controller:
 // within a factor 1.5 (a restart after every projection, the fault this guards against, costs x500)
 inline constexpr double projection_step_ratio = 1.5;
+
+// Contacts (models/contact.hpp).
+// A body released touching the ground falls one step of gravity, g dt^2, before its contacts (found at the
+// step's start, penetration strictly positive) hold it: that much settling, and 1e-6 of it for round-off
+inline constexpr double resting_settle(double g, double dt) { return g * dt * dt * (1 + 1e-6); }
+// then Gauss-Seidel leaves at most contact_velocity_tolerance at each contact: it creeps by at most that
+// speed times the time it rests (the bound over 10 s: 1e-9 m), and its kinetic energy is at most
+// that of the speed, m v^2 / 2, with a factor 10 for rotation's share
+inline constexpr double resting_creep(double seconds) { return contact_velocity_tolerance * seconds; }
+inline constexpr double resting_kinetic(double mass) { return 10 * mass * contact_velocity_tolerance * contact_velocity_tolerance / 2; }
+// a kinetic energy rise below this fraction is round-off of the sums (the impulses' own guard uses it):
+// a few ulps for each of ~100 contacts' terms
+inline constexpr double impulse_energy_roundoff = contact_energy_roundoff;
+// momentum over impulses: each is applied to two bodies as +j and -j at one point, so momentum is kept to
+// the rounding of the sums, a few ulps per impulse over ~1e5 impulses of a run: 1e-11 of the momentum
+inline constexpr double impulse_momentum_roundoff = 1e-11;
+// a box sliding down a slope steeper than its friction angle: symplectic Euler's velocity is exact for a
+// constant acceleration, so only round-off remains, ulps over 1000 steps
+inline constexpr double sliding_roundoff = 1e-12;
 
 }  // namespace stepwise::tolerance

@@ -98,6 +98,10 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
   const fs::path bad_index = scene("index.toml", "model = \"particle-mesh\"\n[mesh]\n" + verts + "triangles = [[0, 2, 1],\n [0, 1, 3],\n [0, 3, 9],\n [1, 2, 3]]\n");
   const fs::path bad_vertex = scene("vertex.toml", "model = \"particle-mesh\"\n[mesh]\nvertices = [[0, 0, 0],\n [1, nan, 0], [0, 1, 0], [0, 0, 1]]\ntriangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]\n");
   const fs::path open_mesh = scene("open.toml", "model = \"particle-mesh\"\n\n[mesh]\n" + verts + "triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2]]\n");
+  // a dropped body's mesh must bound a convex solid: a dent (the apex pushed inside) is refused
+  const fs::path dented = scene("dented.toml", "model = \"dropped-body\"\n[run]\nmethod = \"sequential-impulses\"\ndt = 1e-3\n[mesh]\n"
+                                "vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.1, 0.1, -0.1], [0, 0, -1]]\n"
+                                "triangles = [[0, 1, 3], [1, 2, 3], [2, 0, 3], [0, 4, 1], [1, 4, 2], [2, 4, 0]]\n");
   const fs::path no_mesh_model = scene("pendmesh.toml", "model = \"pendulum\"\n[run]\ndt = 0.01\n[mesh]\n" + verts + "triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]\n");
   const std::vector<std::pair<std::string, std::string>> cases{
       {fmt::format("run '{}' --out '{}'", bad_toml.string(), out.string()), "broken.toml:3:"},
@@ -139,6 +143,14 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run scenes/spinning-body.toml --set I1=0 --out '{}'", out.string()), "--set I1"},
       {fmt::format("run scenes/spinning-body.toml --set qw0=0 --out '{}'", out.string()), "--set qw0: initial orientation quaternion (qw0, qx0, qy0, qz0) is zero"},
       {fmt::format("run scenes/spinning-body.toml --set angular_drag=0.1 --out '{}'", out.string()), "run.method: rigid-splitting needs a torque-free rigid body"},
+      {fmt::format("run '{}' --out '{}'", dented.string(), out.string()), "dented.toml:5: mesh: mesh is not convex"},
+      {fmt::format("run scenes/tumbling-box.toml --method rk4 --out '{}'", out.string()), "--method: rk4 has no contact response"},
+      {fmt::format("run scenes/spinning-body.toml --method sequential-impulses --out '{}'", out.string()), "--method: sequential-impulses needs rigid bodies in contact"},
+      {fmt::format("run scenes/tumbling-box.toml --set density=0 --out '{}'", out.string()), "--set density"},
+      {fmt::format("run scenes/tumbling-box.toml --set qw0=0 --set qx0=0 --out '{}'", out.string()), "--set qw0: initial orientation quaternion"},
+      {fmt::format("run scenes/tumbling-box.toml --set ground_slope=2 --out '{}'", out.string()), "--set ground_slope"},
+      {fmt::format("run scenes/stack-collapse.toml --set ground=0.5 --out '{}'", out.string()), "--set ground: parameter 'ground' must be 0 or 1"},
+      {fmt::format("run scenes/stack-collapse.toml --set rows=2.5 --out '{}'", out.string()), "--set rows"},
   };
   for (const auto& [args, expected] : cases) {
     const Output o = run(args);
@@ -165,6 +177,23 @@ TEST_F(Cli, TheSpinningBodyKeepsItsContractNames) {
   EXPECT_NEAR(s["final_state"]["Ly"].get<double>(), 2.0, roundoff);
   EXPECT_NEAR(s["final_state"]["Lz"].get<double>(), 0.0, roundoff);
   EXPECT_EQ(s["projections"], s["steps"]);
+}
+
+TEST_F(Cli, TheTumblingBoxLandsBouncesAndSettlesOnAFace) {
+  const fs::path out = dir_ / "tumble";
+  const Output o = run(fmt::format("run scenes/tumbling-box.toml --out '{}'", out.string()));
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  for (const char* key : {"energy", "kinetic", "px", "py", "pz", "Lx", "Ly", "Lz", "qw", "wz"}) EXPECT_TRUE(s["final_state"].contains(key)) << key;
+  ASSERT_GT(s["events"].size(), 2u) << "it bounces";
+  EXPECT_EQ(s["events"][0]["kind"], "impact");
+  EXPECT_EQ(s["events"][0]["event"], "contacts");
+  // first touch: the lowest edge (turned 45 degrees about x) falls from 1.5 m to its reach, about 0.5 s
+  EXPECT_GT(s["events"][0]["t"].get<double>(), 0.4);
+  EXPECT_LT(s["events"][0]["t"].get<double>(), 0.6);
+  // at rest on its largest face (hz = 0.1 m below the centre), less the settling of one step of gravity
+  EXPECT_NEAR(s["final_state"]["z"].get<double>(), 0.1, tolerance::resting_settle(9.81, 1e-3));
+  EXPECT_LT(s["final_state"]["kinetic"].get<double>(), tolerance::resting_kinetic(0.6 * 0.4 * 0.2 * 500)) << "m = 24 kg";
 }
 
 TEST_F(Cli, TheBouncingBallWritesItsImpactsAndRestIntoTheSummary) {
