@@ -45,6 +45,7 @@ const ParamSpec params[] = {
     {"px", 0.0, "m", "body point the force acts at, body x (torque r x f)"},
     {"py", 0.0, "m", "body point the force acts at, body y"},
     {"pz", 0.0, "m", "body point the force acts at, body z"},
+    {"density", 1000.0, "kg/m^3", "with a [mesh]: its uniform density, from which mass and I1-I3 follow (they may not be given then)", Bound::positive},
 };
 
 Eigen::Quaterniond orientation(const Eigen::VectorXd& y) { return Eigen::Quaterniond(y[6], y[7], y[8], y[9]).normalized(); }
@@ -131,6 +132,31 @@ double elliptic_f(double phi, double k, double K) {
 
 std::span<const ParamSpec> rigid_body_params() { return params; }
 std::unique_ptr<Model> make_rigid_body(const Params& p) { return std::make_unique<RigidBody>(p); }
+
+std::unique_ptr<Model> make_rigid_body(const Params& p, const TriangleMesh& mesh) {
+  for (const ParamSpec& spec : params)
+    if ((spec.key == "mass" || spec.key.starts_with("I")) && p.at(std::string(spec.key)) != spec.default_value)
+      throw BadParameter(std::string(spec.key), fmt::format("parameter '{}' follows from the [mesh] and its density: give one or the other", spec.key));
+  Params with = p;
+  PrincipalFrame frame;
+  try {
+    const MassProperties props = mass_properties(mesh, p.at("density"));
+    frame = principal_frame(props.inertia);
+    with["mass"] = props.mass;
+  } catch (const std::invalid_argument& e) {
+    throw BadParameter("mesh", e.what());
+  }
+  for (int k = 0; k < 3; ++k) with[fmt::format("I{}", k + 1)] = frame.moments[k];
+  // the orientation given is the mesh's; the body's axes are its principal axes within it
+  const Eigen::Vector4d q(p.at("qw0"), p.at("qx0"), p.at("qy0"), p.at("qz0"));
+  if (!(q.norm() > 0)) throw BadParameter("qw0", "initial orientation quaternion (qw0, qx0, qy0, qz0) is zero");
+  const Eigen::Quaterniond body = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized() * Eigen::Quaterniond(frame.axes);
+  with["qw0"] = body.w();
+  with["qx0"] = body.x();
+  with["qy0"] = body.y();
+  with["qz0"] = body.z();
+  return std::make_unique<RigidBody>(with);
+}
 
 TorqueFreeRotation::TorqueFreeRotation(const Eigen::Vector3d& I, const Eigen::Vector3d& w0) : w0_(w0) {
   std::array<int, 3> order{0, 1, 2};

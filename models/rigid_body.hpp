@@ -26,11 +26,17 @@
 #pragma once
 
 #include "model.hpp"
+#include "triangle_mesh.hpp"
 
 namespace stepwise {
 
 std::span<const ParamSpec> rigid_body_params();
 std::unique_ptr<Model> make_rigid_body(const Params& params);
+// the body bounded by a closed mesh of uniform `density`: mass and principal moments from it (polyhedral
+// mass properties), the orientation given taken as the mesh's and turned onto its principal axes (w0 and
+// the force's point stay in the principal frame). Mass and I1-I3 may not be set as well (BadParameter
+// naming them); BadParameter with key "mesh" for a mesh that is open, inside out or empty
+std::unique_ptr<Model> make_rigid_body(const Params& params, const TriangleMesh& mesh);
 
 // Euler's torque-free equations solved in closed form for principal moments `inertia` (any order) from
 // body angular velocity w0 at t = 0

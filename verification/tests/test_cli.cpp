@@ -161,6 +161,31 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
   }
 }
 
+TEST_F(Cli, ARigidBodyTakesItsMassAndMomentsFromASceneMesh) {
+  // a box of half-extents (0.5, 1, 1.5) at density 2: m = 12 kg, I = m/3 (hy^2 + hz^2, ...) = (13, 10, 5)
+  // about the mesh's x, y, z: principal moments 5, 10, 13, so w0 = (0.01, 1, 0) in the principal frame
+  // has energy (5 * 0.01^2 + 10 * 1^2) / 2
+  const std::string box = "[mesh]\nvertices = [[-0.5, -1, -1.5], [0.5, -1, -1.5], [0.5, 1, -1.5], [-0.5, 1, -1.5], "
+                          "[-0.5, -1, 1.5], [0.5, -1, 1.5], [0.5, 1, 1.5], [-0.5, 1, 1.5]]\n";
+  const std::string faces = "triangles = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5], "
+                            "[2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]]\n";
+  const std::string inside_out = "triangles = [[0, 1, 2], [0, 2, 3], [4, 6, 5], [4, 7, 6], [0, 5, 1], [0, 4, 5], [1, 6, 2], [1, 5, 6], "
+                                 "[2, 7, 3], [2, 6, 7], [3, 4, 0], [3, 7, 4]]\n";
+  const std::string head = "model = \"rigid-body\"\n[parameters]\ndensity = 2.0\nwx0 = 0.01\nwy0 = 1.0\nwz0 = 0.0\n[run]\nmethod = \"rk4\"\ndt = 0.01\nt_end = 1.0\n";
+  const fs::path out = dir_ / "meshbody";
+  const Output o = run(fmt::format("run '{}' --out '{}'", scene("meshbody.toml", head + box + faces).string(), out.string()));
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  EXPECT_NEAR(s["energy_initial"].get<double>() / ((5 * 1e-4 + 10) / 2), 1, tolerance::mass_properties_roundoff);
+  // mass given as well, and the mesh inside out: refused, named
+  const Output both = run(fmt::format("run '{}' --set mass=3 --out '{}'", scene("both.toml", head + box + faces).string(), (dir_ / "both").string()));
+  EXPECT_EQ(both.status, 2);
+  EXPECT_NE(both.err.find("--set mass: parameter 'mass' follows from the [mesh]"), std::string::npos) << both.err;
+  const Output flipped = run(fmt::format("run '{}' --out '{}'", scene("flipped.toml", head + box + inside_out).string(), (dir_ / "flipped").string()));
+  EXPECT_EQ(flipped.status, 2);
+  EXPECT_NE(flipped.err.find("flipped.toml:11: mesh: mesh is inside out"), std::string::npos) << flipped.err;
+}
+
 TEST_F(Cli, TheSpinningBodyKeepsItsContractNames) {
   // parameters I1..I3, wx0..wz0; trajectory columns wx, wy, wz, energy; final_state energy and world Lx, Ly, Lz
   const fs::path out = dir_ / "spin";
