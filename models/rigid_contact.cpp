@@ -37,6 +37,7 @@ const ParamSpec dropped_params[] = {
     {"ground_slope", 0.0, "rad", "the ground turned about the y axis (|slope| < pi/2)"},
     {"ground", 1.0, "", "1: the ground plane is there; 0: no ground (bodies meet only each other)", Bound::unit_interval},
     {"push", 0.2, "", "fraction of a resting pair's penetration (beyond 0.1 mm) pushed out per step; positions only", Bound::unit_interval},
+    {"warm_start", 1.0, "", "1: Gauss-Seidel starts from the last step's impulses; 0: from zero", Bound::unit_interval},
 };
 
 const ParamSpec stack_params[] = {
@@ -58,6 +59,7 @@ const ParamSpec stack_params[] = {
     {"ground_slope", 0.0, "rad", "the ground turned about the y axis (|slope| < pi/2)"},
     {"ground", 1.0, "", "1: the ground plane is there; 0: no ground (bodies meet only each other)", Bound::unit_interval},
     {"push", 0.2, "", "fraction of a resting pair's penetration (beyond 0.1 mm) pushed out per step; positions only", Bound::unit_interval},
+    {"warm_start", 1.0, "", "1: Gauss-Seidel starts from the last step's impulses; 0: from zero", Bound::unit_interval},
 };
 
 // one body's start: its shape and its 13-entry state
@@ -100,6 +102,9 @@ class RigidContact final : public Model {
     material_.restitution = p.at("restitution");
     material_.friction = p.at("friction");
     material_.push = p.at("push");
+    if (const double w = p.at("warm_start"); w != 0 && w != 1)
+      throw BadParameter("warm_start", fmt::format("parameter 'warm_start' must be 0 or 1, got {}", w));
+    warm_start_ = p.at("warm_start") == 1;
     y0_.resize(13 * static_cast<Eigen::Index>(placed.size()));
     for (size_t i = 0; i < placed.size(); ++i) {
       y0_.segment<13>(13 * static_cast<Eigen::Index>(i)) = placed[i].state;
@@ -144,6 +149,7 @@ class RigidContact final : public Model {
     // what one or two steps of gravity make is resting contact, not an impact to bounce from
     m.resting_speed = 2 * g_ * dt;
     const std::vector<Contact> contacts = find_contacts(bodies_, ground_ ? &*ground_ : nullptr, y);
+    if (!warm_start_) memory.impulses.clear();
     return resolve(bodies_, contacts, m, y, memory);
   }
 
@@ -178,6 +184,7 @@ class RigidContact final : public Model {
   std::optional<Plane> ground_;
   double g_;
   ContactMaterial material_;
+  bool warm_start_ = true;
   Eigen::VectorXd y0_;
 };
 
