@@ -6,6 +6,7 @@
 #include "models/contact.hpp"
 #include "models/model.hpp"
 #include "solvers/integrator.hpp"
+#include "verification/contact_checks.hpp"
 #include "verification/measure.hpp"
 #include "verification/tolerances.hpp"
 
@@ -210,51 +211,29 @@ TEST(ContactImpulses, MomentumIsKeptInABodyBodyImpactWithoutGround) {
   }
 }
 
-// a box of half-extents (0.3, 0.2, 0.1) released touching a ground of slope s (its face on it), at rest
-struct Rest {
-  Params params;
-  double slope;
-};
-
-Rest resting_box(double slope) {
-  const double hz = 0.1;
-  return {{{"ground_slope", slope}, {"qw0", std::cos(slope / 2)}, {"qx0", 0}, {"qy0", std::sin(slope / 2)}, {"x0", hz * std::sin(slope)},
-           {"z0", hz * std::cos(slope)}, {"wx0", 0}, {"wy0", 0}, {"wz0", 0}, {"vx0", 0}, {"friction", 0.5}, {"restitution", 0.4}},
-          slope};
-}
-
 TEST(RestingContact, ABoxOnTheGroundStaysPutForTenSeconds) {
   for (const double slope : {0.0, std::atan(0.25)}) {  // flat, and a slope inside the friction cone (mu = 0.5)
-    const Rest rest = resting_box(slope);
-    const auto model = make_model("dropped-body", rest.params);
-    const double dt = 1e-3, t_end = 10;
+    const auto model = make_model("dropped-body", box_on_slope(slope, 0.5));
+    const double dt = 1e-3, t_end = 10, g = 9.81;
     const Measured m = run_and_measure(*model, "sequential-impulses", StepControl::fixed(dt), t_end, 0.01);
     ASSERT_EQ(m.result.status, Status::ok);
     EXPECT_TRUE(m.result.events.empty()) << "no impact: the first approach is one step of gravity";
-    const Eigen::Vector3d n(std::sin(slope), 0, std::cos(slope)), along(std::cos(slope), 0, -std::sin(slope));
-    const Eigen::VectorXd& settled = m.result.trajectory.y[1];  // after 0.01 s
-    const double g = 9.81;
-    double creep = 0, sink = 0, turn = 0;
-    for (const auto& y : m.result.trajectory.y) {
-      const Eigen::Vector3d d = (y.segment<3>(0) - settled.segment<3>(0));
-      creep = std::max({creep, std::abs(d.dot(along)), std::abs(d.y())});
-      sink = std::max(sink, -(y.segment<3>(0) - model->initial_state().segment<3>(0)).dot(n));
-      turn = std::max(turn, Eigen::Quaterniond(y[6], y[7], y[8], y[9]).angularDistance(Eigen::Quaterniond(settled[6], settled[7], settled[8], settled[9])));
-    }
-    EXPECT_LE(creep, tolerance::resting_creep(t_end)) << "slope " << slope;
-    EXPECT_LE(sink, tolerance::resting_settle(g, dt)) << "slope " << slope;
-    EXPECT_LE(turn * 0.1, tolerance::resting_creep(t_end)) << "a corner 0.1 m off the axis moves no more than the centre may";
-    std::cout << "slope " << slope << ": creep " << creep << " m, settled " << sink << " m, turned " << turn << " rad over " << t_end << " s\n";
+    const SlopeMotion motion = slope_motion(m.result, slope, 0.01);
+    EXPECT_LE(motion.creep, tolerance::resting_creep(t_end)) << "slope " << slope;
+    EXPECT_LE(motion.sink, tolerance::resting_settle(g, dt)) << "slope " << slope;
+    EXPECT_LE(motion.turn * 0.1, tolerance::resting_creep(t_end)) << "a corner 0.1 m off the axis moves no more than the centre may";
+    std::cout << "slope " << slope << ": creep " << motion.creep << " m, settled " << motion.sink << " m, turned " << motion.turn << " rad over "
+              << t_end << " s\n";
   }
 }
 
 TEST(RestingContact, ABoxOnASlopeSteeperThanItsFrictionAngleSlidesAtCoulombsAcceleration) {
-  const Rest rest = resting_box(std::atan(0.75));
-  const auto model = make_model("dropped-body", rest.params);
+  const double slope = std::atan(0.75), mu = 0.5;
+  const auto model = make_model("dropped-body", box_on_slope(slope, mu));
   const Measured m = run_and_measure(*model, "sequential-impulses", StepControl::fixed(1e-3), 1.0, 0.1);
   ASSERT_EQ(m.result.status, Status::ok);
-  const double s = rest.slope, a = 9.81 * (std::sin(s) - 0.5 * std::cos(s));
-  const Eigen::Vector3d along(std::cos(s), 0, -std::sin(s));
+  const double a = 9.81 * (std::sin(slope) - mu * std::cos(slope));
+  const Eigen::Vector3d along(std::cos(slope), 0, -std::sin(slope));
   for (size_t k = 1; k < m.result.trajectory.t.size(); ++k) {
     const Eigen::VectorXd& y = m.result.trajectory.y[k];
     // the first step falls freely, and the second's normal impulse, twice a step's, takes back with its
