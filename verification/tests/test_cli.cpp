@@ -102,6 +102,9 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
   const fs::path dented = scene("dented.toml", "model = \"dropped-body\"\n[run]\nmethod = \"sequential-impulses\"\ndt = 1e-3\n[mesh]\n"
                                 "vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.1, 0.1, -0.1], [0, 0, -1]]\n"
                                 "triangles = [[0, 1, 3], [1, 2, 3], [2, 0, 3], [0, 4, 1], [1, 4, 2], [2, 4, 0]]\n");
+  // one face turned the other way: the mesh is not consistently oriented, its mass properties undefined
+  const fs::path misoriented = scene("misoriented.toml", "model = \"dropped-body\"\n[run]\nmethod = \"sequential-impulses\"\ndt = 1e-3\n[mesh]\n" + verts +
+                                     "triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 3, 2]]\n");
   const fs::path no_mesh_model = scene("pendmesh.toml", "model = \"pendulum\"\n[run]\ndt = 0.01\n[mesh]\n" + verts + "triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]\n");
   const std::vector<std::pair<std::string, std::string>> cases{
       {fmt::format("run '{}' --out '{}'", bad_toml.string(), out.string()), "broken.toml:3:"},
@@ -144,6 +147,7 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run scenes/spinning-body.toml --set qw0=0 --out '{}'", out.string()), "--set qw0: initial orientation quaternion (qw0, qx0, qy0, qz0) is zero"},
       {fmt::format("run scenes/spinning-body.toml --set angular_drag=0.1 --out '{}'", out.string()), "run.method: rigid-splitting needs a torque-free rigid body"},
       {fmt::format("run '{}' --out '{}'", dented.string(), out.string()), "dented.toml:5: mesh: mesh is not convex"},
+      {fmt::format("run '{}' --out '{}'", misoriented.string(), out.string()), "misoriented.toml:5: mesh:"},
       {fmt::format("run scenes/tumbling-box.toml --method rk4 --out '{}'", out.string()), "--method: rk4 has no contact response"},
       {fmt::format("run scenes/spinning-body.toml --method sequential-impulses --out '{}'", out.string()), "--method: sequential-impulses needs rigid bodies in contact"},
       {fmt::format("run scenes/tumbling-box.toml --set density=0 --out '{}'", out.string()), "--set density"},
