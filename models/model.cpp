@@ -2,6 +2,7 @@
 
 #include "bouncing_ball.hpp"
 #include "flow_particle.hpp"
+#include "hanging_chain.hpp"
 #include "height_field.hpp"
 #include "particle_mesh.hpp"
 #include "particle_system.hpp"
@@ -53,6 +54,8 @@ const std::array model_table{
     ModelInfo{"rigid-body", "one rigid body: Euler's equations, unit quaternion, gravity, drag, a force at a point",
               rigid_body_params(), [](const Params& p) { return make_rigid_body(p); },
               [](const Params& p, const TriangleMesh& mesh) { return make_rigid_body(p, mesh); }},
+    ModelInfo{"hanging-chain", "N masses on Voigt springs hanging from a pin, gravity along -y; its static equilibrium is exact",
+              hanging_chain_params(), [](const Params& p) { return make_hanging_chain(p); }},
     ModelInfo{"dropped-body", "a box (or the scene's convex [mesh]) dropped with a spin on the ground: contacts, restitution, friction",
               dropped_body_params(), [](const Params& p) { return make_dropped_body(p, nullptr); },
               [](const Params& p, const TriangleMesh& mesh) { return make_dropped_body(p, &mesh); }},

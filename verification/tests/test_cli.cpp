@@ -155,6 +155,9 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run scenes/tumbling-box.toml --set ground_slope=2 --out '{}'", out.string()), "--set ground_slope"},
       {fmt::format("run scenes/stack-collapse.toml --set ground=0.5 --out '{}'", out.string()), "--set ground: parameter 'ground' must be 0 or 1"},
       {fmt::format("run scenes/stack-collapse.toml --set rows=2.5 --out '{}'", out.string()), "--set rows"},
+      {fmt::format("run scenes/hanging-chain.toml --set nodes=0 --out '{}'", out.string()), "--set nodes"},
+      {fmt::format("run scenes/hanging-chain.toml --set stiffness=-1 --out '{}'", out.string()), "--set stiffness"},
+      {fmt::format("run scenes/hanging-chain.toml --set rest_length=nan --out '{}'", out.string()), "--set rest_length"},
   };
   for (const auto& [args, expected] : cases) {
     const Output o = run(args);
@@ -223,6 +226,19 @@ TEST_F(Cli, TheTumblingBoxLandsBouncesAndSettlesOnAFace) {
   // at rest on its largest face (hz = 0.1 m below the centre), less the settling of one step of gravity
   EXPECT_NEAR(s["final_state"]["z"].get<double>(), 0.1, tolerance::resting_settle(9.81, 1e-3));
   EXPECT_LT(s["final_state"]["kinetic"].get<double>(), tolerance::resting_kinetic(0.6 * 0.4 * 0.2 * 500)) << "m = 24 kg";
+}
+
+TEST_F(Cli, TheHangingChainKeepsItsContractNamesAndSettles) {
+  // parameters nodes, mass, stiffness, rest_length, damping, g; final_state y_bottom
+  const fs::path out = dir_ / "chain";
+  const Output o = run(fmt::format("run scenes/hanging-chain.toml --set nodes=5 --set mass=0.2 --set stiffness=50 --set rest_length=0.2 "
+                                   "--set damping=2 --set g=9.81 --out '{}'", out.string()));
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  // the spring i places from the bottom carries i m g: y_bottom = -(N l + m g N (N + 1) / (2 c))
+  const double exact = -(5 * 0.2 + 0.2 * 9.81 * 15 / 50);
+  EXPECT_NEAR(s["final_state"]["y_bottom"].get<double>(), exact,
+              tolerance::chain_settled(100, 0.2 * 9.81 * 15 / 50, 5, 0.2, 50, 2) + 1e-12);
 }
 
 TEST_F(Cli, TheBouncingBallWritesItsImpactsAndRestIntoTheSummary) {

@@ -1,0 +1,108 @@
+#include "hanging_chain.hpp"
+
+#include "particle_common.hpp"
+#include "springs.hpp"
+
+#include <fmt/format.h>
+
+namespace stepwise {
+
+namespace {
+
+const ParamSpec params[] = {
+    {"nodes", 10, "", "free masses below the pin", Bound::positive},
+    {"mass", 0.1, "kg", "mass of each node", Bound::positive},
+    {"stiffness", 100.0, "N/m", "spring constant c", Bound::positive},
+    {"rest_length", 0.1, "m", "rest length l of each spring", Bound::positive},
+    {"damping", 2.0, "N s/m", "Voigt damping gamma along each spring", Bound::nonnegative},
+    {"drag", 0.0, "1/s", "linear drag of each node per unit mass", Bound::nonnegative},
+    {"g", 9.81, "m/s^2", "gravitational acceleration, along -y", Bound::nonnegative},
+};
+
+class HangingChain final : public Model {
+ public:
+  explicit HangingChain(const Params& p)
+      : n_(particle_count(p, "nodes", 1024, "nodes")), mass_(p.at("mass")), drag_(p.at("drag")), g_(p.at("g")) {
+    for (int k = 0; k < n_; ++k) springs_.push_back(Spring{k - 1, k, p.at("rest_length"), p.at("stiffness"), p.at("damping")});
+    y0_ = Eigen::VectorXd::Zero(6 * n_);
+    for (int k = 0; k < n_; ++k) y0_[3 * k + 1] = -(k + 1) * p.at("rest_length");
+  }
+
+  std::string_view name() const override { return "hanging-chain"; }
+  int size() const override { return 6 * n_; }
+  bool autonomous() const override { return true; }
+  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }
+  std::vector<std::string> state_names() const override {
+    std::vector<std::string> names;
+    for (const char* q : {"", "v"})
+      for (int k = 0; k < n_; ++k)
+        for (const char* axis : {"x", "y", "z"}) names.push_back(fmt::format("{}{}[{}]", q, axis, k));
+    return names;
+  }
+  Eigen::VectorXd initial_state() const override { return y0_; }
+
+  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    dydt.head(3 * n_) = y.tail(3 * n_);
+    acceleration(t, y, dydt.tail(3 * n_));
+  }
+  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
+    a.setZero();
+    add_spring_forces(springs_, y.data(), y.data() + 3 * n_, a.data());
+    a /= mass_;
+    a -= drag_ * y.tail(3 * n_);
+    for (int k = 0; k < n_; ++k) a[3 * k + 1] -= g_;
+  }
+
+  bool has_sparse_jacobian() const override { return true; }
+  void sparse_jacobian(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const override {
+    const Eigen::Index m = 3 * n_;
+    std::vector<Eigen::Triplet<double>> entries;
+    for (Eigen::Index j = 0; j < m; ++j) {
+      entries.emplace_back(j, m + j, 1.0);
+      entries.emplace_back(m + j, m + j, -drag_);
+    }
+    add_spring_jacobian(springs_, y.data(), y.data() + m, 1 / mass_, m, 0, m, entries);
+    dfdy.resize(size(), size());
+    dfdy.setFromTriplets(entries.begin(), entries.end());  // duplicates summed
+  }
+
+  std::optional<double> energy(const Eigen::VectorXd& y) const override {
+    double e = mass_ * y.tail(3 * n_).squaredNorm() / 2 + spring_energy(springs_, y.data());
+    for (int k = 0; k < n_; ++k) e += mass_ * g_ * y[3 * k + 1];
+    return e;
+  }
+
+  std::vector<std::string> summary_names() const override {
+    auto names = state_names();
+    names.insert(names.end(), {"y_bottom", "energy"});
+    return names;
+  }
+  Eigen::VectorXd summary(const Eigen::VectorXd& y) const override {
+    Eigen::VectorXd s(y.size() + 2);
+    s << y, y[3 * (n_ - 1) + 1], *energy(y);
+    return s;
+  }
+
+ private:
+  int n_;
+  double mass_, drag_, g_;
+  std::vector<Spring> springs_;
+  Eigen::VectorXd y0_;
+};
+
+}  // namespace
+
+std::span<const ParamSpec> hanging_chain_params() { return params; }
+std::unique_ptr<Model> make_hanging_chain(const Params& p) { return std::make_unique<HangingChain>(p); }
+
+std::vector<double> chain_equilibrium(int nodes, double mass, double stiffness, double rest_length, double g) {
+  std::vector<double> y;
+  double height = 0;
+  for (int k = 1; k <= nodes; ++k) {
+    height -= rest_length + mass * g * (nodes - k + 1) / stiffness;  // the spring above node k carries N - k + 1 masses
+    y.push_back(height);
+  }
+  return y;
+}
+
+}  // namespace stepwise
