@@ -174,6 +174,7 @@ nlohmann::json summary_json(const Prepared& p, const Measured& m) {
   j["linear_solves"] = r.stats.linear_solves;
   j["factorizations"] = r.stats.factorizations;
   j["projections"] = r.stats.projections;
+  j["contact_sweeps"] = r.stats.contact_sweeps;
   j["cpu_seconds"] = r.stats.cpu_seconds;
   const auto names = sample_names(*p.model);
   const Eigen::VectorXd final_sample = p.model->summary(r.y_stop);

@@ -1,12 +1,14 @@
 #include "contact.hpp"
 
 #include "mass_properties.hpp"
+#include "rigid_body.hpp"
 
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <stdexcept>
 
 namespace stepwise {
@@ -23,16 +25,17 @@ Pose pose(const Eigen::VectorXd& y, int body) {
   return {y.segment<3>(o), Eigen::Quaterniond(y[o + 6], y[o + 7], y[o + 8], y[o + 9]).normalized().toRotationMatrix()};
 }
 
-// largest signed distance of p (body frame) to the body's face planes, and that face: negative inside
-std::pair<double, int> deepest_face(const ContactBody& body, const Eigen::Vector3d& p) {
+// largest signed distance of p (body frame) to the body's face planes: negative inside
+double face_distance(const ContactBody& body, const Eigen::Vector3d& p) {
   double d = -std::numeric_limits<double>::infinity();
-  int face = -1;
-  for (size_t f = 0; f < body.faces.size(); ++f)
-    if (const double df = signed_distance(body.faces[f], p); df > d) {
-      d = df;
-      face = static_cast<int>(f);
-    }
-  return {d, face};
+  for (const Plane& face : body.faces) d = std::max(d, signed_distance(face, p));
+  return d;
+}
+
+std::vector<int> unique_sorted(std::vector<int> v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  return v;
 }
 
 struct FeaturePoint {
@@ -45,7 +48,7 @@ struct FeaturePoint {
 void features_inside(const ContactBody& body, const Pose& body_pose, const ContactBody& other,
                      const Eigen::Matrix<double, Eigen::Dynamic, 3>& other_here, std::span<const int> other_faces,
                      std::span<const int> body_faces, std::vector<FeaturePoint>& out) {
-  const auto inside = [&](const Eigen::Vector3d& p) { return deepest_face(body, p).first < 0; };
+  const auto inside = [&](const Eigen::Vector3d& p) { return face_distance(body, p) < 0; };
   std::vector<int> vertices;
   std::vector<int> edges;
   for (const int f : other_faces)
@@ -53,14 +56,10 @@ void features_inside(const ContactBody& body, const Pose& body_pose, const Conta
       vertices.push_back(other.mesh.faces(f, k));
       if (const int e = other.face_edges[static_cast<size_t>(f)][static_cast<size_t>(k)]; e >= 0) edges.push_back(e);
     }
-  for (auto* list : {&vertices, &edges}) {
-    std::sort(list->begin(), list->end());
-    list->erase(std::unique(list->begin(), list->end()), list->end());
-  }
-  for (const int v : vertices)
+  for (const int v : unique_sorted(std::move(vertices)))
     if (const Eigen::Vector3d p = other_here.row(v).transpose(); inside(p)) out.push_back({body_pose.x + body_pose.R * p, v});
   // an edge crossing the body with both ends outside: the middle of the part inside
-  for (const int e : edges) {
+  for (const int e : unique_sorted(std::move(edges))) {
     const Eigen::Vector3d p0 = other_here.row(other.edges[static_cast<size_t>(e)][0]).transpose();
     const Eigen::Vector3d p1 = other_here.row(other.edges[static_cast<size_t>(e)][1]).transpose();
     if (inside(p0) || inside(p1)) continue;
@@ -75,9 +74,11 @@ void features_inside(const ContactBody& body, const Pose& body_pose, const Conta
   }
 }
 
-// world-frame vertices of a body at a pose
-Eigen::Matrix<double, Eigen::Dynamic, 3> world_vertices(const ContactBody& body, const Pose& at) {
-  return (body.mesh.vertices * at.R.transpose()).rowwise() + at.x.transpose();
+// the vertices of `body` at pose `at`, in the frame of pose `frame` (the world's when none)
+Eigen::Matrix<double, Eigen::Dynamic, 3> vertices_in(const ContactBody& body, const Pose& at, const Pose* frame = nullptr) {
+  const Eigen::Matrix3d R = frame ? Eigen::Matrix3d(frame->R.transpose() * at.R) : at.R;
+  const Eigen::Vector3d t = frame ? Eigen::Vector3d(frame->R.transpose() * (at.x - frame->x)) : at.x;
+  return (body.mesh.vertices * R.transpose()).rowwise() + t.transpose();
 }
 
 // the separating-axis test's axis of least overlap between two convex bodies that touch (Gottschalk, Lin
@@ -86,7 +87,7 @@ Eigen::Matrix<double, Eigen::Dynamic, 3> world_vertices(const ContactBody& body,
 // clear a, and that distance, max_a n.p - min_b n.p. A face axis is kept over an edge axis unless the
 // edge's overlap is clearly smaller, so that face-face contact keeps the face's normal
 std::pair<Eigen::Vector3d, double> least_overlap(const ContactBody& a, const Pose& pa, const ContactBody& b, const Pose& pb) {
-  const auto va = world_vertices(a, pa), vb = world_vertices(b, pb);
+  const auto va = vertices_in(a, pa), vb = vertices_in(b, pb);
   const auto overlap = [&](const Eigen::Vector3d& n) { return (va * n).maxCoeff() - (vb * n).minCoeff(); };
   Eigen::Vector3d best_axis = Eigen::Vector3d::UnitZ();
   double best = std::numeric_limits<double>::infinity();
@@ -112,32 +113,16 @@ std::pair<Eigen::Vector3d, double> least_overlap(const ContactBody& a, const Pos
   return {best_axis, overlap(best_axis)};
 }
 
-// the mesh of `body` at `pose`, seen from the frame of `frame`
-TriangleMesh mesh_in(const ContactBody& body, const Pose& at, const Pose& frame) {
-  TriangleMesh m = body.mesh;
-  const Eigen::Matrix3d R = frame.R.transpose() * at.R;
-  const Eigen::Vector3d t = frame.R.transpose() * (at.x - frame.x);
-  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v) m.vertices.row(v) = (R * body.mesh.vertices.row(v).transpose() + t).transpose();
-  return m;
-}
-
-std::vector<int> unique_sorted(std::vector<int> v) {
-  std::sort(v.begin(), v.end());
-  v.erase(std::unique(v.begin(), v.end()), v.end());
-  return v;
-}
-
 }  // namespace
 
 ContactBody make_contact_body(const TriangleMesh& mesh, double density, MeshPlacement* placement) {
-  convex_faces(mesh);  // closed, outward, convex: or throws naming what is not
   const MassProperties props = mass_properties(mesh, density);
   const PrincipalFrame frame = principal_frame(props.inertia);
   ContactBody body;
   body.mesh = mesh;
   for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
     body.mesh.vertices.row(v) = (frame.axes.transpose() * (mesh.vertices.row(v).transpose() - props.center)).transpose();
-  body.faces = convex_faces(body.mesh);
+  body.faces = convex_faces(body.mesh);  // convex, with outward faces: or throws naming what is not
   body.bvh = build_bvh(body.mesh);
   body.mass = props.mass;
   body.inertia = frame.moments;
@@ -185,7 +170,7 @@ std::vector<Contact> find_contacts(std::span<const ContactBody> bodies, const Pl
       const Pose& q = poses[static_cast<size_t>(j)];
       if ((p.x - q.x).norm() > body.radius + other.radius) continue;
       // the other's mesh in this body's frame, and the face pairs that cut each other
-      const TriangleMesh other_here = mesh_in(other, q, p);
+      TriangleMesh other_here{vertices_in(other, q, &p), other.mesh.faces};
       const PairQuery query = intersecting_pairs(body.mesh, body.bvh, other_here, build_bvh(other_here));
       if (exact_tests) *exact_tests += query.exact_tests;
       if (query.pairs.empty()) continue;
@@ -198,7 +183,7 @@ std::vector<Contact> find_contacts(std::span<const ContactBody> bodies, const Pl
       theirs = unique_sorted(std::move(theirs));
       std::vector<FeaturePoint> theirs_inside, mine_inside;
       features_inside(body, p, other, other_here.vertices, theirs, mine, theirs_inside);
-      features_inside(other, q, body, mesh_in(body, p, q).vertices, mine, theirs, mine_inside);
+      features_inside(other, q, body, vertices_in(body, p, &q), mine, theirs, mine_inside);
       if (theirs_inside.empty() && mine_inside.empty()) continue;
       // one normal for the pair's whole manifold: the axis of least overlap, pushing the other body away
       const auto [normal, depth] = least_overlap(body, p, other, q);
@@ -213,8 +198,7 @@ double kinetic_energy(std::span<const ContactBody> bodies, const Eigen::VectorXd
   double t = 0;
   for (size_t b = 0; b < bodies.size(); ++b) {
     const int o = 13 * static_cast<int>(b);
-    const Eigen::Vector3d w = y.segment<3>(o + 10);
-    t += bodies[b].mass * y.segment<3>(o + 3).squaredNorm() / 2 + w.dot(bodies[b].inertia.cwiseProduct(w)) / 2;
+    t += body_kinetic_energy(bodies[b].mass, bodies[b].inertia, y.segment<3>(o + 3), y.segment<3>(o + 10));
   }
   return t;
 }
@@ -264,10 +248,7 @@ struct Motion {
   }
   double kinetic() const {
     double t = 0;
-    for (size_t b = 0; b < v.size(); ++b) {
-      const Eigen::Vector3d w_body = poses[b].R.transpose() * w[b];
-      t += bodies[b].mass * v[b].squaredNorm() / 2 + w_body.dot(bodies[b].inertia.cwiseProduct(w_body)) / 2;
-    }
+    for (size_t b = 0; b < v.size(); ++b) t += body_kinetic_energy(bodies[b].mass, bodies[b].inertia, v[b], poses[b].R.transpose() * w[b]);
     return t;
   }
   void store(Eigen::Ref<Eigen::VectorXd> y) const {
@@ -277,8 +258,6 @@ struct Motion {
     }
   }
 };
-
-constexpr double velocity_tolerance = contact_velocity_tolerance;
 
 // Coulomb's law at one contact with tangential collision matrix Kt = Q diag(k) Q^T, for the sliding
 // velocity `free` the contact would have without friction: the impulse that stops it, -Kt^-1 free, if it
@@ -308,14 +287,12 @@ Eigen::Vector2d coulomb_friction(const Eigen::Matrix2d& Q, const Eigen::Vector2d
   const Eigen::Vector2d lambda(-b[0] / (k[0] + a), -b[1] / (k[1] + a));
   return Q * (lambda * (limit / lambda.norm()));
 }
-constexpr int max_sweeps = contact_max_sweeps;
 
 }  // namespace
 
 ContactOutcome resolve(std::span<const ContactBody> bodies, std::span<const Contact> contacts, const ContactMaterial& material,
                        Eigen::Ref<Eigen::VectorXd> y, ContactMemory& memory) {
   ContactOutcome outcome;
-  outcome.contacts = static_cast<int>(contacts.size());
   if (contacts.empty()) {
     memory.impulses.clear();
     return outcome;
@@ -335,7 +312,7 @@ ContactOutcome resolve(std::span<const ContactBody> bodies, std::span<const Cont
     Eigen::Vector2d lambda_t = Eigen::Vector2d::Zero();
   };
   std::vector<Row> rows(n);
-  std::map<std::array<int, 2>, bool> impact_pairs;
+  std::set<std::array<int, 2>> impact_pairs;
   for (size_t i = 0; i < n; ++i) {
     const Contact& c = contacts[i];
     Row& r = rows[i];
@@ -350,7 +327,7 @@ ContactOutcome resolve(std::span<const ContactBody> bodies, std::span<const Cont
     const double approach = -c.normal.dot(motion.relative(c));
     const bool impact = approach > material.resting_speed;
     r.target = impact ? material.restitution * approach : 0;
-    if (impact) impact_pairs[{c.a, c.b}] = true;
+    if (impact) impact_pairs.insert({c.a, c.b});
   }
   outcome.impacts = static_cast<int>(impact_pairs.size());
   // warm start: a contact the last resolution had begins from its impulse there, inside this one's cone
@@ -365,7 +342,7 @@ ContactOutcome resolve(std::span<const ContactBody> bodies, std::span<const Cont
     if (const double limit = material.friction * r.lambda_n; r.lambda_t.norm() > limit) r.lambda_t *= limit / r.lambda_t.norm();
     motion.apply(c, r.lambda_n * c.normal + r.tangents * r.lambda_t);
   }
-  for (outcome.sweeps = 1; outcome.sweeps <= max_sweeps; ++outcome.sweeps) {
+  for (outcome.sweeps = 1; outcome.sweeps <= contact_max_sweeps; ++outcome.sweeps) {
     double change = 0;
     for (size_t i = 0; i < n; ++i) {
       const Contact& c = contacts[i];
@@ -385,15 +362,15 @@ ContactOutcome resolve(std::span<const ContactBody> bodies, std::span<const Cont
       motion.apply(c, jt);
       change = std::max(change, (r.K * jt).norm());
     }
-    if (change <= velocity_tolerance) break;
+    if (change <= contact_velocity_tolerance) break;
   }
-  outcome.sweeps = std::min(outcome.sweeps, max_sweeps);
+  outcome.sweeps = std::min(outcome.sweeps, contact_max_sweeps);
   if (motion.kinetic() > start.kinetic() * (1 + contact_energy_roundoff)) {
     // Gauss-Seidel with restitution and friction raised the energy: frictionless impulses, one contact at
     // a time, each of which cannot
     outcome.energy_guard = true;
     motion = start;
-    for (int sweep = 0; sweep < max_sweeps; ++sweep) {
+    for (int sweep = 0; sweep < contact_max_sweeps; ++sweep) {
       double change = 0;
       for (size_t i = 0; i < n; ++i) {
         const Contact& c = contacts[i];
@@ -403,7 +380,7 @@ ContactOutcome resolve(std::span<const ContactBody> bodies, std::span<const Cont
         motion.apply(c, -(1 + eps) * u_n / rows[i].normal_mass * c.normal);
         change = std::max(change, -(1 + eps) * u_n);
       }
-      if (change <= velocity_tolerance) break;
+      if (change <= contact_velocity_tolerance) break;
     }
   }
   motion.store(y);

@@ -90,6 +90,8 @@ Params resolve_params(const ModelInfo& model, const Params& values) {
       throw BadParameter(key, fmt::format("parameter '{}' must be non-negative, got {}", key, value));
     if (spec->bound == Bound::unit_interval && !(value >= 0 && value <= 1))
       throw BadParameter(key, fmt::format("parameter '{}' must lie in [0, 1], got {}", key, value));
+    if (spec->bound == Bound::flag && value != 0 && value != 1)
+      throw BadParameter(key, fmt::format("parameter '{}' must be 0 or 1, got {}", key, value));
     resolved[key] = value;
   }
   return resolved;

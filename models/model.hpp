@@ -18,7 +18,7 @@
 namespace stepwise {
 
 // what values a parameter may take
-enum class Bound { finite, positive, nonnegative, unit_interval };
+enum class Bound { finite, positive, nonnegative, unit_interval, flag };  // flag: 0 or 1
 
 struct ParamSpec {
   std::string_view key;

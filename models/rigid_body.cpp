@@ -48,8 +48,6 @@ const ParamSpec params[] = {
     {"density", 1000.0, "kg/m^3", "with a [mesh]: its uniform density, from which mass and I1-I3 follow (they may not be given then)", Bound::positive},
 };
 
-Eigen::Quaterniond orientation(const Eigen::VectorXd& y) { return Eigen::Quaterniond(y[6], y[7], y[8], y[9]).normalized(); }
-
 class RigidBody final : public Model {
  public:
   explicit RigidBody(const Params& p)
@@ -58,31 +56,27 @@ class RigidBody final : public Model {
     if (const int k = moment_beyond_the_others(inertia_); k >= 0)
       throw BadParameter(fmt::format("I{}", k + 1), fmt::format("principal moment I{} = {:g} exceeds the sum of the other two ({:g}): no body has "
                                                                 "these moments", k + 1, inertia_[k], inertia_.sum() - inertia_[k]));
-    const Eigen::Vector4d q(p.at("qw0"), p.at("qx0"), p.at("qy0"), p.at("qz0"));
-    if (!(q.norm() > 0)) throw BadParameter("qw0", "initial orientation quaternion (qw0, qx0, qy0, qz0) is zero");
+    const Eigen::Quaterniond q = initial_orientation(p);
     y0_.resize(13);
-    y0_ << p.at("x0"), p.at("y0"), p.at("z0"), p.at("vx0"), p.at("vy0"), p.at("vz0"), q.normalized(), p.at("wx0"), p.at("wy0"), p.at("wz0");
+    y0_ << p.at("x0"), p.at("y0"), p.at("z0"), p.at("vx0"), p.at("vy0"), p.at("vz0"), q.w(), q.x(), q.y(), q.z(), p.at("wx0"), p.at("wy0"),
+        p.at("wz0");
   }
 
   std::string_view name() const override { return "rigid-body"; }
   int size() const override { return 13; }
   bool autonomous() const override { return true; }
-  std::vector<std::string> state_names() const override {
-    return {"x", "y", "z", "vx", "vy", "vz", "qw", "qx", "qy", "qz", "wx", "wy", "wz"};
-  }
+  std::vector<std::string> state_names() const override { return rigid_body_state_names(1); }
   Eigen::VectorXd initial_state() const override { return y0_; }
 
   void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
-    const Eigen::Quaterniond q(y[6], y[7], y[8], y[9]);
-    const Eigen::Vector3d v = y.segment<3>(3), w = y.segment<3>(10);
+    const Eigen::Vector3d v = y.segment<3>(3);
     dydt.segment<3>(0) = v;
     dydt.segment<3>(3) = gravity_ - drag_ * v + force_ / mass_;
-    const Eigen::Quaterniond dq = q * Eigen::Quaterniond(0, w.x(), w.y(), w.z());
-    dydt.segment<4>(6) << dq.w() / 2, dq.x() / 2, dq.y() / 2, dq.z() / 2;
-    const Eigen::Vector3d momentum = inertia_.cwiseProduct(w);
-    Eigen::Vector3d torque = momentum.cross(w) - angular_drag_ * momentum;
-    if (!point_.isZero()) torque += point_.cross(q.normalized().conjugate() * force_);
-    dydt.segment<3>(10) = torque.cwiseQuotient(inertia_);
+    free_rotation_rates(inertia_, y, dydt);
+    // the torques beyond Euler's: angular damping, and the force at its point
+    Eigen::Vector3d torque = -angular_drag_ * inertia_.cwiseProduct(y.segment<3>(10));
+    if (!point_.isZero()) torque += point_.cross(Eigen::Quaterniond(y[6], y[7], y[8], y[9]).normalized().conjugate() * force_);
+    dydt.segment<3>(10) += torque.cwiseQuotient(inertia_);
   }
 
   bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
@@ -96,8 +90,7 @@ class RigidBody final : public Model {
   }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
-    const Eigen::Vector3d v = y.segment<3>(3), w = y.segment<3>(10);
-    return mass_ * v.squaredNorm() / 2 + w.dot(inertia_.cwiseProduct(w)) / 2 - mass_ * gravity_.dot(y.segment<3>(0));
+    return body_kinetic_energy(mass_, inertia_, y.segment<3>(3), y.segment<3>(10)) - mass_ * gravity_.dot(y.segment<3>(0));
   }
 
   std::vector<std::string> summary_names() const override {
@@ -107,8 +100,7 @@ class RigidBody final : public Model {
   }
   Eigen::VectorXd summary(const Eigen::VectorXd& y) const override {
     Eigen::VectorXd s(17);
-    const Eigen::Vector3d momentum = orientation(y) * inertia_.cwiseProduct(y.segment<3>(10));
-    s << y, *energy(y), momentum;
+    s << y, *energy(y), body_angular_momentum(inertia_, y);
     return s;
   }
 
@@ -131,6 +123,35 @@ double elliptic_f(double phi, double k, double K) {
 }  // namespace
 
 std::span<const ParamSpec> rigid_body_params() { return params; }
+
+Eigen::Quaterniond initial_orientation(const Params& p) {
+  const Eigen::Vector4d q(p.at("qw0"), p.at("qx0"), p.at("qy0"), p.at("qz0"));
+  if (!(q.norm() > 0)) throw BadParameter("qw0", "initial orientation quaternion (qw0, qx0, qy0, qz0) is zero");
+  return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized();
+}
+
+std::vector<std::string> rigid_body_state_names(int bodies) {
+  static const char* const names[] = {"x", "y", "z", "vx", "vy", "vz", "qw", "qx", "qy", "qz", "wx", "wy", "wz"};
+  std::vector<std::string> out;
+  for (int b = 0; b < bodies; ++b)
+    for (const char* n : names) out.push_back(bodies == 1 ? std::string(n) : fmt::format("{}[{}]", n, b));
+  return out;
+}
+
+double body_kinetic_energy(double mass, const Eigen::Vector3d& inertia, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
+  return mass * v.squaredNorm() / 2 + w.dot(inertia.cwiseProduct(w)) / 2;
+}
+
+Eigen::Vector3d body_angular_momentum(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y) {
+  return Eigen::Quaterniond(y[6], y[7], y[8], y[9]).normalized() * inertia.cwiseProduct(y.segment<3>(10));
+}
+
+void free_rotation_rates(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) {
+  const Eigen::Vector3d w = y.segment<3>(10);
+  const Eigen::Quaterniond dq = Eigen::Quaterniond(y[6], y[7], y[8], y[9]) * Eigen::Quaterniond(0, w.x(), w.y(), w.z());
+  dydt.segment<4>(6) << dq.w() / 2, dq.x() / 2, dq.y() / 2, dq.z() / 2;
+  dydt.segment<3>(10) = inertia.cwiseProduct(w).cross(w).cwiseQuotient(inertia);
+}
 std::unique_ptr<Model> make_rigid_body(const Params& p) { return std::make_unique<RigidBody>(p); }
 
 std::unique_ptr<Model> make_rigid_body(const Params& p, const TriangleMesh& mesh) {
@@ -148,9 +169,7 @@ std::unique_ptr<Model> make_rigid_body(const Params& p, const TriangleMesh& mesh
   }
   for (int k = 0; k < 3; ++k) with[fmt::format("I{}", k + 1)] = frame.moments[k];
   // the orientation given is the mesh's; the body's axes are its principal axes within it
-  const Eigen::Vector4d q(p.at("qw0"), p.at("qx0"), p.at("qy0"), p.at("qz0"));
-  if (!(q.norm() > 0)) throw BadParameter("qw0", "initial orientation quaternion (qw0, qx0, qy0, qz0) is zero");
-  const Eigen::Quaterniond body = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized() * Eigen::Quaterniond(frame.axes);
+  const Eigen::Quaterniond body = initial_orientation(p) * Eigen::Quaterniond(frame.axes);
   with["qw0"] = body.w();
   with["qx0"] = body.x();
   with["qy0"] = body.y();

@@ -28,9 +28,23 @@
 #include "model.hpp"
 #include "triangle_mesh.hpp"
 
+#include <Eigen/Geometry>
+
 namespace stepwise {
 
 std::span<const ParamSpec> rigid_body_params();
+
+// One body's 13-entry state (x, v, q, w; w in the principal frame), shared by the rigid-body models:
+// the scene's initial orientation (qw0, qx0, qy0, qz0) normalised, BadParameter("qw0") when all are zero
+Eigen::Quaterniond initial_orientation(const Params& params);
+// x, y, z, vx, ... wz for one body; x[i], ... wz[i] for several
+std::vector<std::string> rigid_body_state_names(int bodies);
+// m |v|^2 / 2 + w . I w / 2 (w in the principal frame)
+double body_kinetic_energy(double mass, const Eigen::Vector3d& inertia, const Eigen::Vector3d& v, const Eigen::Vector3d& w);
+// the world angular momentum about the centre of mass, R I w, of the body state y
+Eigen::Vector3d body_angular_momentum(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y);
+// dq/dt = q (x) (0, w) / 2 and the torque-free Euler equations I dw/dt = (I w) x w, into dydt's entries 6..12
+void free_rotation_rates(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt);
 std::unique_ptr<Model> make_rigid_body(const Params& params);
 // the body bounded by a closed mesh of uniform `density`: mass and principal moments from it (polyhedral
 // mass properties), the orientation given taken as the mesh's and turned onto its principal axes (w0 and

@@ -2,6 +2,7 @@
 
 #include "contact.hpp"
 #include "particle_common.hpp"
+#include "rigid_body.hpp"
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -13,54 +14,19 @@ namespace stepwise {
 
 namespace {
 
-const ParamSpec dropped_params[] = {
-    {"hx", 0.3, "m", "box half-extent along x (without a [mesh])", Bound::positive},
-    {"hy", 0.2, "m", "box half-extent along y", Bound::positive},
-    {"hz", 0.1, "m", "box half-extent along z", Bound::positive},
-    {"density", 500.0, "kg/m^3", "uniform density", Bound::positive},
-    {"x0", 0.0, "m", "initial centre of mass x"},
-    {"y0", 0.0, "m", "initial centre of mass y"},
-    {"z0", 1.5, "m", "initial centre of mass z (height)"},
-    {"vx0", 0.0, "m/s", "initial velocity x"},
-    {"vy0", 0.0, "m/s", "initial velocity y"},
-    {"vz0", 0.0, "m/s", "initial velocity z"},
-    {"qw0", 1.0, "", "initial orientation of the box or mesh as given, quaternion scalar part (normalised; not all four zero)"},
-    {"qx0", 0.0, "", "initial orientation quaternion, x"},
-    {"qy0", 0.0, "", "initial orientation quaternion, y"},
-    {"qz0", 0.0, "", "initial orientation quaternion, z"},
-    {"wx0", 0.0, "rad/s", "initial angular velocity, world x"},
-    {"wy0", 0.0, "rad/s", "initial angular velocity, world y"},
-    {"wz0", 0.0, "rad/s", "initial angular velocity, world z"},
-    {"g", 9.81, "m/s^2", "gravitational acceleration, along -z", Bound::nonnegative},
-    {"restitution", 0.4, "", "coefficient of restitution eps at impacts", Bound::unit_interval},
-    {"friction", 0.5, "", "Coulomb friction coefficient mu", Bound::nonnegative},
-    {"ground_slope", 0.0, "rad", "the ground turned about the y axis (|slope| < pi/2)"},
-    {"ground", 1.0, "", "1: the ground plane is there; 0: no ground (bodies meet only each other)", Bound::unit_interval},
-    {"push", 0.2, "", "fraction of a resting pair's penetration (beyond 0.1 mm) pushed out per step; positions only", Bound::unit_interval},
-    {"warm_start", 1.0, "", "1: Gauss-Seidel starts from the last step's impulses; 0: from zero", Bound::unit_interval},
-};
-
-const ParamSpec stack_params[] = {
-    {"rows", 5, "", "boxes in each column of the wall", Bound::positive},
-    {"columns", 3, "", "columns of the wall, side by side along y", Bound::positive},
-    {"hx", 0.2, "m", "box half-extent along x (the wall's thickness)", Bound::positive},
-    {"hy", 0.2, "m", "box half-extent along y", Bound::positive},
-    {"hz", 0.2, "m", "box half-extent along z", Bound::positive},
-    {"gap", 0.02, "m", "gap between columns", Bound::nonnegative},
-    {"density", 300.0, "kg/m^3", "boxes' density", Bound::positive},
-    {"projectile_radius", 0.15, "m", "projectile (an icosphere) radius", Bound::positive},
-    {"projectile_density", 3000.0, "kg/m^3", "projectile density", Bound::positive},
-    {"projectile_speed", 12.0, "m/s", "projectile's horizontal speed", Bound::positive},
-    {"projectile_distance", 3.0, "m", "how far from the wall (along -x) the projectile starts", Bound::positive},
-    {"projectile_height", 0.9, "m", "height at which the projectile's path meets the wall's plane", Bound::positive},
-    {"g", 9.81, "m/s^2", "gravitational acceleration, along -z", Bound::nonnegative},
-    {"restitution", 0.2, "", "coefficient of restitution eps at impacts", Bound::unit_interval},
-    {"friction", 0.6, "", "Coulomb friction coefficient mu", Bound::nonnegative},
-    {"ground_slope", 0.0, "rad", "the ground turned about the y axis (|slope| < pi/2)"},
-    {"ground", 1.0, "", "1: the ground plane is there; 0: no ground (bodies meet only each other)", Bound::unit_interval},
-    {"push", 0.2, "", "fraction of a resting pair's penetration (beyond 0.1 mm) pushed out per step; positions only", Bound::unit_interval},
-    {"warm_start", 1.0, "", "1: Gauss-Seidel starts from the last step's impulses; 0: from zero", Bound::unit_interval},
-};
+// a model's own parameters, then those of the contacts (their defaults per model), gravity and the ground
+std::vector<ParamSpec> with_contact_params(std::vector<ParamSpec> own, double restitution, double friction) {
+  own.insert(own.end(), {
+      {"g", 9.81, "m/s^2", "gravitational acceleration, along -z", Bound::nonnegative},
+      {"restitution", restitution, "", "coefficient of restitution eps at impacts", Bound::unit_interval},
+      {"friction", friction, "", "Coulomb friction coefficient mu", Bound::nonnegative},
+      {"ground_slope", 0.0, "rad", "the ground turned about the y axis (|slope| < pi/2)"},
+      {"ground", 1.0, "", "1: the ground plane is there; 0: no ground (bodies meet only each other)", Bound::flag},
+      {"push", 0.2, "", "fraction of a resting pair's penetration (beyond 0.1 mm) pushed out per step; positions only", Bound::unit_interval},
+      {"warm_start", 1.0, "", "1: Gauss-Seidel starts from the last step's impulses; 0: from zero", Bound::flag},
+  });
+  return own;
+}
 
 // one body's start: its shape and its 13-entry state
 struct Placed {
@@ -80,14 +46,7 @@ Placed place(const TriangleMesh& mesh, double density, const Eigen::Vector3d& x,
   return p;
 }
 
-Eigen::Quaterniond initial_orientation(const Params& p) {
-  const Eigen::Vector4d q(p.at("qw0"), p.at("qx0"), p.at("qy0"), p.at("qz0"));
-  if (!(q.norm() > 0)) throw BadParameter("qw0", "initial orientation quaternion (qw0, qx0, qy0, qz0) is zero");
-  return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized();
-}
-
 std::optional<Plane> ground(const Params& p) {
-  if (const double g = p.at("ground"); g != 0 && g != 1) throw BadParameter("ground", fmt::format("parameter 'ground' must be 0 or 1, got {}", g));
   if (p.at("ground") == 0) return std::nullopt;
   const double s = p.at("ground_slope");
   if (!(std::abs(s) < std::numbers::pi / 2))
@@ -102,8 +61,6 @@ class RigidContact final : public Model {
     material_.restitution = p.at("restitution");
     material_.friction = p.at("friction");
     material_.push = p.at("push");
-    if (const double w = p.at("warm_start"); w != 0 && w != 1)
-      throw BadParameter("warm_start", fmt::format("parameter 'warm_start' must be 0 or 1, got {}", w));
     warm_start_ = p.at("warm_start") == 1;
     y0_.resize(13 * static_cast<Eigen::Index>(placed.size()));
     for (size_t i = 0; i < placed.size(); ++i) {
@@ -115,25 +72,15 @@ class RigidContact final : public Model {
   std::string_view name() const override { return name_; }
   int size() const override { return static_cast<int>(y0_.size()); }
   bool autonomous() const override { return true; }
-  std::vector<std::string> state_names() const override {
-    static const char* const names[] = {"x", "y", "z", "vx", "vy", "vz", "qw", "qx", "qy", "qz", "wx", "wy", "wz"};
-    std::vector<std::string> out;
-    for (size_t b = 0; b < bodies_.size(); ++b)
-      for (const char* n : names) out.push_back(bodies_.size() == 1 ? std::string(n) : fmt::format("{}[{}]", n, b));
-    return out;
-  }
+  std::vector<std::string> state_names() const override { return rigid_body_state_names(static_cast<int>(bodies_.size())); }
   Eigen::VectorXd initial_state() const override { return y0_; }
 
   void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     for (size_t b = 0; b < bodies_.size(); ++b) {
       const Eigen::Index o = 13 * static_cast<Eigen::Index>(b);
-      const Eigen::Quaterniond q(y[o + 6], y[o + 7], y[o + 8], y[o + 9]);
-      const Eigen::Vector3d w = y.segment<3>(o + 10), I = bodies_[b].inertia;
       dydt.segment<3>(o) = y.segment<3>(o + 3);
       dydt.segment<3>(o + 3) = Eigen::Vector3d(0, 0, -g_);
-      const Eigen::Quaterniond dq = q * Eigen::Quaterniond(0, w.x(), w.y(), w.z());
-      dydt.segment<4>(o + 6) << dq.w() / 2, dq.x() / 2, dq.y() / 2, dq.z() / 2;
-      dydt.segment<3>(o + 10) = I.cwiseProduct(w).cross(w).cwiseQuotient(I);
+      free_rotation_rates(bodies_[b].inertia, y.segment<13>(o), dydt.segment<13>(o));
     }
   }
 
@@ -168,10 +115,9 @@ class RigidContact final : public Model {
     Eigen::Vector3d momentum = Eigen::Vector3d::Zero(), angular = Eigen::Vector3d::Zero();
     for (size_t b = 0; b < bodies_.size(); ++b) {
       const Eigen::Index o = 13 * static_cast<Eigen::Index>(b);
-      const double m = bodies_[b].mass;
-      const Eigen::Quaterniond q = Eigen::Quaterniond(y[o + 6], y[o + 7], y[o + 8], y[o + 9]).normalized();
-      momentum += m * y.segment<3>(o + 3);
-      angular += y.segment<3>(o).cross(m * y.segment<3>(o + 3)) + q * bodies_[b].inertia.cwiseProduct(y.segment<3>(o + 10));
+      const Eigen::Vector3d p = bodies_[b].mass * y.segment<3>(o + 3);
+      momentum += p;
+      angular += y.segment<3>(o).cross(p) + body_angular_momentum(bodies_[b].inertia, y.segment<13>(o));
     }
     Eigen::VectorXd s(y.size() + 8);
     s << y, *energy(y), kinetic_energy(bodies_, y), momentum, angular;
@@ -190,8 +136,52 @@ class RigidContact final : public Model {
 
 }  // namespace
 
-std::span<const ParamSpec> dropped_body_params() { return dropped_params; }
-std::span<const ParamSpec> box_stack_params() { return stack_params; }
+// function-local: the model table, built at static initialisation in another file, asks for them
+std::span<const ParamSpec> dropped_body_params() {
+  // defaults: the tumbling-box scene's drop, turned 45 degrees about x so that an edge lands first
+  static const std::vector<ParamSpec> params = with_contact_params(
+      {
+          {"hx", 0.3, "m", "box half-extent along x (without a [mesh])", Bound::positive},
+          {"hy", 0.2, "m", "box half-extent along y", Bound::positive},
+          {"hz", 0.1, "m", "box half-extent along z", Bound::positive},
+          {"density", 500.0, "kg/m^3", "uniform density", Bound::positive},
+          {"x0", 0.0, "m", "initial centre of mass x"},
+          {"y0", 0.0, "m", "initial centre of mass y"},
+          {"z0", 1.5, "m", "initial centre of mass z (height)"},
+          {"vx0", 0.5, "m/s", "initial velocity x"},
+          {"vy0", 0.0, "m/s", "initial velocity y"},
+          {"vz0", 0.0, "m/s", "initial velocity z"},
+          {"qw0", 0.9238795325112867, "", "initial orientation of the box or mesh as given, quaternion scalar part (normalised; not all four zero)"},
+          {"qx0", 0.3826834323650898, "", "initial orientation quaternion, x"},
+          {"qy0", 0.0, "", "initial orientation quaternion, y"},
+          {"qz0", 0.0, "", "initial orientation quaternion, z"},
+          {"wx0", 1.0, "rad/s", "initial angular velocity, world x"},
+          {"wy0", 4.0, "rad/s", "initial angular velocity, world y"},
+          {"wz0", 2.0, "rad/s", "initial angular velocity, world z"},
+      },
+      0.4, 0.5);
+  return params;
+}
+
+std::span<const ParamSpec> box_stack_params() {
+  static const std::vector<ParamSpec> params = with_contact_params(
+      {
+          {"rows", 5, "", "boxes in each column of the wall", Bound::positive},
+          {"columns", 3, "", "columns of the wall, side by side along y", Bound::positive},
+          {"hx", 0.2, "m", "box half-extent along x (the wall's thickness)", Bound::positive},
+          {"hy", 0.2, "m", "box half-extent along y", Bound::positive},
+          {"hz", 0.2, "m", "box half-extent along z", Bound::positive},
+          {"gap", 0.02, "m", "gap between columns", Bound::nonnegative},
+          {"density", 300.0, "kg/m^3", "boxes' density", Bound::positive},
+          {"projectile_radius", 0.15, "m", "projectile (an icosphere) radius", Bound::positive},
+          {"projectile_density", 3000.0, "kg/m^3", "projectile density", Bound::positive},
+          {"projectile_speed", 12.0, "m/s", "projectile's horizontal speed", Bound::positive},
+          {"projectile_distance", 3.0, "m", "how far from the wall (along -x) the projectile starts", Bound::positive},
+          {"projectile_height", 0.9, "m", "height at which the projectile's path meets the wall's plane", Bound::positive},
+      },
+      0.2, 0.6);
+  return params;
+}
 
 std::unique_ptr<Model> make_dropped_body(const Params& p, const TriangleMesh* mesh) {
   const TriangleMesh shape = mesh ? *mesh : box_mesh(Eigen::Vector3d(p.at("hx"), p.at("hy"), p.at("hz")));

@@ -4,21 +4,22 @@ namespace stepwise {
 
 namespace {
 
-struct SpringState {
-  Eigen::Vector3d r, w;  // x_b - x_a, v_b - v_a
-};
+// x_b - x_a (the anchor for a pinned spring)
+Eigen::Vector3d span_of(const Spring& s, const double* x) {
+  return Eigen::Map<const Eigen::Vector3d>(x + 3 * s.b) - (s.a < 0 ? s.anchor : Eigen::Vector3d(Eigen::Map<const Eigen::Vector3d>(x + 3 * s.a)));
+}
 
-SpringState state(const Spring& s, const double* x, const double* v) {
-  const Eigen::Map<const Eigen::Vector3d> xb(x + 3 * s.b), vb(v + 3 * s.b);
-  if (s.a < 0) return {xb - s.anchor, vb};
-  return {xb - Eigen::Map<const Eigen::Vector3d>(x + 3 * s.a), vb - Eigen::Map<const Eigen::Vector3d>(v + 3 * s.a)};
+// v_b - v_a (an anchor does not move)
+Eigen::Vector3d closing_of(const Spring& s, const double* v) {
+  const Eigen::Map<const Eigen::Vector3d> vb(v + 3 * s.b);
+  return s.a < 0 ? Eigen::Vector3d(vb) : Eigen::Vector3d(vb - Eigen::Map<const Eigen::Vector3d>(v + 3 * s.a));
 }
 
 }  // namespace
 
 void add_spring_forces(std::span<const Spring> springs, const double* x, const double* v, double* f) {
   for (const Spring& s : springs) {
-    const auto [r, w] = state(s, x, v);
+    const Eigen::Vector3d r = span_of(s, x), w = closing_of(s, v);
     const double length = r.norm();
     const Eigen::Vector3d u = r / length;
     const Eigen::Vector3d force = (s.stiffness * (length - s.rest) + s.damping * u.dot(w)) * u;
@@ -30,7 +31,7 @@ void add_spring_forces(std::span<const Spring> springs, const double* x, const d
 double spring_energy(std::span<const Spring> springs, const double* x) {
   double e = 0;
   for (const Spring& s : springs) {
-    const double stretch = state(s, x, x).r.norm() - s.rest;
+    const double stretch = span_of(s, x).norm() - s.rest;
     e += s.stiffness * stretch * stretch / 2;
   }
   return e;
@@ -39,7 +40,7 @@ double spring_energy(std::span<const Spring> springs, const double* x) {
 void add_spring_jacobian(std::span<const Spring> springs, const double* x, const double* v, double scale, Eigen::Index row0,
                          Eigen::Index x0, Eigen::Index v0, std::vector<Eigen::Triplet<double>>& out) {
   for (const Spring& s : springs) {
-    const auto [r, w] = state(s, x, v);
+    const Eigen::Vector3d r = span_of(s, x), w = closing_of(s, v);
     const double length = r.norm();
     const Eigen::Vector3d u = r / length;
     const Eigen::Matrix3d uu = u * u.transpose(), across = Eigen::Matrix3d::Identity() - uu;

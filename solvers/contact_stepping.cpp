@@ -30,7 +30,9 @@ class ContactStepping final : public FixedStepper {
       y_next.segment<3>(o + 3) += h * f_.segment<3>(o + 3);
       y_next.segment<3>(o + 10) += h * f_.segment<3>(o + 10);
     }
-    impacts_ += system_.resolve_contacts(y_next, h, memory_).impacts;
+    const ContactOutcome outcome = system_.resolve_contacts(y_next, h, memory_);
+    impacts_ += outcome.impacts;
+    system_.stats().contact_sweeps += outcome.sweeps;
     for (int b = 0; b < bodies_; ++b) {
       const int o = 13 * b;
       y_next.segment<3>(o) += h * y_next.segment<3>(o + 3);

@@ -23,23 +23,27 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
   // y is the state at t, y_next the step's end: the two swap after each step, so the step's start is kept
   // (for events and for the last finite state of a diverging run) without copying the state
   Eigen::VectorXd y = y0, y_next(y0.size());
-  double t = t0;
+  double t = t0, h = dt;
   std::string failure;
   const auto events = system.events();
   std::vector<std::string> handled;
   Eigen::VectorXd g_start = event_values(events, t, y);
+  // re-steps from the step's start to a fraction of it, for locating an event
+  const Restep restep = [&](double s, Eigen::VectorXd& ys) {
+    stepper->reset();
+    return stepper->step(t, s * h, y, ys, failure);
+  };
   for (const double target : t_out) {
     while (t < target) {
       double t_next = (target - (t + dt) <= snap) ? target : t + dt;
-      const double h = t_next - t;
+      h = t_next - t;
       if (!stepper->step(t, h, y, y_next, failure)) {
         mark_failed(result, t, failure);
         break;
       }
       ++result.stats.steps;
       stepper->take_events(handled);
-      for (auto& kind : handled) result.events.push_back(EventRecord{t_next, std::move(kind), EventRecord::by_method});
-      result.stats.events += static_cast<long>(handled.size());
+      for (auto& kind : handled) record_event(result, t_next, std::move(kind), EventRecord::by_method);
       // back onto the manifold; a multistep history is kept (the correction is of the order of the local
       // error: restarting would drop GSL's multistep methods to order 1 for good, measured)
       counted.project(y_next);
@@ -49,10 +53,6 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
         break;
       }
       // an event inside the step: move to it, apply its handler, and go on from there afresh
-      const Restep restep = [&](double s, Eigen::VectorXd& ys) {
-        stepper->reset();
-        return stepper->step(t, s * h, y, ys, failure);
-      };
       if (const auto t_event = settle_step_events(events, g_start, t, h, y, y_next, control_.event_location, restep, result)) {
         stepper->reset();
         t_next = *t_event;

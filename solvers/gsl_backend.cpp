@@ -161,10 +161,17 @@ class GslAdaptiveIntegrator final : public Integrator {
     double t = t0;
     const auto events = system.events();
     Eigen::VectorXd g_start = event_values(events, t, y);
+    double t_start = t, taken = 0;
+    // re-steps from the step's start to a fraction of it, for locating an event
+    const Restep restep = [&](double s, Eigen::VectorXd& ys) {
+      gsl_odeiv2_step_reset(d->s);
+      ys = y_start;
+      return gsl_odeiv2_step_apply(d->s, t_start, s * taken, ys.data(), session.yerr(), nullptr, nullptr, session.sys()) == GSL_SUCCESS;
+    };
     for (const double target : t_out) {
       while (t < target) {
         y_start = y;
-        const double t_start = t;
+        t_start = t;
         if (result.stats.steps >= control_.max_steps) {
           mark_failed(result, t, fmt::format("{}: more than {} steps before t = {:.9g}", method_, control_.max_steps, target));
           break;
@@ -188,13 +195,7 @@ class GslAdaptiveIntegrator final : public Integrator {
         }
         h = std::min(h, max_step);
         // an event inside the accepted step: locate it, apply its handler, restart the stepper there
-        const double taken = t - t_start;
-        const Restep restep = [&](double s, Eigen::VectorXd& ys) {
-          gsl_odeiv2_step_reset(d->s);
-          ys = y_start;
-          return gsl_odeiv2_step_apply(d->s, t_start, s * taken, ys.data(), session.yerr(), nullptr, nullptr,
-                                       session.sys()) == GSL_SUCCESS;
-        };
+        taken = t - t_start;
         if (const auto t_event = settle_step_events(events, g_start, t_start, taken, y_start, y, control_.event_location, restep, result)) {
           t = *t_event;
           gsl_odeiv2_evolve_reset(d->e);

@@ -50,7 +50,6 @@ struct ContactBodiesView {
 
 // what one resolution of contacts found and did
 struct ContactOutcome {
-  int contacts = 0;                // contact points found
   int impacts = 0;                 // pairs of bodies (or body and ground) meeting faster than a resting approach
   int sweeps = 0;                  // Gauss-Seidel sweeps over the contacts
   bool energy_guard = false;       // the frictional impulses would have raised the kinetic energy (measured):

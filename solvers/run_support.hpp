@@ -103,12 +103,17 @@ inline RunResult begin_run(double t0, const Eigen::VectorXd& y0) {
   return result;
 }
 
+// something happened at t (kind, as summary.json writes it) through event `index` of the system, or
+// EventRecord::by_method: it joins the run's events and their count
+inline void record_event(RunResult& result, double t, std::string kind, size_t index) {
+  result.events.push_back({t, std::move(kind), index});
+  ++result.stats.events;
+}
+
 // an event handled at t: the state is changed by its handler and the event is recorded
 inline void handle_event(RunResult& result, std::span<const Event> events, size_t index, double t, Eigen::VectorXd& y) {
   std::string kind = events[index].apply(t, y);
-  if (kind.empty()) return;
-  result.events.push_back({t, std::move(kind), index});
-  ++result.stats.events;
+  if (!kind.empty()) record_event(result, t, std::move(kind), index);
 }
 
 // the state at an output time joins the trajectory (through the control's observer, if it has one)

@@ -8,10 +8,10 @@
 namespace stepwise {
 
 Params box_on_slope(double slope, double friction) {
-  const double hz = 0.1;
+  const double hz = resolve_params(*find_model("dropped-body"), {}).at("hz");  // the default box's, resting on its largest face
   return {{"ground_slope", slope}, {"qw0", std::cos(slope / 2)}, {"qx0", 0}, {"qy0", std::sin(slope / 2)}, {"qz0", 0},
           {"x0", hz * std::sin(slope)}, {"y0", 0}, {"z0", hz * std::cos(slope)}, {"vx0", 0}, {"vy0", 0}, {"vz0", 0},
-          {"wx0", 0}, {"wy0", 0}, {"wz0", 0}, {"friction", friction}, {"restitution", 0.4}};
+          {"wx0", 0}, {"wy0", 0}, {"wz0", 0}, {"friction", friction}};
 }
 
 SlopeMotion slope_motion(const RunResult& run, double slope, double settled_at) {

@@ -8,7 +8,7 @@
 namespace stepwise {
 
 // dropped-body parameters: the default box (half-extents 0.3, 0.2, 0.1 m) released at rest, its largest
-// face touching a ground of slope s (rad, about y), with Coulomb friction mu and restitution 0.4
+// face touching a ground of slope s (rad, about y), with Coulomb friction mu
 Params box_on_slope(double slope, double friction);
 
 struct SlopeMotion {

@@ -202,6 +202,10 @@ inline constexpr double falling_body = 1e-10;
 inline constexpr double projection_step_ratio = 1.5;
 
 // Contacts (models/contact.hpp).
+// contact geometry of bodies ~0.5 m across: depths, points and normals through a rotation and a plane
+// distance or an overlap along an axis, each a few ulps of the coordinates (~1e-16 m): 1e-12 m or
+// 1e-12 of a unit normal leaves a factor 1000
+inline constexpr double contact_geometry_roundoff = 1e-12;
 // A body released touching the ground falls one step of gravity, g dt^2, before its contacts (found at the
 // step's start, penetration strictly positive) hold it: that much settling, and 1e-6 of it for round-off
 inline constexpr double resting_settle(double g, double dt) { return g * dt * dt * (1 + 1e-6); }
@@ -234,6 +238,9 @@ inline double chain_settled(double t, double start_offset, int nodes, double mas
 // 1e-6 ~ 2e-8 absolute, ~1e-11 of |J| ~ 1e3: 1e-9 relative to 1 + |J| holds it with a factor 100
 inline constexpr double richardson_step = 1e-6;
 inline constexpr double jacobian_richardson = 1e-9;
+// a position or velocity that should vanish, computed from O(1) quantities over a run of ~1e4 steps:
+// round-off accumulated as a random walk of ulps, ~1e-14; 1e-12 leaves a factor 100
+inline constexpr double accumulated_roundoff = 1e-12;
 // internal spring forces are equal and opposite along the spring: their sum and their moment vanish to the
 // rounding of the sums, a few ulps of the largest force per spring
 inline constexpr double spring_momentum_roundoff = 1e-13;

@@ -76,7 +76,7 @@ TEST(HangingChain, SettlesIntoItsExactStaticEquilibrium) {
   const std::vector<double> equilibrium = chain_equilibrium(nodes, mass, stiffness, rest, g);
   // it starts at rest length: the bottom node is m g N (N + 1) / (2 c) above its equilibrium
   const double offset = mass * g * nodes * (nodes + 1) / (2 * stiffness);
-  EXPECT_NEAR(model->initial_state()[3 * (nodes - 1) + 1] - equilibrium.back(), offset, 1e-15);
+  EXPECT_NEAR(model->initial_state()[3 * (nodes - 1) + 1] - equilibrium.back(), offset, tolerance::accumulated_roundoff);
   const double rtol = 1e-8;
   for (const auto& [method, control, own_error] :
        {std::tuple{"implicit-euler", StepControl::fixed(1e-2), 0.0}, std::tuple{"cvode-bdf", StepControl::adaptive(rtol, rtol * 1e-2), 10 * rtol * 2.0}}) {
@@ -84,8 +84,10 @@ TEST(HangingChain, SettlesIntoItsExactStaticEquilibrium) {
     ASSERT_EQ(m.result.status, Status::ok) << method << m.result.message;
     double worst = 0;
     for (int k = 0; k < nodes; ++k) worst = std::max(worst, std::abs(m.result.y_stop[3 * k + 1] - equilibrium[static_cast<size_t>(k)]));
-    EXPECT_LT(worst, tolerance::chain_settled(t_end, offset, nodes, mass, stiffness, damping) + own_error + 1e-12) << method;
-    EXPECT_LT(m.result.y_stop.tail(3 * nodes).lpNorm<Eigen::Infinity>(), 1e-6) << method << ": at rest";
+    const double left = tolerance::chain_settled(t_end, offset, nodes, mass, stiffness, damping) + own_error + tolerance::accumulated_roundoff;
+    EXPECT_LT(worst, left) << method;
+    // and at rest: no mode moves faster than the highest frequency, 2 sqrt(c/m), times what is left of it
+    EXPECT_LT(m.result.y_stop.tail(3 * nodes).lpNorm<Eigen::Infinity>(), 2 * std::sqrt(stiffness / mass) * left) << method;
     std::cout << method << ": largest height error " << worst << " m after " << t_end << " s (" << m.result.stats.steps << " steps)\n";
   }
 }
