@@ -19,11 +19,22 @@ const ParamSpec params[] = {
     {"g", 9.81, "m/s^2", "gravitational acceleration, along -y", Bound::nonnegative},
 };
 
+// node k hangs from node k - 1, node 0 from the pin at the origin
+std::vector<Spring> chain_springs(int nodes, const Params& p) {
+  std::vector<Spring> springs;
+  for (int k = 0; k < nodes; ++k) springs.push_back(Spring{k - 1, k, p.at("rest_length"), p.at("stiffness"), p.at("damping")});
+  return springs;
+}
+
 class HangingChain final : public Model {
  public:
   explicit HangingChain(const Params& p)
-      : n_(particle_count(p, "nodes", 1024, "nodes")), mass_(p.at("mass")), drag_(p.at("drag")), g_(p.at("g")) {
-    for (int k = 0; k < n_; ++k) springs_.push_back(Spring{k - 1, k, p.at("rest_length"), p.at("stiffness"), p.at("damping")});
+      : n_(particle_count(p, "nodes", 1024, "nodes")),
+        mass_(p.at("mass")),
+        drag_(p.at("drag")),
+        g_(p.at("g")),
+        view_{n_, std::vector<double>(n_, mass_), chain_springs(n_, p)},
+        pattern_(n_, spring_pairs(view_.springs)) {
     y0_ = Eigen::VectorXd::Zero(6 * n_);
     for (int k = 0; k < n_; ++k) y0_[3 * k + 1] = -(k + 1) * p.at("rest_length");
   }
@@ -47,27 +58,30 @@ class HangingChain final : public Model {
   }
   void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
     a.setZero();
-    add_spring_forces(springs_, y.data(), y.data() + 3 * n_, a.data());
+    add_spring_forces(view_.springs, y.data(), y.data() + 3 * n_, a.data());
     a /= mass_;
     a -= drag_ * y.tail(3 * n_);
     for (int k = 0; k < n_; ++k) a[3 * k + 1] -= g_;
   }
 
   bool has_sparse_jacobian() const override { return true; }
-  void sparse_jacobian(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const override {
-    const Eigen::Index m = 3 * n_;
-    std::vector<Eigen::Triplet<double>> entries;
-    for (Eigen::Index j = 0; j < m; ++j) {
-      entries.emplace_back(j, m + j, 1.0);
-      entries.emplace_back(m + j, m + j, -drag_);
-    }
-    add_spring_jacobian(springs_, y.data(), y.data() + m, 1 / mass_, m, 0, m, entries);
-    dfdy.resize(size(), size());
-    dfdy.setFromTriplets(entries.begin(), entries.end());  // duplicates summed
+  void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const override {
+    Eigen::SparseMatrix<double> dfdx, dfdv;
+    force_jacobians(t, y, false, dfdx, dfdv);
+    mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
+  }
+
+  const MassSpringView* mass_spring() const override { return &view_; }
+  void force_jacobians(double, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                       Eigen::SparseMatrix<double>& dfdv) const override {
+    dfdx = pattern_.zero_matrix();
+    dfdv = pattern_.zero_matrix();
+    for (int k = 0; k < n_; ++k) pattern_.add(dfdv, k, k, -mass_ * drag_ * Eigen::Matrix3d::Identity());
+    add_spring_force_jacobians(view_.springs, y.data(), y.data() + 3 * n_, definite, pattern_, dfdx, dfdv);
   }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
-    double e = mass_ * y.tail(3 * n_).squaredNorm() / 2 + spring_energy(springs_, y.data());
+    double e = mass_ * y.tail(3 * n_).squaredNorm() / 2 + spring_energy(view_.springs, y.data());
     for (int k = 0; k < n_; ++k) e += mass_ * g_ * y[3 * k + 1];
     return e;
   }
@@ -86,7 +100,8 @@ class HangingChain final : public Model {
  private:
   int n_;
   double mass_, drag_, g_;
-  std::vector<Spring> springs_;
+  MassSpringView view_;
+  BlockPattern pattern_;
   Eigen::VectorXd y0_;
 };
 

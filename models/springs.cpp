@@ -1,5 +1,8 @@
 #include "springs.hpp"
 
+#include <algorithm>
+#include <stdexcept>
+
 namespace stepwise {
 
 namespace {
@@ -37,30 +40,101 @@ double spring_energy(std::span<const Spring> springs, const double* x) {
   return e;
 }
 
-void add_spring_jacobian(std::span<const Spring> springs, const double* x, const double* v, double scale, Eigen::Index row0,
-                         Eigen::Index x0, Eigen::Index v0, std::vector<Eigen::Triplet<double>>& out) {
+BlockPattern::BlockPattern(int nodes, std::span<const std::pair<int, int>> pairs) : nodes_(nodes) {
+  std::vector<std::vector<int>> columns(nodes);
+  for (int j = 0; j < nodes; ++j) columns[j].push_back(j);
+  for (const auto& [i, j] : pairs) {
+    if (i < 0 || j < 0 || i >= nodes || j >= nodes) throw std::out_of_range("BlockPattern: node pair outside the network");
+    columns[j].push_back(i);
+    columns[i].push_back(j);
+  }
+  column_start_.push_back(0);
+  for (auto& column : columns) {
+    std::sort(column.begin(), column.end());
+    column.erase(std::unique(column.begin(), column.end()), column.end());
+    rows_.insert(rows_.end(), column.begin(), column.end());
+    column_start_.push_back(static_cast<int>(rows_.size()));
+  }
+}
+
+Eigen::SparseMatrix<double> BlockPattern::zero_matrix() const {
+  const Eigen::Index n = 3 * Eigen::Index{nodes_};
+  Eigen::SparseMatrix<double> m(n, n);
+  m.resizeNonZeros(9 * static_cast<Eigen::Index>(rows_.size()));
+  Eigen::Index k = 0;
+  for (int j = 0; j < nodes_; ++j)
+    for (int c = 0; c < 3; ++c) {
+      m.outerIndexPtr()[3 * j + c] = static_cast<int>(k);
+      for (int b = column_start_[j]; b < column_start_[j + 1]; ++b)
+        for (int r = 0; r < 3; ++r, ++k) {
+          m.innerIndexPtr()[k] = 3 * rows_[b] + r;
+          m.valuePtr()[k] = 0;
+        }
+    }
+  m.outerIndexPtr()[n] = static_cast<int>(k);
+  return m;
+}
+
+void BlockPattern::add(Eigen::SparseMatrix<double>& m, int i, int j, const Eigen::Matrix3d& b) const {
+  const auto first = rows_.begin() + column_start_[j], last = rows_.begin() + column_start_[j + 1];
+  const auto found = std::lower_bound(first, last, i);
+  if (found == last || *found != i) throw std::out_of_range("BlockPattern::add: block outside the pattern");
+  const Eigen::Index blocks = last - first, rank = found - first;
+  double* column = m.valuePtr() + 9 * Eigen::Index{column_start_[j]};
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) column[3 * blocks * c + 3 * rank + r] += b(r, c);
+}
+
+std::vector<std::pair<int, int>> spring_pairs(std::span<const Spring> springs) {
+  std::vector<std::pair<int, int>> pairs;
+  for (const Spring& s : springs)
+    if (s.a >= 0) pairs.emplace_back(s.a, s.b);
+  return pairs;
+}
+
+void add_spring_force_jacobians(std::span<const Spring> springs, const double* x, const double* v, bool definite,
+                                const BlockPattern& pattern, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv) {
   for (const Spring& s : springs) {
-    const Eigen::Vector3d r = span_of(s, x), w = closing_of(s, v);
+    const Eigen::Vector3d r = span_of(s, x);
     const double length = r.norm();
     const Eigen::Vector3d u = r / length;
     const Eigen::Matrix3d uu = u * u.transpose(), across = Eigen::Matrix3d::Identity() - uu;
-    const double tension = s.stiffness * (length - s.rest) + s.damping * u.dot(w);
-    const Eigen::Matrix3d dr = s.stiffness * uu + tension / length * across + s.damping / length * u * (across * w).transpose();
+    Eigen::Matrix3d dr;
+    if (definite) {
+      dr = s.stiffness * uu + s.stiffness * std::max(0.0, 1 - s.rest / length) * across;
+    } else {
+      const Eigen::Vector3d w = closing_of(s, v);
+      const double tension = s.stiffness * (length - s.rest) + s.damping * u.dot(w);
+      dr = s.stiffness * uu + tension / length * across + s.damping / length * u * (across * w).transpose();
+    }
     const Eigen::Matrix3d dw = s.damping * uu;
     // F acts on a (+) and b (-); it depends on r and w through x_b, v_b (+) and x_a, v_a (-)
-    const auto block = [&](int node, int by, double sign) {
-      if (node < 0 || by < 0) return;
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-          out.emplace_back(row0 + 3 * node + i, x0 + 3 * by + j, sign * scale * dr(i, j));
-          out.emplace_back(row0 + 3 * node + i, v0 + 3 * by + j, sign * scale * dw(i, j));
-        }
-    };
-    block(s.a, s.b, 1);
-    block(s.a, s.a, -1);
-    block(s.b, s.b, -1);
-    block(s.b, s.a, 1);
+    pattern.add(dfdx, s.b, s.b, -dr);
+    pattern.add(dfdv, s.b, s.b, -dw);
+    if (s.a < 0) continue;
+    pattern.add(dfdx, s.a, s.a, -dr);
+    pattern.add(dfdv, s.a, s.a, -dw);
+    pattern.add(dfdx, s.a, s.b, dr);
+    pattern.add(dfdv, s.a, s.b, dw);
+    pattern.add(dfdx, s.b, s.a, dr);
+    pattern.add(dfdv, s.b, s.a, dw);
   }
+}
+
+void mass_spring_jacobian(const Eigen::SparseMatrix<double>& dfdx, const Eigen::SparseMatrix<double>& dfdv, std::span<const double> mass,
+                          Eigen::SparseMatrix<double>& dfdy) {
+  const Eigen::Index m = dfdx.rows();
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<size_t>(m + dfdx.nonZeros() + dfdv.nonZeros()));
+  for (Eigen::Index j = 0; j < m; ++j) entries.emplace_back(j, m + j, 1.0);
+  for (int part = 0; part < 2; ++part) {
+    const Eigen::SparseMatrix<double>& block = part == 0 ? dfdx : dfdv;
+    for (Eigen::Index j = 0; j < m; ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(block, j); it; ++it)
+        entries.emplace_back(m + it.row(), part * m + j, it.value() / mass[it.row() / 3]);
+  }
+  dfdy.resize(2 * m, 2 * m);
+  dfdy.setFromTriplets(entries.begin(), entries.end());
 }
 
 }  // namespace stepwise

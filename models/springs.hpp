@@ -1,29 +1,30 @@
 // Springs of a mass-spring system (seeds: Hooke's law with Voigt damping): between nodes a and b, with
 // r = x_b - x_a, L = |r|, u = r / L, elongation e = L - l and its rate de/dt = u . (v_b - v_a), the force
 //   F = (c e + gamma de/dt) u  on a,  -F on b.
-// Its exact derivatives, for a Jacobian (w = v_b - v_a):
+// Its exact derivatives (w = v_b - v_a):
 //   dF/dr = c u u^T + (c e + gamma de/dt) / L (1 - u u^T) + gamma / L u w^T (1 - u u^T),   dF/dw = gamma u u^T,
-// with dF/dx_a = -dF/dr, dF/dx_b = dF/dr (and the same for v). A compressed spring (e < 0) makes the middle
-// term indefinite; these are the exact derivatives, which CVODE's Newton iteration wants (a symmetric
-// definite approximation for a Cholesky solve is the cloth's business).
-// A spring may hang from a fixed anchor instead of a node (a = -1): a pin.
+// with dF/dx_a = -dF/dr, dF/dx_b = dF/dr (and the same for v). These are what CVODE's Newton iteration wants.
+//
+// A Cholesky solve needs M - h D - h^2 K symmetric positive definite, and the exact dF/dr is neither
+// symmetric (the damping's last term) nor, for a compressed spring (e < 0, so the middle term's
+// coefficient is negative), semidefinite. The definite approximation drops the damping's derivatives by
+// position (Baraff & Witkin 1998, section 5.2: they are not symmetric, and leaving them out only weakens
+// the damping's implicitness) and clamps the transverse stiffness to c max(0, 1 - l / L) (Choi & Ko 2002,
+// "Stable but responsive cloth", section 4: a compressed spring's transverse term is what makes the
+// matrix indefinite, and dropping it is what keeps the implicit step stable through buckling):
+//   dF/dr ~ c u u^T + c max(0, 1 - l / L) (1 - u u^T),   symmetric positive semidefinite.
 #pragma once
+
+#include "solvers/ode_system.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace stepwise {
-
-struct Spring {
-  int a = -1, b = 0;                                 // node indices; a = -1: the fixed point `anchor`
-  double rest = 1;                                   // l (m)
-  double stiffness = 0;                              // c (N/m)
-  double damping = 0;                                // gamma (N s/m)
-  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // where a pinned spring hangs from (m)
-};
 
 // f[3i..3i+3) += the springs' forces on node i; x, v, f hold 3 entries per node
 void add_spring_forces(std::span<const Spring> springs, const double* x, const double* v, double* f);
@@ -31,9 +32,35 @@ void add_spring_forces(std::span<const Spring> springs, const double* x, const d
 // the springs' potential energy, sum c e^2 / 2
 double spring_energy(std::span<const Spring> springs, const double* x);
 
-// triplets of scale * dF/dx at (row0 + 3i, x0 + 3j) and scale * dF/dv at (row0 + 3i, v0 + 3j), node forces
-// by node positions and velocities: the acceleration rows of y' = (v, f / m) with scale = 1 / m
-void add_spring_jacobian(std::span<const Spring> springs, const double* x, const double* v, double scale, Eigen::Index row0,
-                         Eigen::Index x0, Eigen::Index v0, std::vector<Eigen::Triplet<double>>& out);
+// the fixed sparsity of a network's 3n x 3n force Jacobians: a 3 x 3 block on the diagonal of every node
+// and at (i, j) and (j, i) for every pair of nodes a force couples (a spring's ends, a triangle's corners).
+// Blocks are added straight into the matrix's values, so a Jacobian is refilled every step without
+// triplets or a change of pattern (what a Cholesky factor analysed once relies on)
+class BlockPattern {
+ public:
+  BlockPattern(int nodes, std::span<const std::pair<int, int>> pairs);
+  // the 3n x 3n matrix with this pattern, every value zero
+  Eigen::SparseMatrix<double> zero_matrix() const;
+  // m(3i..3i+3, 3j..3j+3) += b; i == j, or i and j a pair given (throws std::out_of_range otherwise)
+  void add(Eigen::SparseMatrix<double>& m, int i, int j, const Eigen::Matrix3d& b) const;
+
+ private:
+  int nodes_;
+  std::vector<int> column_start_;  // block column j's block rows are rows_[column_start_[j] .. column_start_[j + 1])
+  std::vector<int> rows_;          // sorted within a column
+};
+
+// the node pairs the springs couple (pinned springs couple none)
+std::vector<std::pair<int, int>> spring_pairs(std::span<const Spring> springs);
+
+// K += dF/dx and D += dF/dv summed over the springs (node forces by node positions and velocities), exact
+// or definite (above); K and D have the pattern's shape
+void add_spring_force_jacobians(std::span<const Spring> springs, const double* x, const double* v, bool definite,
+                                const BlockPattern& pattern, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv);
+
+// the Jacobian of y' = (v, M^-1 f) for y = (x, v) from the force Jacobians K = df/dx, D = df/dv and the
+// lumped node masses: [[0, I], [M^-1 K, M^-1 D]]
+void mass_spring_jacobian(const Eigen::SparseMatrix<double>& dfdx, const Eigen::SparseMatrix<double>& dfdv, std::span<const double> mass,
+                          Eigen::SparseMatrix<double>& dfdy);
 
 }  // namespace stepwise

@@ -49,7 +49,13 @@ class FixedStepIntegrator final : public Integrator {
 std::unique_ptr<FixedStepper> make_euler(const CountedSystem& system);
 std::unique_ptr<FixedStepper> make_symplectic_euler(const CountedSystem& system);
 std::unique_ptr<FixedStepper> make_rk4(const CountedSystem& system);
+// backward Euler: on a mass-spring system Baraff & Witkin's linearised step on CHOLMOD (mass_spring_implicit.hpp),
+// otherwise Newton's method to convergence on a dense (or sparse) matrix
 std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system);
+// backward Euler iterated to convergence: on a mass-spring system by Newton on CHOLMOD, otherwise as above
+std::unique_ptr<FixedStepper> make_implicit_euler_newton(const CountedSystem& system);
+// Liu et al. 2013's prefactored local/global method; the system has a mass_spring()
+std::unique_ptr<FixedStepper> make_fast_mass_spring(const CountedSystem& system);
 // the seeds' three-level scheme for a wave equation on a grid (wave_step.hpp); the system has a wave_grid()
 std::unique_ptr<FixedStepper> make_wave_fd(const CountedSystem& system);
 // the free rigid body's splitting into exact rotations; the system has a free_rigid_body()

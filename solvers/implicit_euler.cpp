@@ -4,6 +4,7 @@
 // (I - h J) d = -G and sets y1 += d, until |d|inf <= newton_tol (1 + |y1|inf). The iteration starts
 // from y0; the Jacobian is re-evaluated every iteration (full Newton, quadratic convergence).
 #include "fixed_step.hpp"
+#include "mass_spring_implicit.hpp"
 #include "newton_matrix.hpp"
 #include "run_support.hpp"
 
@@ -51,6 +52,16 @@ class ImplicitEuler final : public FixedStepper {
 }  // namespace
 
 std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system) {
+  if (system.mass_spring()) return make_mass_spring_implicit(system, MassSpringImplicitOptions{});
+  return std::make_unique<ImplicitEuler>(system);
+}
+
+std::unique_ptr<FixedStepper> make_implicit_euler_newton(const CountedSystem& system) {
+  if (system.mass_spring()) {
+    MassSpringImplicitOptions options;
+    options.newton = true;
+    return make_mass_spring_implicit(system, options);
+  }
   return std::make_unique<ImplicitEuler>(system);
 }
 

@@ -30,7 +30,10 @@ constexpr std::array method_table{
     MethodInfo{"euler", "explicit, fixed step", "1", "hand-written", 1, 1, true, false, false},
     MethodInfo{"symplectic-euler", "semi-implicit, fixed step", "1", "hand-written", 1, 1, true, false, true},
     MethodInfo{"rk4", "explicit, fixed step", "4", "hand-written", 4, 4, true, false, false},
-    MethodInfo{"implicit-euler", "implicit, fixed step, Newton + dense LU", "1", "hand-written", 1, 1, true, false, false, true},
+    MethodInfo{"implicit-euler", "implicit, fixed step; Newton + dense LU, or for mass-spring systems Baraff-Witkin's linearised step "
+               "on CHOLMOD (a kept factor preconditioning CG)", "1", "hand-written", 1, 1, true, false, false, true},
+    MethodInfo{"implicit-euler-newton", "implicit, fixed step, Newton to convergence (CHOLMOD for mass-spring systems, else dense LU)",
+               "1", "hand-written", 1, 1, true, false, false, true},
     MethodInfo{"cvode-adams", "adaptive, variable order Adams-Moulton, fixed-point iteration", "1-12", "SUNDIALS CVODE", 1, 12, false, true, false},
     MethodInfo{"cvode-bdf", "adaptive, variable order BDF, Newton + dense LU or KLU", "1-5", "SUNDIALS CVODE", 1, 5, false, true, false, true, true},
     MethodInfo{"gsl-rk2", "explicit embedded Runge-Kutta (2,3), advances with the third-order solution", "3", "GSL odeiv2", 3, 3, true, true, false},
@@ -51,6 +54,8 @@ constexpr std::array method_table{
     MethodInfo{"sequential-impulses", "rigid bodies in contact: kick, contact impulses by projected Gauss-Seidel (restitution, Coulomb "
                "friction), drift (velocity-level time stepping, fixed step)", "1", "hand-written", 1, 1, true, false, false, false, false,
                false, false, true},
+    MethodInfo{"fast-mass-spring", "mass-spring systems: prefactored local/global implicit Euler of the springs (Liu et al. 2013), "
+               "other forces explicit, fixed step", "1", "hand-written", 1, 1, true, false, false, false, false, false, false, false, true},
 };
 
 }  // namespace
@@ -68,6 +73,7 @@ bool method_applies(const MethodInfo& method, const OdeSystem& system) {
   if (method.needs_wave_grid && !system.wave_grid()) return false;
   if (method.needs_free_rigid_body && !system.free_rigid_body()) return false;
   if (method.resolves_contacts != system.contact_bodies().has_value()) return false;
+  if (method.needs_mass_spring && !system.mass_spring()) return false;
   return true;
 }
 
@@ -78,6 +84,7 @@ std::string method_requirement(const MethodInfo& method, const OdeSystem& system
   if (method.needs_wave_grid) return fmt::format("{} needs a wave equation on a grid (a water scene)", method.name);
   if (method.needs_free_rigid_body)
     return fmt::format("{} needs a torque-free rigid body (a rigid-body scene without drag or torque)", method.name);
+  if (method.needs_mass_spring) return fmt::format("{} needs a mass-spring system (a cloth or chain scene)", method.name);
   if (method.needs_second_order) return fmt::format("{} needs a second-order model y = (x, v)", method.name);
   return {};
 }
@@ -98,6 +105,8 @@ std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepC
   if (method == "symplectic-euler") return std::make_unique<FixedStepIntegrator>(name, control, make_symplectic_euler);
   if (method == "rk4") return std::make_unique<FixedStepIntegrator>(name, control, make_rk4);
   if (method == "implicit-euler") return std::make_unique<FixedStepIntegrator>(name, control, make_implicit_euler);
+  if (method == "implicit-euler-newton") return std::make_unique<FixedStepIntegrator>(name, control, make_implicit_euler_newton);
+  if (method == "fast-mass-spring") return std::make_unique<FixedStepIntegrator>(name, control, make_fast_mass_spring);
   if (method == "wave-fd") return std::make_unique<FixedStepIntegrator>(name, control, make_wave_fd);
   if (method == "rigid-splitting") return std::make_unique<FixedStepIntegrator>(name, control, make_rigid_splitting);
   if (method == "sequential-impulses") return std::make_unique<FixedStepIntegrator>(name, control, make_contact_stepping);
@@ -111,6 +120,8 @@ double physical_memory_bytes() {
 
 double dense_matrix_bytes(const MethodInfo& method, const OdeSystem& system) {
   if (!method.dense_matrix || (method.sparse_newton && system.has_sparse_jacobian())) return 0;
+  // the hand-written backward Euler solves a mass-spring system on CHOLMOD
+  if (method.source == "hand-written" && system.mass_spring()) return 0;
   const double n = system.size();
   // the Jacobian and the Newton matrix (GSL's implicit steppers and Bulirsch-Stoer keep a few more)
   return 2 * n * n * sizeof(double);

@@ -108,6 +108,7 @@ struct MethodInfo {
   bool needs_wave_grid = false;     // only for a wave equation on a grid (OdeSystem::wave_grid)
   bool needs_free_rigid_body = false;  // only for a torque-free rigid body (OdeSystem::free_rigid_body)
   bool resolves_contacts = false;   // steps rigid bodies in contact (OdeSystem::contact_bodies), and only them
+  bool needs_mass_spring = false;   // only for a mass-spring system (OdeSystem::mass_spring)
 };
 
 std::span<const MethodInfo> methods();

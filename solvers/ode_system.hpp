@@ -63,6 +63,28 @@ struct ContactMemory {
   std::vector<std::pair<std::array<int, 4>, Eigen::Vector3d>> impulses;  // sorted by key
 };
 
+// a spring of a mass-spring network (seeds: Hooke's law with Voigt damping) between nodes a and b, or from
+// the fixed point `anchor` to node b (a = -1: a pin); models/springs.hpp has its forces and derivatives
+struct Spring {
+  int a = -1, b = 0;                                 // node indices; a = -1: the fixed point `anchor`
+  double rest = 1;                                   // l (m)
+  double stiffness = 0;                              // c (N/m)
+  double damping = 0;                                // gamma (N s/m)
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // where a pinned spring hangs from (m)
+};
+
+// y = (x, v) of `nodes` points in 3-D (x = y[0..3 nodes), node-major, then v), each with a lumped mass, so
+// that M dv/dt = f(t, x, v) with M diagonal: the structure Baraff & Witkin's linearised implicit Euler on a
+// sparse Cholesky factor, and the prefactored local/global method of Liu et al. 2013, need. The force
+// Jacobians come from OdeSystem::force_jacobians; `springs` are the network's elastic springs, which the
+// prefactored method treats implicitly (every other force, their damping included, it holds at the step's
+// start)
+struct MassSpringView {
+  int nodes = 0;
+  std::vector<double> mass;     // kg per node
+  std::vector<Spring> springs;  // the springs whose elastic forces f holds
+};
+
 // An event g(t, y) = 0 (a collision, a plane crossing) and what happens at it.
 struct Event {
   std::string name;                                                      // what the event is ("ground")
@@ -111,6 +133,15 @@ class OdeSystem {
 
   // optional wave-equation structure for the finite-difference scheme
   virtual std::optional<WaveGridView> wave_grid() const { return std::nullopt; }
+
+  // optional mass-spring structure (see MassSpringView): nullptr for a system without one
+  virtual const MassSpringView* mass_spring() const { return nullptr; }
+  // for a mass-spring system, the force Jacobians K = df/dx and D = df/dv (f = M dv/dt, 3 nodes x 3 nodes,
+  // CSC, the same pattern at every call); definite: K replaced by a symmetric negative semidefinite
+  // approximation and D by its symmetric part (the system says which), so that M - h D - h^2 K is symmetric
+  // positive definite for a Cholesky factor; exact otherwise
+  virtual void force_jacobians(double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                               Eigen::SparseMatrix<double>& dfdv) const;
 
   // optional projection onto the manifold the exact flow keeps (a rigid body's unit quaternion): the
   // integrators apply it after every accepted step (hand-written and GSL steppers; CVODE BDF through

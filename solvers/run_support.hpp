@@ -40,6 +40,12 @@ class CountedSystem final : public OdeSystem {
     inner_.local_acceleration(t, x, v, a, first, count);
   }
   std::optional<WaveGridView> wave_grid() const override { return inner_.wave_grid(); }
+  const MassSpringView* mass_spring() const override { return inner_.mass_spring(); }
+  void force_jacobians(double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                       Eigen::SparseMatrix<double>& dfdv) const override {
+    ++stats_.jac_evals;
+    inner_.force_jacobians(t, y, definite, dfdx, dfdv);
+  }
   std::optional<RigidBodyView> free_rigid_body() const override { return inner_.free_rigid_body(); }
   std::optional<ContactBodiesView> contact_bodies() const override { return inner_.contact_bodies(); }
   ContactOutcome resolve_contacts(Eigen::Ref<Eigen::VectorXd> y, double dt, ContactMemory& memory) const override {

@@ -1,0 +1,182 @@
+#include "mass_spring_implicit.hpp"
+
+#include "run_support.hpp"
+
+#include <Eigen/IterativeLinearSolvers>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace stepwise {
+
+BaraffWitkinSystem::BaraffWitkinSystem(const OdeSystem& system, bool definite)
+    : system_(system), definite_(definite), f_(system.size() / 2), b_(system.size() / 2) {
+  const MassSpringView* view = system.mass_spring();
+  if (!view) throw std::invalid_argument("BaraffWitkinSystem: the system has no mass-spring structure");
+  m_.resize(3 * Eigen::Index{view->nodes});
+  for (int i = 0; i < view->nodes; ++i) m_.segment<3>(3 * i).setConstant(view->mass[i]);
+}
+
+void BaraffWitkinSystem::assemble_matrix(double t, const Eigen::VectorXd& y, double h) {
+  system_.force_jacobians(t, y, definite_, k_, d_);
+  const bool same_pattern = a_.nonZeros() == k_.nonZeros() && k_.nonZeros() == d_.nonZeros() &&
+                            std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), d_.innerIndexPtr()) &&
+                            std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), a_.innerIndexPtr());
+  if (same_pattern) {
+    // K, D and A share one pattern with every diagonal entry in it (the usual case after the first call)
+    const double* k = k_.valuePtr();
+    const double* d = d_.valuePtr();
+    double* a = a_.valuePtr();
+    for (Eigen::Index s = 0; s < a_.nonZeros(); ++s) a[s] = -h * d[s] - h * h * k[s];
+    a_.diagonal() += m_;
+  } else {
+    Eigen::SparseMatrix<double> mass(m_.size(), m_.size());
+    mass.setIdentity();
+    mass.diagonal() = m_;
+    a_ = mass - h * d_ - (h * h) * k_;
+    a_.makeCompressed();
+  }
+  system_.acceleration(t, y, f_);
+  f_ = f_.cwiseProduct(m_);
+}
+
+void BaraffWitkinSystem::assemble_rhs(const Eigen::VectorXd& y, double h) {
+  const Eigen::Index n = m_.size();
+  b_ = h * (f_ + h * (k_ * y.tail(n)));
+}
+
+namespace {
+
+// CG's preconditioner: the kept CHOLMOD factor of an earlier matrix (Eigen's preconditioner interface; the
+// factor is managed by the stepper, so compute does nothing)
+class KeptFactor {
+ public:
+  KeptFactor() = default;
+  template <class Matrix>
+  KeptFactor& analyzePattern(const Matrix&) { return *this; }
+  template <class Matrix>
+  KeptFactor& factorize(const Matrix&) { return *this; }
+  template <class Matrix>
+  KeptFactor& compute(const Matrix&) { return *this; }
+  Eigen::ComputationInfo info() const { return Eigen::Success; }
+  template <class Rhs>
+  Eigen::VectorXd solve(const Rhs& r) const {
+    rhs_ = r;
+    factor_->solve(rhs_, out_);
+    return out_.col(0);
+  }
+  void use(const SparseCholesky* factor) { factor_ = factor; }
+
+ private:
+  const SparseCholesky* factor_ = nullptr;
+  mutable Eigen::MatrixXd rhs_, out_;
+};
+
+class MassSpringImplicit final : public FixedStepper {
+ public:
+  MassSpringImplicit(const CountedSystem& s, const MassSpringImplicitOptions& options)
+      : system_(s), options_(options), bw_(s, options.definite), n_(s.size() / 2) {
+    cg_.setTolerance(options.cg_residual);
+    cg_.setMaxIterations(options.cg_max_iterations);
+  }
+
+  bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
+    bw_.assemble_matrix(t, y, h);
+    bw_.assemble_rhs(y, h);
+    if (!solve(t, failure)) return false;
+    y_next.resize(y.size());
+    y_next.tail(n_) = y.tail(n_) + dv_;
+    y_next.head(n_) = y.head(n_) + h * y_next.tail(n_);
+    if (!options_.newton) return true;
+
+    const double t1 = t + h;
+    for (int iteration = 0; iteration < options_.newton_max_iterations; ++iteration) {
+      // the residual at the iterate, and the matrix there
+      bw_.assemble_matrix(t1, y_next, h);
+      residual_ = bw_.mass().cwiseProduct(y_next.tail(n_) - y.tail(n_)) - h * bw_.force();
+      const double scale = bw_.mass().cwiseProduct(y_next.tail(n_)).norm() + h * bw_.force().norm();
+      if (!residual_.allFinite()) break;
+      if (residual_.norm() <= options_.newton_residual * scale || residual_.norm() == 0) return true;
+      rhs_ = -residual_;
+      if (!solve(t, failure, &rhs_)) return false;
+      y_next.tail(n_) += dv_;
+      y_next.head(n_) = y.head(n_) + h * y_next.tail(n_);
+    }
+    ++system_.stats().rejected;
+    failure = fmt::format("implicit-euler-newton: the Newton iteration did not reach a residual of {:.1e} in {} iterations at t = {:.9g} (h = {:.3g})",
+                          options_.newton_residual, options_.newton_max_iterations, t, h);
+    return false;
+  }
+
+  // the kept factor's last use and what its analysis chose, for the benchmark and the report
+  const CholeskyAnalysis& analysis() const { return factor_.analysis(); }
+
+ private:
+  // dv = A^-1 b (the system's rhs, or `rhs`) by the option's way; false with the failing call named
+  bool solve(double t, std::string& failure, const Eigen::VectorXd* rhs = nullptr) {
+    const Eigen::VectorXd& b = rhs ? *rhs : bw_.rhs();
+    const auto refactor = [&]() {
+      if (!analysed_) {
+        if (auto e = factor_.analyze(bw_.matrix(), options_.ordering); !e.empty()) {
+          failure = fmt::format("implicit-euler: {} at t = {:.9g}", e, t);
+          return false;
+        }
+        analysed_ = true;
+      }
+      ++system_.stats().factorizations;
+      if (auto e = factor_.factorize(bw_.matrix()); !e.empty()) {
+        failure = fmt::format("implicit-euler: {} at t = {:.9g}", e, t);
+        return false;
+      }
+      stale_ = false;
+      return true;
+    };
+    if (options_.solve == LinearSolve::refactor || stale_ || !analysed_) {
+      if (!refactor()) return false;
+      if (options_.solve == LinearSolve::refactor) {
+        ++system_.stats().linear_solves;
+        b_ = b;
+        if (auto e = factor_.solve(b_, x_); !e.empty()) {
+          failure = fmt::format("implicit-euler: {} at t = {:.9g}", e, t);
+          return false;
+        }
+        dv_ = x_.col(0);
+        return true;
+      }
+    }
+    // conjugate gradients preconditioned by the kept factor, from dv = 0
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      cg_.preconditioner().use(&factor_);
+      cg_.compute(bw_.matrix());
+      dv_ = cg_.solve(b);
+      system_.stats().linear_solves += cg_.iterations() + 1;
+      if (cg_.info() == Eigen::Success) {
+        stale_ = cg_.iterations() > options_.refresh_iterations;
+        return true;
+      }
+      if (attempt == 0 && !refactor()) return false;
+    }
+    failure = fmt::format("implicit-euler: conjugate gradients on a fresh factor did not reach a relative residual of {:.1e} in {} "
+                          "iterations at t = {:.9g}", options_.cg_residual, options_.cg_max_iterations, t);
+    return false;
+  }
+
+  const CountedSystem& system_;
+  MassSpringImplicitOptions options_;
+  BaraffWitkinSystem bw_;
+  Eigen::Index n_;
+  SparseCholesky factor_;
+  bool analysed_ = false, stale_ = true;
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, KeptFactor> cg_;
+  Eigen::VectorXd dv_, residual_, rhs_;
+  Eigen::MatrixXd b_, x_;
+};
+
+}  // namespace
+
+std::unique_ptr<FixedStepper> make_mass_spring_implicit(const CountedSystem& system, const MassSpringImplicitOptions& options) {
+  return std::make_unique<MassSpringImplicit>(system, options);
+}
+
+}  // namespace stepwise

@@ -1,0 +1,141 @@
+#include "sparse_cholesky.hpp"
+
+#include <cholmod.h>
+#include <fmt/format.h>
+
+#include <stdexcept>
+#include <vector>
+
+namespace stepwise {
+
+struct SparseCholesky::Impl {
+  cholmod_common common{};
+  cholmod_sparse* lower = nullptr;   // the lower triangle, values refreshed at each factorisation
+  cholmod_factor* factor = nullptr;
+  mutable cholmod_dense* b = nullptr;
+  mutable cholmod_dense* x = nullptr;
+  mutable cholmod_dense* y = nullptr;  // cholmod_solve2's workspace
+  mutable cholmod_dense* e = nullptr;
+  std::vector<Eigen::Index> source;  // for each entry of `lower`, its index in the Eigen matrix's values
+  CholeskyAnalysis analysis;
+  bool factored = false;
+
+  Impl() {
+    cholmod_start(&common);
+    common.print = 0;  // failures are reported through the status, in words, by the caller
+  }
+  ~Impl() {
+    release();
+    cholmod_finish(&common);
+  }
+  void release() {
+    cholmod_free_dense(&b, &common);
+    cholmod_free_dense(&x, &common);
+    cholmod_free_dense(&y, &common);
+    cholmod_free_dense(&e, &common);
+    cholmod_free_factor(&factor, &common);
+    cholmod_free_sparse(&lower, &common);
+  }
+  std::string status(std::string_view call) const {
+    return fmt::format("{} failed (CHOLMOD status {})", call, common.status);
+  }
+};
+
+SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
+SparseCholesky::~SparseCholesky() = default;
+
+const CholeskyAnalysis& SparseCholesky::analysis() const { return impl_->analysis; }
+
+std::string SparseCholesky::analyze(const Eigen::SparseMatrix<double>& a, Ordering ordering) {
+  Impl& m = *impl_;
+  m.release();
+  m.factored = false;
+  const Eigen::Index n = a.rows();
+  if (a.cols() != n || !a.isCompressed()) throw std::invalid_argument("SparseCholesky::analyze: a compressed square matrix is needed");
+  m.source.clear();
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index k = a.outerIndexPtr()[j]; k < a.outerIndexPtr()[j + 1]; ++k)
+      if (a.innerIndexPtr()[k] >= j) m.source.push_back(k);
+  m.lower = cholmod_allocate_sparse(static_cast<size_t>(n), static_cast<size_t>(n), m.source.size(), 1, 1, -1, CHOLMOD_REAL, &m.common);
+  if (!m.lower) return m.status("cholmod_allocate_sparse");
+  auto* column = static_cast<int*>(m.lower->p);
+  auto* row = static_cast<int*>(m.lower->i);
+  size_t k = 0;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    column[j] = static_cast<int>(k);
+    for (Eigen::Index s = a.outerIndexPtr()[j]; s < a.outerIndexPtr()[j + 1]; ++s)
+      if (a.innerIndexPtr()[s] >= j) row[k++] = a.innerIndexPtr()[s];
+  }
+  column[n] = static_cast<int>(k);
+
+  const auto analyse_with = [&](int method) -> cholmod_factor* {
+    m.common.nmethods = 1;
+    m.common.method[0].ordering = method;
+    m.common.postorder = 1;
+    return cholmod_analyze(m.lower, &m.common);
+  };
+  m.analysis = {};
+  if (ordering == Ordering::cheaper) {
+    cholmod_factor* amd = analyse_with(CHOLMOD_AMD);
+    if (!amd) return m.status("cholmod_analyze (AMD)");
+    m.analysis.amd_flops = m.common.fl;
+    cholmod_factor* metis = analyse_with(CHOLMOD_METIS);
+    if (!metis) {
+      cholmod_free_factor(&amd, &m.common);
+      return m.status("cholmod_analyze (METIS)");
+    }
+    m.analysis.metis_flops = m.common.fl;
+    const bool metis_cheaper = m.analysis.metis_flops < m.analysis.amd_flops;
+    m.factor = metis_cheaper ? metis : amd;
+    cholmod_free_factor(metis_cheaper ? &amd : &metis, &m.common);
+    m.analysis.ordering = metis_cheaper ? "metis" : "amd";
+    m.analysis.flops = metis_cheaper ? m.analysis.metis_flops : m.analysis.amd_flops;
+  } else {
+    m.factor = analyse_with(ordering == Ordering::metis ? CHOLMOD_METIS : CHOLMOD_AMD);
+    if (!m.factor) return m.status("cholmod_analyze");
+    m.analysis.ordering = ordering == Ordering::metis ? "metis" : "amd";
+    m.analysis.flops = m.common.fl;
+  }
+  m.analysis.supernodal = m.factor->is_super != 0;
+  // entries of L as the analysis counts them (the column counts)
+  const auto* counts = static_cast<const int*>(m.factor->ColCount);
+  for (Eigen::Index j = 0; j < n; ++j) m.analysis.factor_nonzeros += counts[j];
+  return {};
+}
+
+std::string SparseCholesky::factorize(const Eigen::SparseMatrix<double>& a) {
+  Impl& m = *impl_;
+  if (!m.factor) throw std::logic_error("SparseCholesky::factorize before analyze");
+  auto* values = static_cast<double*>(m.lower->x);
+  const double* from = a.valuePtr();
+  for (size_t k = 0; k < m.source.size(); ++k) values[k] = from[m.source[k]];
+  const int ok = cholmod_factorize(m.lower, m.factor, &m.common);
+  m.factored = false;
+  if (m.common.status == CHOLMOD_NOT_POSDEF)
+    return fmt::format("cholmod_factorize: matrix not positive definite (column {} of {}, CHOLMOD status {})", m.factor->minor,
+                       m.factor->n, m.common.status);
+  if (!ok || m.common.status < 0) return m.status("cholmod_factorize");
+  m.factored = true;
+  m.analysis.supernodal = m.factor->is_super != 0;
+  return {};
+}
+
+std::string SparseCholesky::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
+  Impl& m = *impl_;
+  if (!m.factored) throw std::logic_error("SparseCholesky::solve without a factor");
+  const auto n = static_cast<size_t>(b.rows()), k = static_cast<size_t>(b.cols());
+  if (!m.b || m.b->ncol != k) {
+    cholmod_free_dense(&m.b, &m.common);
+    m.b = cholmod_allocate_dense(n, k, n, CHOLMOD_REAL, &m.common);
+    if (!m.b) return m.status("cholmod_allocate_dense");
+  }
+  std::copy(b.data(), b.data() + b.size(), static_cast<double*>(m.b->x));
+  if (!cholmod_solve2(CHOLMOD_A, m.factor, m.b, nullptr, &m.x, nullptr, &m.y, &m.e, &m.common))
+    return m.status("cholmod_solve2");
+  x.resize(b.rows(), b.cols());
+  const auto* result = static_cast<const double*>(m.x->x);
+  std::copy(result, result + b.size(), x.data());
+  return {};
+}
+
+}  // namespace stepwise

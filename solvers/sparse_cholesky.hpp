@@ -1,0 +1,52 @@
+// A sparse Cholesky factor A = L L^T of a symmetric positive definite matrix whose pattern never changes:
+// analysed once (fill-reducing ordering, elimination tree, supernodes), refactorised per step with the
+// analysis kept, solved for several right-hand sides at once. CHOLMOD does the work; its types stay in
+// sparse_cholesky.cpp (RAII over cholmod_common, cholmod_sparse, cholmod_factor, cholmod_dense).
+#pragma once
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCore>
+
+#include <memory>
+#include <string>
+
+namespace stepwise {
+
+enum class Ordering {
+  amd,     // approximate minimum degree
+  metis,   // METIS nested dissection
+  cheaper  // both analysed, the one whose factor takes fewer flops kept
+};
+
+// what the analysis chose and what the factor will cost
+struct CholeskyAnalysis {
+  std::string ordering;     // "amd" or "metis"
+  double factor_nonzeros = 0;  // entries of L
+  double flops = 0;         // floating-point operations of one numeric factorisation
+  double amd_flops = 0, metis_flops = 0;  // both, when Ordering::cheaper compared them (else 0)
+  bool supernodal = false;  // CHOLMOD's supernodal path (BLAS-3 on dense blocks) rather than simplicial
+};
+
+class SparseCholesky {
+ public:
+  SparseCholesky();
+  ~SparseCholesky();
+  SparseCholesky(const SparseCholesky&) = delete;
+  SparseCholesky& operator=(const SparseCholesky&) = delete;
+
+  // symbolic analysis of a's pattern (a symmetric, both triangles stored, CSC; only the lower one is read);
+  // returns "" or the failing CHOLMOD call and its status
+  std::string analyze(const Eigen::SparseMatrix<double>& a, Ordering ordering);
+  // numeric factorisation of a (the analysed pattern, new values); "" or why not: a matrix that is not
+  // positive definite names the column where the factorisation stopped
+  std::string factorize(const Eigen::SparseMatrix<double>& a);
+  // x = A^-1 b for each column of b with the last factor; "" or the failing CHOLMOD call and its status
+  std::string solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const;
+  const CholeskyAnalysis& analysis() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stepwise
