@@ -34,7 +34,8 @@ class HangingChain final : public Model {
         drag_(p.at("drag")),
         g_(p.at("g")),
         view_{n_, std::vector<double>(n_, mass_), chain_springs(n_, p)},
-        pattern_(n_, spring_pairs(view_.springs)) {
+        pattern_(n_, spring_pairs(view_.springs)),
+        slots_(spring_slots(view_.springs, pattern_)) {
     y0_ = Eigen::VectorXd::Zero(6 * n_);
     for (int k = 0; k < n_; ++k) y0_[3 * k + 1] = -(k + 1) * p.at("rest_length");
   }
@@ -74,10 +75,10 @@ class HangingChain final : public Model {
   const MassSpringView* mass_spring() const override { return &view_; }
   void force_jacobians(double, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                        Eigen::SparseMatrix<double>& dfdv) const override {
-    dfdx = pattern_.zero_matrix();
-    dfdv = pattern_.zero_matrix();
+    pattern_.zero(dfdx);
+    pattern_.zero(dfdv);
     for (int k = 0; k < n_; ++k) pattern_.add(dfdv, k, k, -mass_ * drag_ * Eigen::Matrix3d::Identity());
-    add_spring_force_jacobians(view_.springs, y.data(), y.data() + 3 * n_, definite, pattern_, dfdx, dfdv);
+    add_spring_force_jacobians(view_.springs, slots_, y.data(), y.data() + 3 * n_, definite, dfdx, dfdv);
   }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
@@ -102,6 +103,7 @@ class HangingChain final : public Model {
   double mass_, drag_, g_;
   MassSpringView view_;
   BlockPattern pattern_;
+  std::vector<std::array<BlockPattern::Slot, 4>> slots_;
   Eigen::VectorXd y0_;
 };
 

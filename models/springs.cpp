@@ -57,10 +57,14 @@ BlockPattern::BlockPattern(int nodes, std::span<const std::pair<int, int>> pairs
   }
 }
 
-Eigen::SparseMatrix<double> BlockPattern::zero_matrix() const {
-  const Eigen::Index n = 3 * Eigen::Index{nodes_};
-  Eigen::SparseMatrix<double> m(n, n);
-  m.resizeNonZeros(9 * static_cast<Eigen::Index>(rows_.size()));
+void BlockPattern::zero(Eigen::SparseMatrix<double>& m) const {
+  const Eigen::Index n = 3 * Eigen::Index{nodes_}, entries = 9 * static_cast<Eigen::Index>(rows_.size());
+  if (m.rows() == n && m.cols() == n && m.isCompressed() && m.nonZeros() == entries) {
+    std::fill(m.valuePtr(), m.valuePtr() + entries, 0.0);
+    return;
+  }
+  m = Eigen::SparseMatrix<double>(n, n);
+  m.resizeNonZeros(entries);
   Eigen::Index k = 0;
   for (int j = 0; j < nodes_; ++j)
     for (int c = 0; c < 3; ++c) {
@@ -72,17 +76,14 @@ Eigen::SparseMatrix<double> BlockPattern::zero_matrix() const {
         }
     }
   m.outerIndexPtr()[n] = static_cast<int>(k);
-  return m;
 }
 
-void BlockPattern::add(Eigen::SparseMatrix<double>& m, int i, int j, const Eigen::Matrix3d& b) const {
+BlockPattern::Slot BlockPattern::slot(int i, int j) const {
   const auto first = rows_.begin() + column_start_[j], last = rows_.begin() + column_start_[j + 1];
   const auto found = std::lower_bound(first, last, i);
-  if (found == last || *found != i) throw std::out_of_range("BlockPattern::add: block outside the pattern");
+  if (found == last || *found != i) throw std::out_of_range("BlockPattern::slot: block outside the pattern");
   const Eigen::Index blocks = last - first, rank = found - first;
-  double* column = m.valuePtr() + 9 * Eigen::Index{column_start_[j]};
-  for (int c = 0; c < 3; ++c)
-    for (int r = 0; r < 3; ++r) column[3 * blocks * c + 3 * rank + r] += b(r, c);
+  return {9 * Eigen::Index{column_start_[j]} + 3 * rank, 3 * blocks};
 }
 
 std::vector<std::pair<int, int>> spring_pairs(std::span<const Spring> springs) {
@@ -92,9 +93,21 @@ std::vector<std::pair<int, int>> spring_pairs(std::span<const Spring> springs) {
   return pairs;
 }
 
-void add_spring_force_jacobians(std::span<const Spring> springs, const double* x, const double* v, bool definite,
-                                const BlockPattern& pattern, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv) {
+std::vector<std::array<BlockPattern::Slot, 4>> spring_slots(std::span<const Spring> springs, const BlockPattern& pattern) {
+  std::vector<std::array<BlockPattern::Slot, 4>> slots;
   for (const Spring& s : springs) {
+    if (s.a < 0)
+      slots.push_back({pattern.slot(s.b, s.b)});
+    else
+      slots.push_back({pattern.slot(s.b, s.b), pattern.slot(s.a, s.a), pattern.slot(s.a, s.b), pattern.slot(s.b, s.a)});
+  }
+  return slots;
+}
+
+void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const std::array<BlockPattern::Slot, 4>> slots, const double* x,
+                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv) {
+  for (size_t k = 0; k < springs.size(); ++k) {
+    const Spring& s = springs[k];
     const Eigen::Vector3d r = span_of(s, x);
     const double length = r.norm();
     const Eigen::Vector3d u = r / length;
@@ -109,15 +122,16 @@ void add_spring_force_jacobians(std::span<const Spring> springs, const double* x
     }
     const Eigen::Matrix3d dw = s.damping * uu;
     // F acts on a (+) and b (-); it depends on r and w through x_b, v_b (+) and x_a, v_a (-)
-    pattern.add(dfdx, s.b, s.b, -dr);
-    pattern.add(dfdv, s.b, s.b, -dw);
+    const auto& slot = slots[k];
+    BlockPattern::add(dfdx, slot[0], -dr);
+    BlockPattern::add(dfdv, slot[0], -dw);
     if (s.a < 0) continue;
-    pattern.add(dfdx, s.a, s.a, -dr);
-    pattern.add(dfdv, s.a, s.a, -dw);
-    pattern.add(dfdx, s.a, s.b, dr);
-    pattern.add(dfdv, s.a, s.b, dw);
-    pattern.add(dfdx, s.b, s.a, dr);
-    pattern.add(dfdv, s.b, s.a, dw);
+    BlockPattern::add(dfdx, slot[1], -dr);
+    BlockPattern::add(dfdv, slot[1], -dw);
+    BlockPattern::add(dfdx, slot[2], dr);
+    BlockPattern::add(dfdv, slot[2], dw);
+    BlockPattern::add(dfdx, slot[3], dr);
+    BlockPattern::add(dfdv, slot[3], dw);
   }
 }
 

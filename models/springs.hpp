@@ -20,6 +20,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
+#include <array>
 #include <span>
 #include <utility>
 #include <vector>
@@ -39,10 +40,23 @@ double spring_energy(std::span<const Spring> springs, const double* x);
 class BlockPattern {
  public:
   BlockPattern(int nodes, std::span<const std::pair<int, int>> pairs);
-  // the 3n x 3n matrix with this pattern, every value zero
-  Eigen::SparseMatrix<double> zero_matrix() const;
-  // m(3i..3i+3, 3j..3j+3) += b; i == j, or i and j a pair given (throws std::out_of_range otherwise)
-  void add(Eigen::SparseMatrix<double>& m, int i, int j, const Eigen::Matrix3d& b) const;
+  // m becomes the 3n x 3n matrix with this pattern, every value zero (its storage reused when it has the
+  // pattern already)
+  void zero(Eigen::SparseMatrix<double>& m) const;
+  // where block (i, j) lies in the values: i == j, or i and j a pair given (throws std::out_of_range
+  // otherwise); found once, used every step
+  struct Slot {
+    Eigen::Index first = 0;   // value index of the block's (0, 0) entry
+    Eigen::Index stride = 0;  // from one of its columns to the next
+  };
+  Slot slot(int i, int j) const;
+  // m(3i..3i+3, 3j..3j+3) += b at a slot
+  static void add(Eigen::SparseMatrix<double>& m, Slot slot, const Eigen::Matrix3d& b) {
+    double* v = m.valuePtr() + slot.first;
+    for (int c = 0; c < 3; ++c, v += slot.stride)
+      for (int r = 0; r < 3; ++r) v[r] += b(r, c);
+  }
+  void add(Eigen::SparseMatrix<double>& m, int i, int j, const Eigen::Matrix3d& b) const { add(m, slot(i, j), b); }
 
  private:
   int nodes_;
@@ -53,10 +67,13 @@ class BlockPattern {
 // the node pairs the springs couple (pinned springs couple none)
 std::vector<std::pair<int, int>> spring_pairs(std::span<const Spring> springs);
 
+// each spring's blocks in a pattern: (b, b), then for a spring between nodes (a, a), (a, b), (b, a)
+std::vector<std::array<BlockPattern::Slot, 4>> spring_slots(std::span<const Spring> springs, const BlockPattern& pattern);
+
 // K += dF/dx and D += dF/dv summed over the springs (node forces by node positions and velocities), exact
-// or definite (above); K and D have the pattern's shape
-void add_spring_force_jacobians(std::span<const Spring> springs, const double* x, const double* v, bool definite,
-                                const BlockPattern& pattern, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv);
+// or definite (above); K and D have the pattern the slots were found in
+void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const std::array<BlockPattern::Slot, 4>> slots, const double* x,
+                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv);
 
 // the Jacobian of y' = (v, M^-1 f) for y = (x, v) from the force Jacobians K = df/dx, D = df/dv and the
 // lumped node masses: [[0, I], [M^-1 K, M^-1 D]]

@@ -48,6 +48,8 @@ void BaraffWitkinSystem::assemble_rhs(const Eigen::VectorXd& y, double h) {
 
 namespace {
 
+constexpr int max_direct_run = 64;
+
 // CG's preconditioner: the kept CHOLMOD factor of an earlier matrix (Eigen's preconditioner interface; the
 // factor is managed by the stepper, so compute does nothing)
 class KeptFactor {
@@ -125,41 +127,58 @@ class MassSpringImplicit final : public FixedStepper {
         analysed_ = true;
       }
       ++system_.stats().factorizations;
-      if (auto e = factor_.factorize(bw_.matrix()); !e.empty()) {
+      const double start = thread_cpu_seconds();
+      const std::string e = factor_.factorize(bw_.matrix());
+      factor_seconds_ = thread_cpu_seconds() - start;
+      if (!e.empty()) {
         failure = fmt::format("implicit-euler: {} at t = {:.9g}", e, t);
         return false;
       }
-      stale_ = false;
+      reuses_ = 0;
       return true;
     };
-    if (options_.solve == LinearSolve::refactor || stale_ || !analysed_) {
+    // a fresh factor (of this very matrix) solves directly; CG would stop after its first iteration
+    const auto direct = [&]() {
       if (!refactor()) return false;
-      if (options_.solve == LinearSolve::refactor) {
-        ++system_.stats().linear_solves;
-        b_ = b;
-        if (auto e = factor_.solve(b_, x_); !e.empty()) {
-          failure = fmt::format("implicit-euler: {} at t = {:.9g}", e, t);
-          return false;
-        }
-        dv_ = x_.col(0);
-        return true;
+      ++system_.stats().linear_solves;
+      b_ = b;
+      if (auto e = factor_.solve(b_, x_); !e.empty()) {
+        failure = fmt::format("implicit-euler: {} at t = {:.9g}", e, t);
+        return false;
       }
+      dv_ = x_.col(0);
+      if (!rhs) guess_ = dv_;
+      return true;
+    };
+    if (options_.solve == LinearSolve::refactor || !analysed_ || direct_left_ > 0) {
+      if (direct_left_ > 0) --direct_left_;
+      return direct();
     }
-    // conjugate gradients preconditioned by the kept factor, from dv = 0
-    for (int attempt = 0; attempt < 2; ++attempt) {
-      cg_.preconditioner().use(&factor_);
-      cg_.compute(bw_.matrix());
-      dv_ = cg_.solve(b);
-      system_.stats().linear_solves += cg_.iterations() + 1;
-      if (cg_.info() == Eigen::Success) {
-        stale_ = cg_.iterations() > options_.refresh_iterations;
-        return true;
-      }
-      if (attempt == 0 && !refactor()) return false;
+    // conjugate gradients preconditioned by the kept factor of an earlier matrix, from the last step's dv
+    // (a cloth's velocity changes smoothly, so it starts closer than zero does), for at most as many
+    // iterations as a refactorisation costs: past that the factor has stopped paying
+    const double limit = solve_seconds_ > 0 ? 1 + factor_seconds_ / solve_seconds_ : 2;
+    cg_.setMaxIterations(std::clamp(static_cast<int>(limit) - 1, 1, options_.cg_max_iterations));
+    cg_.preconditioner().use(&factor_);
+    cg_.compute(bw_.matrix());
+    const double start = thread_cpu_seconds();
+    dv_ = cg_.solveWithGuess(b, rhs ? Eigen::VectorXd::Zero(b.size()) : guess_);
+    const long solves = cg_.iterations() + 1;  // Eigen counts the iterations after the first
+    solve_seconds_ = (thread_cpu_seconds() - start) / static_cast<double>(solves);
+    system_.stats().linear_solves += solves;
+    ++reuses_;
+    if (cg_.info() == Eigen::Success) {
+      if (!rhs) guess_ = dv_;
+      if (reuses_ > 1) direct_run_ = 1;
+      return true;
     }
-    failure = fmt::format("implicit-euler: conjugate gradients on a fresh factor did not reach a relative residual of {:.1e} in {} "
-                          "iterations at t = {:.9g}", options_.cg_residual, options_.cg_max_iterations, t);
-    return false;
+    // the kept factor no longer pays: refactorise and solve; if it did not pay even once, refactorise
+    // directly for a run of solves before trying a kept factor again
+    if (reuses_ == 1) {
+      direct_left_ = direct_run_;
+      direct_run_ = std::min(2 * direct_run_, max_direct_run);
+    }
+    return direct();
   }
 
   const CountedSystem& system_;
@@ -167,9 +186,13 @@ class MassSpringImplicit final : public FixedStepper {
   BaraffWitkinSystem bw_;
   Eigen::Index n_;
   SparseCholesky factor_;
-  bool analysed_ = false, stale_ = true;
+  bool analysed_ = false;
+  int reuses_ = 0;        // CG solves with the present factor
+  int direct_left_ = 0;   // solves still to refactorise directly
+  int direct_run_ = 1;    // how many the next failed trial of a kept factor refactorises directly
+  double factor_seconds_ = 0, solve_seconds_ = 0;  // thread CPU time of the last factorisation, and of one CG iteration
   Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, KeptFactor> cg_;
-  Eigen::VectorXd dv_, residual_, rhs_;
+  Eigen::VectorXd dv_, residual_, rhs_, guess_;
   Eigen::MatrixXd b_, x_;
 };
 

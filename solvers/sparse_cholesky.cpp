@@ -1,12 +1,47 @@
 #include "sparse_cholesky.hpp"
 
 #include <cholmod.h>
+#include <dlfcn.h>
 #include <fmt/format.h>
+#include <omp.h>
 
 #include <stdexcept>
 #include <vector>
 
 namespace stepwise {
+
+namespace {
+
+// CHOLMOD's supernodal factorisation calls the BLAS on dense blocks. When the BLAS is OpenBLAS (Debian's
+// alternative to the reference BLAS), its own threads would do part of the work: on this project's 2-core
+// machines they spin against the caller (measured: a third of the run in the scheduler), and a run's thread
+// CPU time would not count their work. So the BLAS is kept on the calling thread, through OpenBLAS's own
+// call where it is the BLAS loaded (looked up at run time: the reference BLAS has no such call).
+void keep_blas_on_this_thread() {
+  static const bool done = [] {
+    using SetThreads = void (*)(int);
+    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
+    return true;
+  }();
+  (void)done;
+}
+
+// Debian's CHOLMOD opens OpenMP parallel regions of a fixed 4 threads (CHOLMOD_OMP_NUM_THREADS, compiled in)
+// to copy and clear its arrays, whatever omp_set_num_threads says; on 2 cores their start-up and spinning
+// cost more than the copies (measured: a factorisation's wall time was twice its CPU time). While a CHOLMOD
+// call runs, parallel regions are made inactive (one thread), and the setting is restored after it.
+class SerialOpenMP {
+ public:
+  SerialOpenMP() : levels_(omp_get_max_active_levels()) { omp_set_max_active_levels(0); }
+  ~SerialOpenMP() { omp_set_max_active_levels(levels_); }
+  SerialOpenMP(const SerialOpenMP&) = delete;
+  SerialOpenMP& operator=(const SerialOpenMP&) = delete;
+
+ private:
+  int levels_;
+};
+
+}  // namespace
 
 struct SparseCholesky::Impl {
   cholmod_common common{};
@@ -21,6 +56,7 @@ struct SparseCholesky::Impl {
   bool factored = false;
 
   Impl() {
+    keep_blas_on_this_thread();
     cholmod_start(&common);
     common.print = 0;  // failures are reported through the status, in words, by the caller
   }
@@ -47,6 +83,7 @@ SparseCholesky::~SparseCholesky() = default;
 const CholeskyAnalysis& SparseCholesky::analysis() const { return impl_->analysis; }
 
 std::string SparseCholesky::analyze(const Eigen::SparseMatrix<double>& a, Ordering ordering) {
+  const SerialOpenMP serial;
   Impl& m = *impl_;
   m.release();
   m.factored = false;
@@ -55,8 +92,8 @@ std::string SparseCholesky::analyze(const Eigen::SparseMatrix<double>& a, Orderi
   m.source.clear();
   for (Eigen::Index j = 0; j < n; ++j)
     for (Eigen::Index k = a.outerIndexPtr()[j]; k < a.outerIndexPtr()[j + 1]; ++k)
-      if (a.innerIndexPtr()[k] >= j) m.source.push_back(k);
-  m.lower = cholmod_allocate_sparse(static_cast<size_t>(n), static_cast<size_t>(n), m.source.size(), 1, 1, -1, CHOLMOD_REAL, &m.common);
+      if (a.innerIndexPtr()[k] <= j) m.source.push_back(k);
+  m.lower = cholmod_allocate_sparse(static_cast<size_t>(n), static_cast<size_t>(n), m.source.size(), 1, 1, 1, CHOLMOD_REAL, &m.common);
   if (!m.lower) return m.status("cholmod_allocate_sparse");
   auto* column = static_cast<int*>(m.lower->p);
   auto* row = static_cast<int*>(m.lower->i);
@@ -64,7 +101,7 @@ std::string SparseCholesky::analyze(const Eigen::SparseMatrix<double>& a, Orderi
   for (Eigen::Index j = 0; j < n; ++j) {
     column[j] = static_cast<int>(k);
     for (Eigen::Index s = a.outerIndexPtr()[j]; s < a.outerIndexPtr()[j + 1]; ++s)
-      if (a.innerIndexPtr()[s] >= j) row[k++] = a.innerIndexPtr()[s];
+      if (a.innerIndexPtr()[s] <= j) row[k++] = a.innerIndexPtr()[s];
   }
   column[n] = static_cast<int>(k);
 
@@ -104,6 +141,7 @@ std::string SparseCholesky::analyze(const Eigen::SparseMatrix<double>& a, Orderi
 }
 
 std::string SparseCholesky::factorize(const Eigen::SparseMatrix<double>& a) {
+  const SerialOpenMP serial;
   Impl& m = *impl_;
   if (!m.factor) throw std::logic_error("SparseCholesky::factorize before analyze");
   auto* values = static_cast<double*>(m.lower->x);
@@ -121,6 +159,7 @@ std::string SparseCholesky::factorize(const Eigen::SparseMatrix<double>& a) {
 }
 
 std::string SparseCholesky::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
+  const SerialOpenMP serial;
   Impl& m = *impl_;
   if (!m.factored) throw std::logic_error("SparseCholesky::solve without a factor");
   const auto n = static_cast<size_t>(b.rows()), k = static_cast<size_t>(b.cols());

@@ -1,0 +1,207 @@
+// The seeds' flag (the cloth model's defaults: four corners pinned, gusting wind) at N x N nodes, N = 32,
+// 64, 128, one implicit Euler step of dt = 0.01 from the state 0.1 s into the run. In one run:
+//  - the linear solve of Baraff & Witkin's step, M - h D - h^2 K, refactorised by CHOLMOD (analysis kept)
+//    against Eigen's SimplicialLDLT refactorised (pattern analysed once) and Eigen's conjugate gradients
+//    with a diagonal preconditioner, each to a relative residual of 1e-8;
+//  - CHOLMOD's symbolic analysis with AMD and with METIS (flops of the factor each predicts);
+//  - whole steps: implicit-euler as the project runs it (a kept CHOLMOD factor preconditioning CG, refreshed
+//    when the iterations climb), against the same step refactorising every step, and against Liu et al.'s
+//    prefactored fast-mass-spring.
+// One core: CHOLMOD's BLAS is kept on the calling thread (sparse_cholesky.cpp). The BLAS is Debian's
+// alternative (OpenBLAS when installed); LD_LIBRARY_PATH=/usr/lib/x86_64-linux-gnu/blas runs the reference
+// BLAS instead. The program prints which one it has.
+#include "app/scene.hpp"
+#include "models/model.hpp"
+#include "solvers/integrator.hpp"
+#include "solvers/mass_spring_implicit.hpp"
+#include "solvers/run_support.hpp"
+#include "solvers/sparse_cholesky.hpp"
+
+#include "ratio_reporter.hpp"
+
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCholesky>
+#include <dlfcn.h>
+
+#include <cstdio>
+#include <map>
+
+namespace {
+
+using stepwise::Params;
+constexpr double dt = 0.01;
+constexpr double residual = 1e-8;
+
+struct Flag {
+  std::unique_ptr<stepwise::Model> model;
+  Eigen::VectorXd y;
+  stepwise::Stats stats;
+  std::unique_ptr<stepwise::CountedSystem> counted;
+  std::unique_ptr<stepwise::BaraffWitkinSystem> bw;
+};
+
+// the flag (the model's defaults), or a scene file's cloth, at n x n nodes
+Flag& flag(int n, const std::string& scene = {}) {
+  static std::map<std::pair<int, std::string>, Flag> flags;
+  auto [it, fresh] = flags.try_emplace({n, scene});
+  Flag& f = it->second;
+  if (fresh) {
+    Params params = scene.empty() ? Params{} : stepwise::load_scene(stepwise::scenes_directory() + "/" + scene + ".toml").parameters;
+    params["rows"] = params["columns"] = n;
+    f.model = stepwise::make_model("cloth", params);
+    const std::vector<double> t_out{0.1};
+    f.y = stepwise::make_integrator("implicit-euler", stepwise::StepControl::fixed(dt))->integrate(*f.model, 0, f.model->initial_state(), t_out).y_stop;
+    f.counted = std::make_unique<stepwise::CountedSystem>(*f.model, f.stats);
+    f.bw = std::make_unique<stepwise::BaraffWitkinSystem>(*f.counted, true);
+    f.bw->assemble_matrix(0.1, f.y, dt);
+    f.bw->assemble_rhs(f.y, dt);
+  }
+  return f;
+}
+
+void BM_cholmod_refactor(benchmark::State& state) {
+  Flag& f = flag(static_cast<int>(state.range(0)));
+  stepwise::SparseCholesky cholesky;
+  cholesky.analyze(f.bw->matrix(), stepwise::Ordering::cheaper);
+  Eigen::MatrixXd x;
+  for (auto _ : state) {
+    cholesky.factorize(f.bw->matrix());
+    cholesky.solve(f.bw->rhs(), x);
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.counters["unknowns"] = static_cast<double>(f.bw->rhs().size());
+  state.counters["residual"] = (f.bw->rhs() - f.bw->matrix() * x.col(0)).norm() / f.bw->rhs().norm();
+}
+
+// one pair of triangular solves with a factor
+void BM_cholmod_solve(benchmark::State& state) {
+  Flag& f = flag(static_cast<int>(state.range(0)));
+  stepwise::SparseCholesky cholesky;
+  cholesky.analyze(f.bw->matrix(), stepwise::Ordering::cheaper);
+  cholesky.factorize(f.bw->matrix());
+  Eigen::MatrixXd x;
+  for (auto _ : state) {
+    cholesky.solve(f.bw->rhs(), x);
+    benchmark::DoNotOptimize(x.data());
+  }
+}
+
+// the step's matrix and right-hand side: force Jacobians, M - h D - h^2 K, f, b
+void BM_assemble(benchmark::State& state) {
+  Flag& f = flag(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    f.bw->assemble_matrix(0.1, f.y, dt);
+    f.bw->assemble_rhs(f.y, dt);
+    benchmark::DoNotOptimize(f.bw->rhs().data());
+  }
+}
+
+void BM_eigen_ldlt_refactor(benchmark::State& state) {
+  Flag& f = flag(static_cast<int>(state.range(0)));
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  ldlt.analyzePattern(f.bw->matrix());
+  Eigen::VectorXd x;
+  for (auto _ : state) {
+    ldlt.factorize(f.bw->matrix());
+    x = ldlt.solve(f.bw->rhs());
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.counters["residual"] = (f.bw->rhs() - f.bw->matrix() * x).norm() / f.bw->rhs().norm();
+}
+
+void BM_diagonal_pcg(benchmark::State& state) {
+  Flag& f = flag(static_cast<int>(state.range(0)));
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>> cg;
+  cg.setTolerance(residual);
+  cg.setMaxIterations(100000);
+  Eigen::VectorXd x;
+  for (auto _ : state) {
+    cg.compute(f.bw->matrix());
+    x = cg.solve(f.bw->rhs());
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.counters["iterations"] = static_cast<double>(cg.iterations());
+  state.counters["residual"] = (f.bw->rhs() - f.bw->matrix() * x).norm() / f.bw->rhs().norm();
+}
+
+void analyse(benchmark::State& state, stepwise::Ordering ordering) {
+  Flag& f = flag(static_cast<int>(state.range(0)));
+  stepwise::SparseCholesky cholesky;
+  for (auto _ : state) cholesky.analyze(f.bw->matrix(), ordering);
+  state.counters["factor_Mflop"] = cholesky.analysis().flops / 1e6;
+  state.counters["factor_nnz"] = cholesky.analysis().factor_nonzeros;
+}
+void BM_cholmod_analyze_amd(benchmark::State& state) { analyse(state, stepwise::Ordering::amd); }
+void BM_cholmod_analyze_metis(benchmark::State& state) { analyse(state, stepwise::Ordering::metis); }
+
+// steps of dt from the fixture's state, one stepper for the whole benchmark (its symbolic analysis, done at
+// the first step, is set apart first), 10 steps per iteration; time per step
+void steps(benchmark::State& state, const stepwise::FixedStepperFactory& make, const std::string& scene = {}) {
+  Flag& f = flag(static_cast<int>(state.range(0)), scene);
+  stepwise::Stats stats;
+  stepwise::CountedSystem counted(*f.model, stats);
+  auto stepper = make(counted);
+  Eigen::VectorXd y = f.y, next;
+  std::string failure;
+  double t = 0.1;
+  const auto take = [&]() {
+    if (!stepper->step(t, dt, y, next, failure)) state.SkipWithError(failure.c_str());
+    y.swap(next);
+    t += dt;
+  };
+  take();
+  stats = {};
+  long taken = 0;
+  for (auto _ : state) {
+    for (int k = 0; k < 10; ++k) take();
+    taken += 10;
+  }
+  state.SetItemsProcessed(taken);
+  state.counters["ms/step"] = benchmark::Counter(static_cast<double>(taken) / 1e3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["solves/step"] = static_cast<double>(stats.linear_solves) / static_cast<double>(taken);
+  state.counters["factors/step"] = static_cast<double>(stats.factorizations) / static_cast<double>(taken);
+}
+std::unique_ptr<stepwise::FixedStepper> refactoring(const stepwise::CountedSystem& s) {
+  stepwise::MassSpringImplicitOptions options;
+  options.solve = stepwise::LinearSolve::refactor;
+  return stepwise::make_mass_spring_implicit(s, options);
+}
+void BM_step_kept_factor(benchmark::State& state) { steps(state, stepwise::make_implicit_euler); }
+void BM_step_refactor(benchmark::State& state) { steps(state, refactoring); }
+// the sheet hanging from two corners (scenes/hanging-cloth.toml): no wind, its matrix changes slowly
+void BM_hanging_step_kept_factor(benchmark::State& state) { steps(state, stepwise::make_implicit_euler, "hanging-cloth"); }
+void BM_hanging_step_refactor(benchmark::State& state) { steps(state, refactoring, "hanging-cloth"); }
+void BM_step_fast_mass_spring(benchmark::State& state) { steps(state, stepwise::make_fast_mass_spring); }
+
+#define FLAG_SIZES ->Arg(32)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)
+BENCHMARK(BM_cholmod_analyze_amd) FLAG_SIZES;
+BENCHMARK(BM_cholmod_analyze_metis) FLAG_SIZES;
+BENCHMARK(BM_assemble) FLAG_SIZES;
+BENCHMARK(BM_cholmod_refactor) FLAG_SIZES;
+BENCHMARK(BM_cholmod_solve) FLAG_SIZES;
+BENCHMARK(BM_eigen_ldlt_refactor) FLAG_SIZES;
+BENCHMARK(BM_diagonal_pcg) FLAG_SIZES;
+BENCHMARK(BM_step_refactor) FLAG_SIZES;
+BENCHMARK(BM_step_kept_factor) FLAG_SIZES;
+BENCHMARK(BM_step_fast_mass_spring) FLAG_SIZES;
+BENCHMARK(BM_hanging_step_refactor) FLAG_SIZES;
+BENCHMARK(BM_hanging_step_kept_factor) FLAG_SIZES;
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using Config = const char* (*)();
+  const auto config = reinterpret_cast<Config>(dlsym(RTLD_DEFAULT, "openblas_get_config"));
+  std::printf("BLAS: %s\n", config ? config() : "not OpenBLAS (the reference BLAS)");
+  std::vector<std::pair<std::string, std::string>> pairs;
+  for (const char* n : {"32", "64", "128"}) {
+    const std::string arg = std::string("/") + n;
+    pairs.emplace_back("BM_eigen_ldlt_refactor" + arg, "BM_cholmod_refactor" + arg);
+    pairs.emplace_back("BM_diagonal_pcg" + arg, "BM_cholmod_refactor" + arg);
+    pairs.emplace_back("BM_cholmod_analyze_metis" + arg, "BM_cholmod_analyze_amd" + arg);
+    pairs.emplace_back("BM_step_refactor" + arg, "BM_step_kept_factor" + arg);
+    pairs.emplace_back("BM_step_kept_factor" + arg, "BM_step_fast_mass_spring" + arg);
+    pairs.emplace_back("BM_hanging_step_refactor" + arg, "BM_hanging_step_kept_factor" + arg);
+  }
+  return stepwise::bench::run_with_ratios(argc, argv, pairs);
+}

@@ -1,0 +1,352 @@
+#include "cloth.hpp"
+
+#include "particle_common.hpp"
+#include "plane_collision.hpp"
+#include "springs.hpp"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <cmath>
+#include <numbers>
+
+namespace stepwise {
+
+namespace {
+
+// the defaults are the seeds' flag (scenes/flag.toml): 32 x 32, four corners pinned, a gusting wind face-on
+std::span<const ParamSpec> parameter_table() {
+  static const ParamSpec table[] = {
+      {"rows", 32, "", "grid nodes down the sheet (at least 2)", Bound::positive},
+      {"columns", 32, "", "grid nodes across the sheet (at least 2)", Bound::positive},
+      {"width", 1.0, "m", "sheet width (along x)", Bound::positive},
+      {"height", 1.0, "m", "sheet height (down the sheet: -y when vertical, +z when horizontal)", Bound::positive},
+      {"mass", 0.5, "kg", "mass of the whole sheet, shared equally by its nodes", Bound::positive},
+      {"stiffness", 200.0, "N/m", "structural spring constant c", Bound::nonnegative},
+      {"shear_stiffness", 100.0, "N/m", "shear (diagonal) spring constant", Bound::nonnegative},
+      {"bend_stiffness", 20.0, "N/m", "bend (two apart) spring constant", Bound::nonnegative},
+      {"structural", 1, "", "structural springs on (1) or off (0)", Bound::flag},
+      {"shear", 1, "", "shear springs on (1) or off (0)", Bound::flag},
+      {"bend", 1, "", "bend springs on (1) or off (0)", Bound::flag},
+      {"damping", 0.02, "N s/m", "Voigt damping gamma along every spring", Bound::nonnegative},
+      {"drag", 0.05, "1/s", "linear drag of each node per unit mass", Bound::nonnegative},
+      {"g", 9.81, "m/s^2", "gravitational acceleration, along -y", Bound::nonnegative},
+      {"wind_x", 0, "m/s", "wind velocity w0, x", Bound::finite},
+      {"wind_y", 0, "m/s", "wind velocity w0, y", Bound::finite},
+      {"wind_z", 3, "m/s", "wind velocity w0, z", Bound::finite},
+      {"wind_coefficient", 0.5, "N s/m^3", "force per unit area per unit normal relative speed k_w", Bound::nonnegative},
+      {"gust_amplitude", 0.5, "", "gust A: the wind is w0 (1 + A sin(2 pi f t))", Bound::finite},
+      {"gust_frequency", 0.5, "Hz", "gust frequency f", Bound::nonnegative},
+      {"pick_row", -1, "", "row of the picked node pulled by the pick force (-1: none)", Bound::finite},
+      {"pick_column", -1, "", "column of the picked node", Bound::finite},
+      {"pick_fx", 0, "N", "pick force, x", Bound::finite},
+      {"pick_fy", 0, "N", "pick force, y", Bound::finite},
+      {"pick_fz", 0, "N", "pick force, z", Bound::finite},
+      {"pin_corners", 1, "", "pin the four corners (the seeds' flag)", Bound::flag},
+      {"pin_top_corners", 0, "", "pin the two top (row 0) corners (a hanging sheet)", Bound::flag},
+      {"pin_left_edge", 0, "", "pin the left (column 0) edge (a flag on a pole)", Bound::flag},
+      {"pin_row", -1, "", "row of one more pinned node (-1: none)", Bound::finite},
+      {"pin_column", -1, "", "column of that pinned node", Bound::finite},
+      {"horizontal", 0, "", "sheet starts horizontal in the x-z plane (1) or vertical in x-y (0)", Bound::flag},
+      {"elevation", 0, "m", "height y of the top row (vertical) or of the sheet (horizontal)", Bound::finite},
+      {"sphere_radius", 0, "m", "radius of a fixed sphere the cloth collides with (0: none)", Bound::nonnegative},
+      {"sphere_x", 0, "m", "sphere centre, x", Bound::finite},
+      {"sphere_y", 0, "m", "sphere centre, y", Bound::finite},
+      {"sphere_z", 0, "m", "sphere centre, z", Bound::finite},
+      {"ground", 0, "", "collide with the ground plane y = ground_y (1) or not (0)", Bound::flag},
+      {"ground_y", -2, "m", "height of the ground plane", Bound::finite},
+      {"friction", 0.3, "", "Coulomb friction on the sphere and the ground", Bound::nonnegative},
+  };
+  return table;
+}
+
+// a whole number in [low, high], or -1 when `optional` allows none; BadParameter naming the key otherwise
+int grid_index(const Params& p, const char* key, int low, int high, bool optional) {
+  const double value = p.at(key);
+  if (optional && value == -1) return -1;
+  if (value != std::floor(value) || value < low || value > high)
+    throw BadParameter(key, fmt::format("parameter '{}' = {} must be a whole number from {} to {}{} (the grid's size)", key, value, low,
+                                        high, optional ? ", or -1 for none" : ""));
+  return static_cast<int>(value);
+}
+
+Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+class Cloth final : public Model {
+ public:
+  explicit Cloth(const Params& p)
+      : rows_(grid_size(p, "rows")),
+        columns_(grid_size(p, "columns")),
+        g_(p.at("g")),
+        drag_(p.at("drag")),
+        wind_(p.at("wind_x"), p.at("wind_y"), p.at("wind_z")),
+        wind_k_(p.at("wind_coefficient")),
+        gust_(p.at("gust_amplitude")),
+        gust_frequency_(p.at("gust_frequency")),
+        pick_force_(p.at("pick_fx"), p.at("pick_fy"), p.at("pick_fz")),
+        sphere_centre_(p.at("sphere_x"), p.at("sphere_y"), p.at("sphere_z")),
+        sphere_radius_(p.at("sphere_radius")),
+        ground_(p.at("ground") == 1),
+        ground_y_(p.at("ground_y")),
+        friction_(p.at("friction")) {
+    const int nodes = rows_ * columns_;
+    node_mass_ = p.at("mass") / nodes;
+    const double dx = p.at("width") / (columns_ - 1), dz = p.at("height") / (rows_ - 1);
+    const bool horizontal = p.at("horizontal") == 1;
+    for (int r = 0; r < rows_; ++r)
+      for (int c = 0; c < columns_; ++c) {
+        const double across = c * dx - p.at("width") / 2;
+        rest_.push_back(horizontal ? Eigen::Vector3d(across, p.at("elevation"), r * dz - p.at("height") / 2)
+                                   : Eigen::Vector3d(across, p.at("elevation") - r * dz, 0));
+      }
+
+    // pins, then the free nodes' numbering
+    std::vector<bool> pinned(nodes, false);
+    const auto pin = [&](int r, int c) { pinned[r * columns_ + c] = true; };
+    if (p.at("pin_corners") == 1) {
+      pin(0, 0), pin(0, columns_ - 1), pin(rows_ - 1, 0), pin(rows_ - 1, columns_ - 1);
+    }
+    if (p.at("pin_top_corners") == 1) pin(0, 0), pin(0, columns_ - 1);
+    if (p.at("pin_left_edge") == 1)
+      for (int r = 0; r < rows_; ++r) pin(r, 0);
+    const int pin_row = grid_index(p, "pin_row", 0, rows_ - 1, true), pin_column = grid_index(p, "pin_column", 0, columns_ - 1, true);
+    if ((pin_row < 0) != (pin_column < 0))
+      throw BadParameter(pin_row < 0 ? "pin_row" : "pin_column", "parameters 'pin_row' and 'pin_column' go together: give both or neither");
+    if (pin_row >= 0) pin(pin_row, pin_column);
+    free_index_.assign(nodes, -1);
+    for (int k = 0; k < nodes; ++k)
+      if (!pinned[k]) {
+        free_index_[k] = free_;
+        grid_node_.push_back(k);
+        ++free_;
+      }
+    if (free_ == 0) throw BadParameter("pin_corners", "every node of the cloth is pinned: nothing moves");
+    const int pick_row = grid_index(p, "pick_row", 0, rows_ - 1, true), pick_column = grid_index(p, "pick_column", 0, columns_ - 1, true);
+    if ((pick_row < 0) != (pick_column < 0))
+      throw BadParameter(pick_row < 0 ? "pick_row" : "pick_column", "parameters 'pick_row' and 'pick_column' go together: give both or neither");
+    picked_ = pick_row >= 0 ? free_index_[pick_row * columns_ + pick_column] : -1;
+
+    // the springs, family by family (offsets in rows and columns), each once
+    const double gamma = p.at("damping");
+    const auto join = [&](int r, int c, int dr, int dc, double stiffness) {
+      const int r2 = r + dr, c2 = c + dc;
+      if (r2 < 0 || r2 >= rows_ || c2 < 0 || c2 >= columns_) return;
+      const int a = r * columns_ + c, b = r2 * columns_ + c2;
+      const double rest = (rest_[b] - rest_[a]).norm();
+      const int fa = free_index_[a], fb = free_index_[b];
+      if (fa < 0 && fb < 0) return;
+      if (fa < 0) view_.springs.push_back(Spring{-1, fb, rest, stiffness, gamma, rest_[a]});
+      else if (fb < 0) view_.springs.push_back(Spring{-1, fa, rest, stiffness, gamma, rest_[b]});
+      else view_.springs.push_back(Spring{fa, fb, rest, stiffness, gamma});
+    };
+    for (int r = 0; r < rows_; ++r)
+      for (int c = 0; c < columns_; ++c) {
+        if (p.at("structural") == 1) join(r, c, 0, 1, p.at("stiffness")), join(r, c, 1, 0, p.at("stiffness"));
+        if (p.at("shear") == 1) join(r, c, 1, 1, p.at("shear_stiffness")), join(r, c, 1, -1, p.at("shear_stiffness"));
+        if (p.at("bend") == 1) join(r, c, 0, 2, p.at("bend_stiffness")), join(r, c, 2, 0, p.at("bend_stiffness"));
+      }
+    for (int r = 0; r + 1 < rows_; ++r)
+      for (int c = 0; c + 1 < columns_; ++c) {
+        const int k = r * columns_ + c;
+        triangles_.push_back({k, k + columns_, k + 1});
+        triangles_.push_back({k + columns_, k + columns_ + 1, k + 1});
+      }
+    view_.nodes = free_;
+    view_.mass.assign(free_, node_mass_);
+    auto pairs = spring_pairs(view_.springs);
+    if (wind_k_ > 0)
+      for (const auto& tri : triangles_)
+        for (int i = 0; i < 3; ++i)
+          for (int j = i + 1; j < 3; ++j)
+            if (free_index_[tri[i]] >= 0 && free_index_[tri[j]] >= 0) pairs.emplace_back(free_index_[tri[i]], free_index_[tri[j]]);
+    pattern_ = std::make_unique<BlockPattern>(free_, pairs);
+    spring_slots_ = spring_slots(view_.springs, *pattern_);
+    for (int i = 0; i < free_; ++i) diagonal_slots_.push_back(pattern_->slot(i, i));
+    if (wind_k_ > 0)
+      for (const auto& tri : triangles_) {
+        std::array<BlockPattern::Slot, 9> slots{};
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            if (free_index_[tri[i]] >= 0 && free_index_[tri[j]] >= 0) slots[3 * i + j] = pattern_->slot(free_index_[tri[i]], free_index_[tri[j]]);
+        triangle_slots_.push_back(slots);
+      }
+  }
+
+  std::string_view name() const override { return "cloth"; }
+  int size() const override { return 6 * free_; }
+  bool autonomous() const override { return gust_ == 0 || wind_k_ == 0; }
+  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * free_}; }
+  const MassSpringView* mass_spring() const override { return &view_; }
+  std::vector<std::string> state_names() const override { return particle_state_names(free_); }
+  Eigen::VectorXd initial_state() const override {
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
+    for (int i = 0; i < free_; ++i) y.segment<3>(3 * i) = rest_[grid_node_[i]];
+    return y;
+  }
+
+  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    dydt.head(3 * free_) = y.tail(3 * free_);
+    acceleration(t, y, dydt.tail(3 * free_));
+  }
+  void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
+    const double* x = y.data();
+    const double* v = y.data() + 3 * free_;
+    a.setZero();
+    add_spring_forces(view_.springs, x, v, a.data());
+    if (wind_k_ > 0) {
+      const Eigen::Vector3d w = wind_at(t);
+      for (const auto& tri : triangles_) {
+        const Eigen::Vector3d n = area_vector(tri, x), share = wind_k_ * (w - mean_velocity(tri, v)).dot(n) * n / (3 * n.norm());
+        for (const int k : tri)
+          if (free_index_[k] >= 0) a.segment<3>(3 * free_index_[k]) += share;
+      }
+    }
+    if (picked_ >= 0) a.segment<3>(3 * picked_) += pick_force_;
+    a /= node_mass_;
+    a -= drag_ * y.tail(3 * free_);
+    for (int i = 0; i < free_; ++i) a[3 * i + 1] -= g_;
+  }
+
+  void force_jacobians(double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                       Eigen::SparseMatrix<double>& dfdv) const override {
+    const double* x = y.data();
+    const double* v = y.data() + 3 * free_;
+    pattern_->zero(dfdx);
+    pattern_->zero(dfdv);
+    const Eigen::Matrix3d drag = -node_mass_ * drag_ * Eigen::Matrix3d::Identity();
+    for (const auto& slot : diagonal_slots_) BlockPattern::add(dfdv, slot, drag);
+    add_spring_force_jacobians(view_.springs, spring_slots_, x, v, definite, dfdx, dfdv);
+    if (wind_k_ == 0) return;
+    const Eigen::Vector3d w = wind_at(t);
+    for (size_t k = 0; k < triangles_.size(); ++k) {
+      const auto& tri = triangles_[k];
+      const Eigen::Vector3d n = area_vector(tri, x);
+      const double area = n.norm();
+      const Eigen::Matrix3d by_velocity = -wind_k_ / (9 * area) * n * n.transpose();  // corner force by one corner's velocity
+      std::array<Eigen::Matrix3d, 3> by_position;  // the corner force (a third of F) by each corner's position
+      if (!definite) {
+        const Eigen::Vector3d u = w - mean_velocity(tri, v);
+        const double flow = u.dot(n);
+        const Eigen::Matrix3d dg = (n * u.transpose() + flow * Eigen::Matrix3d::Identity()) / area - flow * n * n.transpose() / (area * area * area);
+        const Eigen::Vector3d e1 = corner(tri[1], x) - corner(tri[0], x), e2 = corner(tri[2], x) - corner(tri[0], x);
+        const Eigen::Matrix3d d1 = -cross_matrix(e2) / 2, d2 = cross_matrix(e1) / 2;
+        by_position = {wind_k_ / 3 * dg * (-d1 - d2), wind_k_ / 3 * dg * d1, wind_k_ / 3 * dg * d2};
+      }
+      for (int i = 0; i < 3; ++i) {
+        if (free_index_[tri[i]] < 0) continue;
+        for (int j = 0; j < 3; ++j) {
+          if (free_index_[tri[j]] < 0) continue;
+          BlockPattern::add(dfdv, triangle_slots_[k][3 * i + j], by_velocity);
+          if (!definite) BlockPattern::add(dfdx, triangle_slots_[k][3 * i + j], by_position[j]);
+        }
+      }
+    }
+  }
+
+  bool has_sparse_jacobian() const override { return true; }
+  void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const override {
+    Eigen::SparseMatrix<double> dfdx, dfdv;
+    force_jacobians(t, y, false, dfdx, dfdv);
+    mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
+  }
+
+  // nodes inside the sphere or below the ground back onto its surface, their approach stopped
+  bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
+    if (sphere_radius_ == 0 && !ground_) return false;
+    bool moved = false;
+    const auto contact = [&](int i, const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
+      y.segment<3>(3 * i) = surface;
+      auto v = y.segment<3>(3 * (free_ + i));
+      if (v.dot(normal) < 0) v = collision_response(Plane{surface, normal}, v, 0, friction_);
+      moved = true;
+    };
+    for (int i = 0; i < free_; ++i) {
+      const Eigen::Vector3d offset = y.segment<3>(3 * i) - sphere_centre_;
+      const double distance = offset.norm();
+      if (sphere_radius_ > 0 && distance < sphere_radius_ && distance > 0) {
+        const Eigen::Vector3d normal = offset / distance;
+        contact(i, sphere_centre_ + sphere_radius_ * normal, normal);
+      }
+      if (ground_ && y[3 * i + 1] < ground_y_) {
+        Eigen::Vector3d surface = y.segment<3>(3 * i);
+        surface.y() = ground_y_;
+        contact(i, surface, Eigen::Vector3d::UnitY());
+      }
+    }
+    return moved;
+  }
+
+  std::optional<double> energy(const Eigen::VectorXd& y) const override {
+    double e = node_mass_ * y.tail(3 * free_).squaredNorm() / 2 + spring_energy(view_.springs, y.data());
+    for (int i = 0; i < free_; ++i) e += node_mass_ * g_ * y[3 * i + 1];
+    if (picked_ >= 0) e -= pick_force_.dot(y.segment<3>(3 * picked_));
+    return e;
+  }
+
+  std::vector<std::string> summary_names() const override {
+    return {"energy", "kinetic_energy", "x_mean", "y_mean", "z_mean", "y_min", "max_stretch"};
+  }
+  Eigen::VectorXd summary(const Eigen::VectorXd& y) const override {
+    const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> x(y.data(), 3, free_);
+    double stretch = 0;
+    for (const Spring& s : view_.springs) {
+      const Eigen::Vector3d from = s.a < 0 ? s.anchor : Eigen::Vector3d(x.col(s.a));
+      stretch = std::max(stretch, (x.col(s.b) - from).norm() / s.rest - 1);
+    }
+    Eigen::VectorXd out(7);
+    out << *energy(y), node_mass_ * y.tail(3 * free_).squaredNorm() / 2, x.row(0).mean(), x.row(1).mean(), x.row(2).mean(),
+        x.row(1).minCoeff(), stretch;
+    return out;
+  }
+
+ private:
+  // at most 1024 a side: a million nodes, whose sparse factor already takes gigabytes
+  static int grid_size(const Params& p, const char* key) { return grid_index(p, key, 2, 1024, false); }
+  Eigen::Vector3d wind_at(double t) const { return wind_ * (1 + gust_ * std::sin(2 * std::numbers::pi * gust_frequency_ * t)); }
+  Eigen::Vector3d corner(int k, const double* x) const {
+    const int i = free_index_[k];
+    return i < 0 ? rest_[k] : Eigen::Vector3d(Eigen::Map<const Eigen::Vector3d>(x + 3 * i));
+  }
+  Eigen::Vector3d area_vector(const std::array<int, 3>& tri, const double* x) const {
+    const Eigen::Vector3d x0 = corner(tri[0], x);
+    return (corner(tri[1], x) - x0).cross(corner(tri[2], x) - x0) / 2;
+  }
+  Eigen::Vector3d mean_velocity(const std::array<int, 3>& tri, const double* v) const {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const int k : tri)
+      if (free_index_[k] >= 0) sum += Eigen::Map<const Eigen::Vector3d>(v + 3 * free_index_[k]);
+    return sum / 3;
+  }
+
+  int rows_, columns_;
+  double g_, drag_;
+  Eigen::Vector3d wind_;
+  double wind_k_, gust_, gust_frequency_;
+  Eigen::Vector3d pick_force_, sphere_centre_;
+  double sphere_radius_;
+  bool ground_;
+  double ground_y_, friction_;
+  double node_mass_ = 0;
+  std::vector<Eigen::Vector3d> rest_;  // every grid node's starting place (a pinned node stays there)
+  std::vector<int> free_index_;         // grid node -> state node, -1 if pinned
+  std::vector<int> grid_node_;          // state node -> grid node
+  int free_ = 0;
+  int picked_ = -1;
+  std::vector<std::array<int, 3>> triangles_;  // grid nodes
+  MassSpringView view_;
+  std::unique_ptr<BlockPattern> pattern_;
+  std::vector<std::array<BlockPattern::Slot, 4>> spring_slots_;
+  std::vector<BlockPattern::Slot> diagonal_slots_;
+  std::vector<std::array<BlockPattern::Slot, 9>> triangle_slots_;  // (corner i, corner j) of each triangle
+};
+
+}  // namespace
+
+std::span<const ParamSpec> cloth_params() { return parameter_table(); }
+std::unique_ptr<Model> make_cloth(const Params& params) { return std::make_unique<Cloth>(params); }
+
+}  // namespace stepwise
