@@ -5,6 +5,7 @@
 #include "scene.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/measure.hpp"
+#include "verification/stability.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -121,6 +122,14 @@ Prepared prepare(const RunOptions& o) {
       fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s on this grid (d = {} m, c = {} m/s, "
                  "mu = {} 1/s); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method, *limit,
                  grid->spacing, grid->c, grid->mu);
+  // and on a mass-spring system, the limit its stiffest mode sets at the start (verification/stability.hpp)
+  if (p.model->mass_spring() && p.control.dt && mass_spring_stable_dt(p.method, StiffestMode{1, 0})) {
+    const StiffestMode mode = stiffest_mode(*p.model, 0, p.model->initial_state());
+    if (const double limit = *mass_spring_stable_dt(p.method, mode); *p.control.dt > limit)
+      fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s for this system's stiffest mode (omega = {:.6g} "
+                 "rad/s, damping {:.3g} 1/s at the start); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method,
+                 limit, mode.omega, mode.damping);
+  }
   p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
   // a fixed-step run samples on its own step grid: an output time between grid points would shorten a step
   // and change the very run being sampled (a dt beyond the stability limit would be hidden by short steps)

@@ -58,7 +58,9 @@ struct SparseCholesky::Impl {
   Impl() {
     keep_blas_on_this_thread();
     cholmod_start(&common);
-    common.print = 0;  // failures are reported through the status, in words, by the caller
+    common.print = 0;     // failures are reported through the status, in words, by the caller
+    common.final_ll = 1;  // L L^T also on the simplicial path, whose default L D L^T would factor an indefinite
+                          // matrix without a word (negative D): the step needs it positive definite
   }
   ~Impl() {
     release();

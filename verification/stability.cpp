@@ -5,7 +5,11 @@
 #include "tolerances.hpp"
 #include "wave_modes.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
+#include <complex>
+#include <stdexcept>
 #include <memory>
 
 namespace stepwise {
@@ -45,6 +49,63 @@ WaveStability wave_stability(std::string_view method, int points, double spacing
   const double measured = bisect_stability(wave_stays_bounded(method, points, spacing, c, mu, steps), 0.5 * derived, 2 * derived,
                                            tolerance::stability_bisection_width);
   return {measured, derived, seeds_wave_condition(grid)};
+}
+
+StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::VectorXd& y) {
+  const MassSpringView* view = system.mass_spring();
+  if (!view) throw std::invalid_argument("stiffest_mode: not a mass-spring system");
+  Eigen::SparseMatrix<double> k, d;
+  system.force_jacobians(t, y, false, k, d);
+  const Eigen::Index n = k.rows();
+  Eigen::VectorXd root_mass(n);
+  for (int i = 0; i < view->nodes; ++i) root_mass.segment<3>(3 * i).setConstant(std::sqrt(view->mass[i]));
+  const Eigen::VectorXd inverse = root_mass.cwiseInverse();
+  // S = M^-1/2 (-K) M^-1/2, symmetric for the springs' K (the wind's position part, not symmetric, is taken
+  // symmetrised)
+  Eigen::SparseMatrix<double> s = -(inverse.asDiagonal() * k * inverse.asDiagonal());
+  s = (Eigen::SparseMatrix<double>(s.transpose()) + s) / 2;
+  Eigen::VectorXd mode(n);
+  double lambda = 0;
+  if (n <= 3000) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen{Eigen::MatrixXd(s)};
+    lambda = eigen.eigenvalues()[n - 1];
+    mode = eigen.eigenvectors().col(n - 1);
+  } else {
+    mode = Eigen::VectorXd::LinSpaced(n, 1, 2);
+    for (int k = 0; k < 400; ++k) mode = (s * mode).normalized();
+    lambda = mode.dot(s * mode);
+  }
+  const Eigen::VectorXd v = inverse.cwiseProduct(mode);  // the mode in coordinates: M^-1/2 times S's eigenvector
+  const double a = -v.dot(d * v) / (2 * v.dot(root_mass.cwiseAbs2().cwiseProduct(v)));
+  return {std::sqrt(std::max(lambda, 0.0)), a};
+}
+
+std::optional<double> mass_spring_stable_dt(std::string_view method, const StiffestMode& mode) {
+  const double w = mode.omega, a = mode.damping;
+  // symplectic Euler on x'' = -w^2 x - 2 a x': amplification [[1 - h^2 w^2, h (1 - 2 h a)], [-h w^2, 1 - 2 h a]],
+  // determinant 1 - 2 h a, trace 2 - h^2 w^2 - 2 h a; |trace| <= 1 + determinant gives h^2 w^2 <= 4 - 4 h a
+  if (method == "symplectic-euler") return 2 * (std::sqrt(a * a + w * w) - a) / (w * w);
+  // explicit Euler and rk4: |R(h lambda)| <= 1 at lambda = -a + i sqrt(w^2 - a^2), |lambda| = w
+  const std::complex<double> lambda(-a, std::sqrt(std::max(w * w - a * a, 0.0)));
+  if (method == "euler") return 2 * a / (w * w);
+  if (method == "rk4") {
+    const auto grows = [&](double h) {
+      const std::complex<double> z = h * lambda;
+      return std::abs(1.0 + z + z * z / 2.0 + z * z * z / 6.0 + z * z * z * z / 24.0) > 1;
+    };
+    // |R| < 1 just above h = 0 for a > 0 (and = 1 - O(h^6) for a = 0); the boundary lies below 3 / w
+    double low = 1e-6 / w, high = 3 / w;
+    while (high - low > 1e-12 * high) (grows((low + high) / 2) ? high : low) = (low + high) / 2;
+    return low;
+  }
+  return std::nullopt;
+}
+
+double measured_stable_dt(const Model& model, std::string_view method, long steps, double predicted) {
+  const Eigen::VectorXd y0 = model.initial_state();
+  const auto bounded = [&](double dt) { return stays_bounded(model, method, y0, dt, steps); };
+  const double low = predicted > 0 ? predicted / 10 : 1e-6, high = predicted > 0 ? predicted * 10 : 1;
+  return bisect_stability(bounded, low, high, tolerance::stability_bisection_width);
 }
 
 }  // namespace stepwise

@@ -245,4 +245,22 @@ inline constexpr double accumulated_roundoff = 1e-12;
 // rounding of the sums, a few ulps of the largest force per spring
 inline constexpr double spring_momentum_roundoff = 1e-13;
 
+// ---- cloth
+
+// implicit Euler's amplification on the undamped oscillator, 1 / sqrt(1 + w^2 h^2) in the energy norm
+// (w x, v), is exact for a linear spring: one step's ratio against it is round-off, a few eps over the
+// few operations of the solve
+inline constexpr double implicit_damping_roundoff = 1e-12;
+
+// a measured stability limit against the prediction from the stiffest mode: the probe (2000 steps stay
+// within 1e6) sees growth only once |R|^2000 > 1e6, i.e. |R| - 1 > 0.7%; where |R| climbs past 1 steeply
+// (symplectic Euler: at h w = 2 its two roots meet at -1 and split) that is a step 0.1-1% past the
+// boundary, which stability_match (1%) allows; rk4's damped boundary is crossed at a shallow angle, and the
+// same 0.7% of |R| is a step up to 10% past it (measured 4-9% over 3 decades of stiffness)
+inline constexpr double rk4_probe_excess = 0.10;
+
+// cloth-on-sphere: a node put back onto the sphere's surface lies on it to the rounding of c + r n, and the
+// next step's motion inward is undone at the step's end; after the step nothing is inside by more than eps r
+inline constexpr double obstacle_roundoff = 1e-12;
+
 }  // namespace stepwise::tolerance

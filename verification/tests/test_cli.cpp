@@ -158,6 +158,15 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run scenes/hanging-chain.toml --set nodes=0 --out '{}'", out.string()), "--set nodes"},
       {fmt::format("run scenes/hanging-chain.toml --set stiffness=-1 --out '{}'", out.string()), "--set stiffness"},
       {fmt::format("run scenes/hanging-chain.toml --set rest_length=nan --out '{}'", out.string()), "--set rest_length"},
+      {fmt::format("run scenes/flag.toml --set rows=1 --out '{}'", out.string()), "--set rows: parameter 'rows' = 1 must be a whole number from 2"},
+      {fmt::format("run scenes/flag.toml --set columns=2.5 --out '{}'", out.string()), "--set columns"},
+      {fmt::format("run scenes/flag.toml --set pin_row=32 --set pin_column=0 --out '{}'", out.string()), "--set pin_row: parameter 'pin_row' = 32"},
+      {fmt::format("run scenes/flag.toml --set pin_row=3 --out '{}'", out.string()), "pin_column"},
+      {fmt::format("run scenes/flag.toml --set stiffness=-1 --out '{}'", out.string()), "--set stiffness"},
+      {fmt::format("run scenes/flag.toml --set mass=0 --out '{}'", out.string()), "--set mass"},
+      {fmt::format("run scenes/flag.toml --set damping=inf --out '{}'", out.string()), "--set damping"},
+      {fmt::format("run scenes/hanging-cloth.toml --set pick_row=0 --set pick_column=99 --out '{}'", out.string()), "--set pick_column"},
+      {fmt::format("run scenes/pendulum.toml --method fast-mass-spring --dt 0.01 --out '{}'", out.string()), "--method: fast-mass-spring needs a mass-spring system"},
   };
   for (const auto& [args, expected] : cases) {
     const Output o = run(args);
@@ -298,6 +307,25 @@ TEST_F(Cli, AWaveStepPastTheStabilityLimitIsWarnedRunAndReportedDiverged) {
   const auto fine = nlohmann::json::parse(slurp(ok / "summary.json"));
   EXPECT_EQ(fine["status"], "ok");
   for (const char* key : {"energy", "max_abs_z"}) EXPECT_TRUE(fine["final_state"].contains(key)) << key;
+}
+
+TEST_F(Cli, AnExplicitClothStepPastItsStiffestModesLimitIsWarnedRunAndReportedDiverged) {
+  const fs::path out = dir_ / "flag-past";
+  const Output o = run(fmt::format("run scenes/flag.toml --method symplectic-euler --dt 0.002 --t-end 1 --out '{}'", out.string()));
+  EXPECT_EQ(o.status, 1) << o.err;
+  EXPECT_NE(o.err.find("--dt: warning: dt = 0.002 s is past symplectic-euler's stability limit"), std::string::npos) << o.err;
+  const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+  EXPECT_EQ(summary["status"], "diverged");
+  EXPECT_NE(summary["message"].get<std::string>().find("diverged at t = "), std::string::npos) << summary["message"];
+  // the cloth scenes run as written, and the flag's summary carries what the users look at
+  for (const char* scene : {"flag", "flag-on-pole", "hanging-cloth", "cloth-on-sphere"}) {
+    const fs::path ok = dir_ / scene;
+    const Output r = run(fmt::format("run scenes/{}.toml --t-end 0.2 --out '{}'", scene, ok.string()));
+    ASSERT_EQ(r.status, 0) << scene << r.err;
+    const auto fine = nlohmann::json::parse(slurp(ok / "summary.json"));
+    EXPECT_EQ(fine["status"], "ok") << scene;
+    for (const char* key : {"energy", "y_min", "max_stretch"}) EXPECT_TRUE(fine["final_state"].contains(key)) << scene << key;
+  }
 }
 
 TEST_F(Cli, ARerunReplacesOutputsWholeAndLeavesNoTemporaryFiles) {

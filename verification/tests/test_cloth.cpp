@@ -5,13 +5,20 @@
 #include "models/model.hpp"
 #include "models/springs.hpp"
 #include "solvers/integrator.hpp"
+#include "solvers/mass_spring_implicit.hpp"
+#include "solvers/run_support.hpp"
 #include "verification/measure.hpp"
+#include "verification/order_fit.hpp"
+#include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <random>
+#include <tuple>
 
 namespace stepwise {
 namespace {
@@ -90,6 +97,175 @@ TEST(HangingChain, SettlesIntoItsExactStaticEquilibrium) {
     EXPECT_LT(m.result.y_stop.tail(3 * nodes).lpNorm<Eigen::Infinity>(), 2 * std::sqrt(stiffness / mass) * left) << method;
     std::cout << method << ": largest height error " << worst << " m after " << t_end << " s (" << m.result.stats.steps << " steps)\n";
   }
+}
+
+}  // namespace
+}  // namespace stepwise
+
+namespace stepwise {
+namespace {
+
+// a small cloth with everything on: one pin, a gusting wind across it, a picked node, drag and damping
+std::unique_ptr<Model> small_cloth(Params extra = {}) {
+  Params p{{"rows", 4}, {"columns", 5}, {"pin_corners", 0}, {"pin_row", 0}, {"pin_column", 0}, {"wind_x", 1}, {"wind_z", 3},
+           {"wind_coefficient", 0.7}, {"gust_amplitude", 0.4}, {"pick_row", 3}, {"pick_column", 2}, {"pick_fy", -0.3}, {"drag", 0.2}, {"damping", 0.05}};
+  for (const auto& [k, v] : extra) p[k] = v;
+  return make_model("cloth", p);
+}
+
+// a state with springs stretched and compressed, moving
+Eigen::VectorXd shaken(const Model& model, double spread, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::VectorXd y = model.initial_state();
+  for (Eigen::Index i = 0; i < y.size(); ++i) y[i] += (i < y.size() / 2 ? spread : 1.0) * u(rng);
+  return y;
+}
+
+TEST(Cloth, ForceJacobiansMatchCentralDifferences) {
+  const auto model = small_cloth();
+  const MassSpringView& view = *model->mass_spring();
+  const Eigen::Index n = model->size() / 2;
+  for (const double spread : {0.02, 0.1}) {  // springs near rest, and some compressed
+    const Eigen::VectorXd y = shaken(*model, spread, 3);
+    const double t = 0.3;
+    Eigen::SparseMatrix<double> k, d;
+    model->force_jacobians(t, y, false, k, d);
+    // f = M a, by Richardson-extrapolated central differences (as for the chain)
+    const auto force = [&](const Eigen::VectorXd& at) {
+      Eigen::VectorXd a(n);
+      model->acceleration(t, at, a);
+      for (int i = 0; i < view.nodes; ++i) a.segment<3>(3 * i) *= view.mass[i];
+      return a;
+    };
+    const auto column = [&](Eigen::Index j, double h) {
+      Eigen::VectorXd yp = y, ym = y;
+      yp[j] += h;
+      ym[j] -= h;
+      return Eigen::VectorXd((force(yp) - force(ym)) / (2 * h));
+    };
+    // both blocks are differences of the same f, so they share its round-off, eps |f| / h absolute: the
+    // scale is the whole Jacobian's, as for the chain
+    const double scale = 1 + std::max(Eigen::MatrixXd(k).lpNorm<Eigen::Infinity>(), Eigen::MatrixXd(d).lpNorm<Eigen::Infinity>());
+    for (const auto& [offset, analytic, what] : {std::tuple{Eigen::Index{0}, Eigen::MatrixXd(k), "df/dx"}, std::tuple{n, Eigen::MatrixXd(d), "df/dv"}}) {
+      Eigen::MatrixXd fd(n, n);
+      for (Eigen::Index j = 0; j < n; ++j)
+        fd.col(j) = (4 * column(offset + j, tolerance::richardson_step / 2) - column(offset + j, tolerance::richardson_step)) / 3;
+      EXPECT_LT((analytic - fd).lpNorm<Eigen::Infinity>(), tolerance::jacobian_richardson * scale) << what << " at spread " << spread;
+    }
+  }
+}
+
+TEST(Cloth, TheDefiniteApproximationMakesTheStepMatrixPositiveDefiniteWhereTheExactOneIsNot) {
+  // without damping and wind the exact K is symmetric, so its Cholesky factorisation is what fails
+  const auto model = small_cloth({{"damping", 0}, {"wind_coefficient", 0}});
+  const Eigen::VectorXd y = shaken(*model, 0.1, 5);  // several springs compressed
+  const double h = 0.05;
+  Stats stats;
+  const CountedSystem counted(*model, stats);
+  for (const bool definite : {true, false}) {
+    BaraffWitkinSystem bw(counted, definite);
+    bw.assemble_matrix(0, y, h);
+    const Eigen::MatrixXd a(bw.matrix());
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen((a + a.transpose()) / 2);
+    if (definite) {
+      EXPECT_LT((a - a.transpose()).lpNorm<Eigen::Infinity>(), tolerance::accumulated_roundoff * a.lpNorm<Eigen::Infinity>());
+      EXPECT_GT(eigen.eigenvalues().minCoeff(), 0);
+    } else {
+      EXPECT_LT(eigen.eigenvalues().minCoeff(), 0) << "this state should make the exact matrix indefinite";
+    }
+  }
+  // so the exact Jacobian's Cholesky solve fails, named, with the step's time
+  MassSpringImplicitOptions options;
+  options.definite = false;
+  auto stepper = make_mass_spring_implicit(counted, options);
+  Eigen::VectorXd next;
+  std::string failure;
+  EXPECT_FALSE(stepper->step(0.25, h, y, next, failure));
+  EXPECT_NE(failure.find("cholmod_factorize: matrix not positive definite"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("t = 0.25"), std::string::npos) << failure;
+}
+
+TEST(Cloth, ImplicitEulerIsItsOwnOrderAgainstCvodeOnASmallCloth) {
+  // a 6 x 6 sheet hanging from two corners, 0.4 s, against CVODE BDF (KLU, the analytic sparse Jacobian)
+  const auto model = make_model("cloth", {{"rows", 6}, {"columns", 6}, {"pin_corners", 0}, {"pin_top_corners", 1}, {"wind_coefficient", 0}});
+  const double t_end = 0.4;
+  const Measured reference = run_and_measure(*model, "cvode-bdf", StepControl::adaptive(1e-11, 1e-13), t_end, t_end);
+  ASSERT_EQ(reference.result.status, Status::ok) << reference.result.message;
+  for (const char* method : {"implicit-euler", "implicit-euler-newton", "fast-mass-spring"}) {
+    std::vector<double> dts, errors;
+    for (double dt = 4e-3; dt >= 2.4e-4; dt /= 2) {
+      const Measured m = run_and_measure(*model, method, StepControl::fixed(dt), t_end, t_end);
+      ASSERT_EQ(m.result.status, Status::ok) << method << " " << m.result.message;
+      dts.push_back(dt);
+      errors.push_back(max_norm_error(m.result.y_stop, reference.result.y_stop));
+    }
+    const double order = loglog_slope(dts, errors);
+    EXPECT_NEAR(order, 1, tolerance::order_band) << method;
+    std::cout << method << ": order " << order << ", error " << errors.back() << " at dt " << dts.back() << "\n";
+  }
+}
+
+TEST(Cloth, ImplicitEulerDampsASpringBy1OverSqrt1PlusOmegaSquaredHSquaredAStep) {
+  // one mass on one spring moving along it: a linear oscillator about its equilibrium, w = sqrt(c / m)
+  const double mass = 0.1, stiffness = 40, g = 9.81;
+  const auto model = make_model("hanging-chain", {{"nodes", 1}, {"mass", mass}, {"stiffness", stiffness}, {"damping", 0}, {"g", g}});
+  const double w = std::sqrt(stiffness / mass), rest = chain_equilibrium(1, mass, stiffness, 0.1, g)[0];
+  Stats stats;
+  const CountedSystem counted(*model, stats);
+  for (const double wh : {0.1, 1.0, 3.0, 10.0}) {
+    const double h = wh / w;
+    auto stepper = make_implicit_euler(counted);
+    Eigen::VectorXd y = model->initial_state(), next;
+    std::string failure;
+    const auto amplitude = [&](const Eigen::VectorXd& s) { return std::hypot(w * (s[1] - rest), s[4]); };
+    for (int k = 0; k < 5; ++k) {
+      ASSERT_TRUE(stepper->step(k * h, h, y, next, failure)) << failure;
+      EXPECT_NEAR(amplitude(next) / amplitude(y), 1 / std::sqrt(1 + wh * wh), tolerance::implicit_damping_roundoff) << "w h = " << wh;
+      y = next;
+    }
+  }
+}
+
+TEST(Cloth, ExplicitMethodsFailWhereTheStiffestModePredictsAndImplicitEulerDoesNot) {
+  for (const double c : {100.0, 1000.0}) {
+    const auto model = make_model("cloth", {{"rows", 8}, {"columns", 8}, {"stiffness", c}, {"shear_stiffness", c / 2}, {"bend_stiffness", c / 10},
+                                            {"wind_coefficient", 0}, {"pin_corners", 0}, {"pin_top_corners", 1}});
+    const StiffestMode mode = stiffest_mode(*model, 0, model->initial_state());
+    const double symplectic = *mass_spring_stable_dt("symplectic-euler", mode), rk4 = *mass_spring_stable_dt("rk4", mode),
+                 euler = *mass_spring_stable_dt("euler", mode);
+    EXPECT_NEAR(measured_stable_dt(*model, "symplectic-euler", 2000, symplectic) / symplectic, 1, tolerance::stability_match) << c;
+    const double rk4_ratio = measured_stable_dt(*model, "rk4", 2000, rk4) / rk4;
+    EXPECT_GT(rk4_ratio, 1 - tolerance::stability_match) << c;
+    EXPECT_LT(rk4_ratio, 1 + tolerance::rk4_probe_excess) << c;
+    // explicit Euler lives only through the damping: its limit is the smallest, and the prediction is safe
+    EXPECT_LT(euler, symplectic / 10);
+    EXPECT_GT(measured_stable_dt(*model, "euler", 2000, euler) / euler, 1 - tolerance::stability_match) << c;
+    // implicit Euler at 100 times symplectic Euler's limit: bounded, its energy below where it started
+    const Measured m = run_and_measure(*model, "implicit-euler", StepControl::fixed(100 * symplectic), 2.0, 2.0);
+    ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+    EXPECT_LT(*model->energy(m.result.y_stop), *model->energy(model->initial_state())) << c;
+  }
+}
+
+TEST(Cloth, ASheetDroppedOnASphereStaysOutsideItAndAboveTheGround) {
+  const double radius = 0.5, ground = -0.5;
+  const auto model = make_model("cloth", {{"rows", 10}, {"columns", 10}, {"width", 2}, {"height", 2}, {"horizontal", 1}, {"elevation", 0.7},
+                                          {"pin_corners", 0}, {"wind_coefficient", 0}, {"sphere_radius", radius}, {"ground", 1}, {"ground_y", ground}});
+  const RunResult r = make_integrator("implicit-euler", StepControl::fixed(0.005))->integrate(*model, 0, model->initial_state(), output_times(1.5, 0.05));
+  ASSERT_EQ(r.status, Status::ok) << r.message;
+  EXPECT_GT(r.stats.projections, 0);
+  double inside = 0, below = 0, touching = 0;
+  for (const auto& y : r.trajectory.y)
+    for (Eigen::Index i = 0; i < y.size() / 6; ++i) {
+      const Eigen::Vector3d x = y.segment<3>(3 * i);
+      inside = std::max(inside, radius - x.norm());
+      below = std::max(below, ground - x.y());
+      touching += std::abs(x.norm() - radius) < 1e-9;
+    }
+  EXPECT_LT(inside, tolerance::obstacle_roundoff * radius);
+  EXPECT_LT(below, tolerance::obstacle_roundoff);
+  EXPECT_GT(touching, 0) << "the sheet never reached the sphere";
 }
 
 }  // namespace
