@@ -9,7 +9,7 @@
 //    prefactored fast-mass-spring.
 // One core: CHOLMOD's BLAS is kept on the calling thread (sparse_cholesky.cpp). The BLAS is Debian's
 // alternative (OpenBLAS when installed); LD_LIBRARY_PATH=/usr/lib/x86_64-linux-gnu/blas runs the reference
-// BLAS instead. The program prints which one it has.
+// BLAS instead. The program prints the library its dgemm_ comes from.
 #include "app/scene.hpp"
 #include "models/model.hpp"
 #include "solvers/integrator.hpp"
@@ -24,6 +24,7 @@
 #include <dlfcn.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <map>
 
 namespace {
@@ -190,9 +191,10 @@ BENCHMARK(BM_hanging_step_kept_factor) FLAG_SIZES;
 }  // namespace
 
 int main(int argc, char** argv) {
-  using Config = const char* (*)();
-  const auto config = reinterpret_cast<Config>(dlsym(RTLD_DEFAULT, "openblas_get_config"));
-  std::printf("BLAS: %s\n", config ? config() : "not OpenBLAS (the reference BLAS)");
+  // the library whose dgemm_ CHOLMOD calls (OpenBLAS may be loaded beside the reference BLAS, through LAPACK)
+  Dl_info blas{};
+  if (void* dgemm = dlsym(RTLD_DEFAULT, "dgemm_"); dgemm && dladdr(dgemm, &blas))
+    std::printf("BLAS (dgemm_ from): %s\n", std::filesystem::weakly_canonical(blas.dli_fname).c_str());
   std::vector<std::pair<std::string, std::string>> pairs;
   for (const char* n : {"32", "64", "128"}) {
     const std::string arg = std::string("/") + n;
