@@ -44,6 +44,17 @@ class Cli : public ::testing::Test {
     const int raw = std::system(cmd.c_str());
     return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(dir_ / "stdout"), slurp(dir_ / "stderr")};
   }
+  // a run past a method's stability limit: warned (the warning starting with `warning`), run, exit 1, and
+  // its summary written with status diverged at the time it happened
+  void expect_warned_and_diverged(const std::string& args, const std::string& warning) const {
+    const fs::path out = dir_ / "past";
+    const Output o = run(fmt::format("{} --out '{}'", args, out.string()));
+    EXPECT_EQ(o.status, 1) << args << o.err;
+    EXPECT_NE(o.err.find(warning), std::string::npos) << o.err;
+    const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+    EXPECT_EQ(summary["status"], "diverged") << args;
+    EXPECT_NE(summary["message"].get<std::string>().find("diverged at t = "), std::string::npos) << summary["message"];
+  }
   fs::path scene(const std::string& name, const std::string& text) const {
     const fs::path p = dir_ / name;
     std::ofstream(p) << text;
@@ -294,13 +305,7 @@ TEST_F(Cli, ADivergedRunExitsOneWithItsSummaryWritten) {
 
 TEST_F(Cli, AWaveStepPastTheStabilityLimitIsWarnedRunAndReportedDiverged) {
   // water-drop's grid: d = 0.02 m, c = 1 m/s, N = 63: limit d / (sqrt(2) c cos(pi/126)) = 0.0141465 s
-  const fs::path out = dir_ / "past";
-  const Output o = run(fmt::format("run scenes/water-drop.toml --dt 0.015 --out '{}'", out.string()));
-  EXPECT_EQ(o.status, 1) << o.err;
-  EXPECT_NE(o.err.find("--dt: warning: dt = 0.015 s is past wave-fd's stability limit 0.0141465 s"), std::string::npos) << o.err;
-  const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
-  EXPECT_EQ(summary["status"], "diverged");
-  EXPECT_NE(summary["message"].get<std::string>().find("diverged at t = "), std::string::npos) << summary["message"];
+  expect_warned_and_diverged("run scenes/water-drop.toml --dt 0.015", "--dt: warning: dt = 0.015 s is past wave-fd's stability limit 0.0141465 s");
   // and below it: ok, energy and max_abs_z in final_state as the issue names them
   const fs::path ok = dir_ / "below";
   ASSERT_EQ(run(fmt::format("run scenes/water-drop.toml --dt 0.014 --out '{}'", ok.string())).status, 0);
@@ -310,13 +315,8 @@ TEST_F(Cli, AWaveStepPastTheStabilityLimitIsWarnedRunAndReportedDiverged) {
 }
 
 TEST_F(Cli, AnExplicitClothStepPastItsStiffestModesLimitIsWarnedRunAndReportedDiverged) {
-  const fs::path out = dir_ / "flag-past";
-  const Output o = run(fmt::format("run scenes/flag.toml --method symplectic-euler --dt 0.002 --t-end 1 --out '{}'", out.string()));
-  EXPECT_EQ(o.status, 1) << o.err;
-  EXPECT_NE(o.err.find("--dt: warning: dt = 0.002 s is past symplectic-euler's stability limit"), std::string::npos) << o.err;
-  const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
-  EXPECT_EQ(summary["status"], "diverged");
-  EXPECT_NE(summary["message"].get<std::string>().find("diverged at t = "), std::string::npos) << summary["message"];
+  expect_warned_and_diverged("run scenes/flag.toml --method symplectic-euler --dt 0.002 --t-end 1",
+                             "--dt: warning: dt = 0.002 s is past symplectic-euler's stability limit");
   // the cloth scenes run as written, and the flag's summary carries what the issue's users look at
   for (const char* scene : {"flag", "flag-on-pole", "hanging-cloth", "cloth-on-sphere"}) {
     const fs::path ok = dir_ / scene;
