@@ -122,7 +122,8 @@ Prepared prepare(const RunOptions& o) {
       fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s on this grid (d = {} m, c = {} m/s, "
                  "mu = {} 1/s); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method, *limit,
                  grid->spacing, grid->c, grid->mu);
-  // and on a mass-spring system, the limit its stiffest mode sets at the start (verification/stability.hpp)
+  // and on a mass-spring system, the limit its stiffest mode sets at the start (verification/stability.hpp), for
+  // the methods that have one (asked first with any mode, so the eigenproblem is solved only for those)
   if (p.model->mass_spring() && p.control.dt && mass_spring_stable_dt(p.method, StiffestMode{1, 0})) {
     const StiffestMode mode = stiffest_mode(*p.model, 0, p.model->initial_state());
     if (const double limit = *mass_spring_stable_dt(p.method, mode); *p.control.dt > limit)

@@ -1,7 +1,6 @@
 #include "studies.hpp"
 
 #include "models/bouncing_ball.hpp"
-#include "models/hanging_chain.hpp"
 #include "models/model.hpp"
 #include "models/pendulum.hpp"
 #include "models/rigid_body.hpp"
@@ -471,10 +470,6 @@ StudyOutput contacts(bool quick) {
 StudyOutput cloth_study(bool quick) {
   const long steps = 2000;
   const std::vector<double> stiffnesses = quick ? std::vector<double>{10, 100, 1000} : std::vector<double>{10, 100, 1000, 10000};
-  const auto sheet = [](double c) {
-    return make_model("cloth", {{"rows", 8}, {"columns", 8}, {"stiffness", c}, {"shear_stiffness", c / 2}, {"bend_stiffness", c / 10},
-                                {"wind_coefficient", 0}, {"pin_corners", 0}, {"pin_top_corners", 1}});
-  };
   Table limits{{"stiffness", "method", "omega_max", "mode_damping", "predicted_dt", "measured_dt", "measured_over_predicted"}, {}};
   std::string md = fmt::format(
       "An 8 x 8 sheet (0.5 kg, hanging from two corners; shear and bend springs at 1/2 and 1/10 of the structural stiffness c). "
@@ -490,7 +485,7 @@ StudyOutput cloth_study(bool quick) {
   std::string implicit_note;
   bool implicit_all_ok = true;
   for (const double c : stiffnesses) {
-    const auto model = sheet(c);
+    const auto model = stability_sheet(c);
     const StiffestMode mode = stiffest_mode(*model, 0, model->initial_state());
     for (const std::string method : {"symplectic-euler", "rk4", "euler"}) {
       const double predicted = *mass_spring_stable_dt(method, mode);
@@ -522,16 +517,10 @@ StudyOutput cloth_study(bool quick) {
   Table damping{{"omega_h", "measured_ratio", "predicted_ratio", "periods_to_halve"}, {}};
   md += "Implicit Euler's numerical damping: one mass on one undamped spring (w = 20 rad/s), the amplitude sqrt(w^2 u^2 + v^2) "
         "kept per step against 1 / sqrt(1 + w^2 h^2).\n\n| w h | measured | 1 / sqrt(1 + w^2 h^2) | periods to halve |\n|---|---|---|---|\n";
-  const double mass = 0.1, stiffness = 40, g = 9.81, w = std::sqrt(stiffness / mass);
-  const auto spring = make_model("hanging-chain", {{"nodes", 1}, {"mass", mass}, {"stiffness", stiffness}, {"damping", 0}, {"g", g}});
-  const double rest = chain_equilibrium(1, mass, stiffness, 0.1, g)[0];
   std::map<double, double> halving;
   double worst_damping = 0;
   for (const double wh : {0.01, 0.1, 0.5, 1.0, 3.0}) {
-    const double h = wh / w;
-    const Measured m = run_and_measure(*spring, "implicit-euler", StepControl::fixed(h), h, h);
-    const Eigen::VectorXd y0 = spring->initial_state(), y1 = m.result.y_stop;
-    const double ratio = std::hypot(w * (y1[1] - rest), y1[4]) / std::hypot(w * (y0[1] - rest), y0[4]);
+    const double ratio = implicit_euler_amplitude_ratios(wh, 1)[0];
     const double predicted = 1 / std::sqrt(1 + wh * wh);
     const double halve = std::log(2) / -std::log(ratio) * wh / (2 * std::numbers::pi);
     damping.rows.push_back({wh, ratio, predicted, halve});

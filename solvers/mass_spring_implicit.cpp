@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 namespace stepwise {
@@ -20,22 +21,24 @@ BaraffWitkinSystem::BaraffWitkinSystem(const OdeSystem& system, bool definite)
 
 void BaraffWitkinSystem::assemble_matrix(double t, const Eigen::VectorXd& y, double h) {
   system_.force_jacobians(t, y, definite_, k_, d_);
-  const bool same_pattern = a_.nonZeros() == k_.nonZeros() && k_.nonZeros() == d_.nonZeros() &&
-                            std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), d_.innerIndexPtr()) &&
-                            std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), a_.innerIndexPtr());
-  if (same_pattern) {
-    // K, D and A share one pattern with every diagonal entry in it (the usual case after the first call)
+  // force_jacobians keeps its pattern from call to call: whether K, D and A share one is found at the first
+  // call, and then A's values come straight from theirs
+  if (shared_pattern_) {
     const double* k = k_.valuePtr();
     const double* d = d_.valuePtr();
     double* a = a_.valuePtr();
     for (Eigen::Index s = 0; s < a_.nonZeros(); ++s) a[s] = -h * d[s] - h * h * k[s];
     a_.diagonal() += m_;
   } else {
+    const bool first = a_.nonZeros() == 0;
     Eigen::SparseMatrix<double> mass(m_.size(), m_.size());
     mass.setIdentity();
     mass.diagonal() = m_;
     a_ = mass - h * d_ - (h * h) * k_;
     a_.makeCompressed();
+    shared_pattern_ = first && k_.nonZeros() == d_.nonZeros() && k_.nonZeros() == a_.nonZeros() &&
+                      std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), d_.innerIndexPtr()) &&
+                      std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), a_.innerIndexPtr());
   }
   system_.acceleration(t, y, f_);
   f_ = f_.cwiseProduct(m_);
@@ -65,7 +68,9 @@ class KeptFactor {
   template <class Rhs>
   Eigen::VectorXd solve(const Rhs& r) const {
     rhs_ = r;
-    factor_->solve(rhs_, out_);
+    // a failed solve (CHOLMOD out of memory) poisons the iteration, which then fails to converge and the
+    // stepper refactorises, where the failure is reported by name
+    if (!factor_->solve(rhs_, out_).empty()) out_.setConstant(rhs_.rows(), 1, std::numeric_limits<double>::quiet_NaN());
     return out_.col(0);
   }
   void use(const SparseCholesky* factor) { factor_ = factor; }
@@ -110,9 +115,6 @@ class MassSpringImplicit final : public FixedStepper {
                           options_.newton_residual, options_.newton_max_iterations, t, h);
     return false;
   }
-
-  // the kept factor's last use and what its analysis chose, for the benchmark and the report
-  const CholeskyAnalysis& analysis() const { return factor_.analysis(); }
 
  private:
   // dv = A^-1 b (the system's rhs, or `rhs`) by the option's way; false with the failing call named

@@ -63,6 +63,7 @@ class BaraffWitkinSystem {
   bool definite_;
   Eigen::VectorXd m_, f_, b_;
   Eigen::SparseMatrix<double> k_, d_, a_;
+  bool shared_pattern_ = false;  // K, D and A have one pattern (found at the first assembly)
 };
 
 std::unique_ptr<FixedStepper> make_mass_spring_implicit(const CountedSystem& system, const MassSpringImplicitOptions& options);

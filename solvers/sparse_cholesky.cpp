@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
 
@@ -117,25 +118,24 @@ std::string SparseCholesky::analyze(const Eigen::SparseMatrix<double>& a, Orderi
   if (ordering == Ordering::cheaper) {
     cholmod_factor* amd = analyse_with(CHOLMOD_AMD);
     if (!amd) return m.status("cholmod_analyze (AMD)");
-    m.analysis.amd_flops = m.common.fl;
+    const double amd_flops = m.common.fl;
     cholmod_factor* metis = analyse_with(CHOLMOD_METIS);
     if (!metis) {
       cholmod_free_factor(&amd, &m.common);
       return m.status("cholmod_analyze (METIS)");
     }
-    m.analysis.metis_flops = m.common.fl;
-    const bool metis_cheaper = m.analysis.metis_flops < m.analysis.amd_flops;
+    const double metis_flops = m.common.fl;
+    const bool metis_cheaper = metis_flops < amd_flops;
     m.factor = metis_cheaper ? metis : amd;
     cholmod_free_factor(metis_cheaper ? &amd : &metis, &m.common);
     m.analysis.ordering = metis_cheaper ? "metis" : "amd";
-    m.analysis.flops = metis_cheaper ? m.analysis.metis_flops : m.analysis.amd_flops;
+    m.analysis.flops = std::min(amd_flops, metis_flops);
   } else {
     m.factor = analyse_with(ordering == Ordering::metis ? CHOLMOD_METIS : CHOLMOD_AMD);
     if (!m.factor) return m.status("cholmod_analyze");
     m.analysis.ordering = ordering == Ordering::metis ? "metis" : "amd";
     m.analysis.flops = m.common.fl;
   }
-  m.analysis.supernodal = m.factor->is_super != 0;
   // entries of L as the analysis counts them (the column counts)
   const auto* counts = static_cast<const int*>(m.factor->ColCount);
   for (Eigen::Index j = 0; j < n; ++j) m.analysis.factor_nonzeros += counts[j];
@@ -156,7 +156,6 @@ std::string SparseCholesky::factorize(const Eigen::SparseMatrix<double>& a) {
                        m.factor->n, m.common.status);
   if (!ok || m.common.status < 0) return m.status("cholmod_factorize");
   m.factored = true;
-  m.analysis.supernodal = m.factor->is_super != 0;
   return {};
 }
 

@@ -23,8 +23,6 @@ struct CholeskyAnalysis {
   std::string ordering;     // "amd" or "metis"
   double factor_nonzeros = 0;  // entries of L
   double flops = 0;         // floating-point operations of one numeric factorisation
-  double amd_flops = 0, metis_flops = 0;  // both, when Ordering::cheaper compared them (else 0)
-  bool supernodal = false;  // CHOLMOD's supernodal path (BLAS-3 on dense blocks) rather than simplicial
 };
 
 class SparseCholesky {

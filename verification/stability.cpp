@@ -1,5 +1,6 @@
 #include "stability.hpp"
 
+#include "models/hanging_chain.hpp"
 #include "models/height_field.hpp"
 #include "solvers/wave_step.hpp"
 #include "tolerances.hpp"
@@ -106,6 +107,29 @@ double measured_stable_dt(const Model& model, std::string_view method, long step
   const auto bounded = [&](double dt) { return stays_bounded(model, method, y0, dt, steps); };
   const double low = predicted > 0 ? predicted / 10 : 1e-6, high = predicted > 0 ? predicted * 10 : 1;
   return bisect_stability(bounded, low, high, tolerance::stability_bisection_width);
+}
+
+std::unique_ptr<Model> stability_sheet(double stiffness) {
+  return make_model("cloth", {{"rows", 8}, {"columns", 8}, {"stiffness", stiffness}, {"shear_stiffness", stiffness / 2},
+                              {"bend_stiffness", stiffness / 10}, {"wind_coefficient", 0}, {"pin_corners", 0}, {"pin_top_corners", 1}});
+}
+
+std::vector<double> implicit_euler_amplitude_ratios(double wh, int steps) {
+  const double mass = 0.1, stiffness = 40, g = 9.81, w = std::sqrt(stiffness / mass);
+  const auto spring = make_model("hanging-chain", {{"nodes", 1}, {"mass", mass}, {"stiffness", stiffness}, {"damping", 0}, {"g", g}});
+  const double rest = chain_equilibrium(1, mass, stiffness, spring->mass_spring()->springs[0].rest, g)[0];
+  const auto amplitude = [&](const Eigen::VectorXd& y) { return std::hypot(w * (y[1] - rest), y[4]); };
+  const double h = wh / w;
+  std::vector<double> times;
+  for (int k = 1; k <= steps; ++k) times.push_back(k * h);
+  const RunResult r = make_integrator("implicit-euler", StepControl::fixed(h))->integrate(*spring, 0, spring->initial_state(), times);
+  std::vector<double> ratios;
+  double before = amplitude(spring->initial_state());
+  for (const auto& y : r.trajectory.y) {
+    ratios.push_back(amplitude(y) / before);
+    before = amplitude(y);
+  }
+  return ratios;
 }
 
 }  // namespace stepwise

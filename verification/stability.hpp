@@ -6,9 +6,11 @@
 #include "solvers/integrator.hpp"
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace stepwise {
 
@@ -58,5 +60,14 @@ std::optional<double> mass_spring_stable_dt(std::string_view method, const Stiff
 // tolerance::stability_bisection_width) between a tenth and ten times the predicted limit (or 1e-6 s and 1 s
 // where none is predicted): `steps` steps from the model's initial state stay within 1e6 of its size.
 double measured_stable_dt(const Model& model, std::string_view method, long steps, double predicted);
+
+// The sheet the cloth's stability checks use (the test and the report's table): 8 x 8 nodes, 0.5 kg, hanging
+// from its two top corners, no wind, shear and bend springs at 1/2 and 1/10 of the structural stiffness c.
+std::unique_ptr<Model> stability_sheet(double stiffness);
+
+// Implicit Euler's numerical damping: one mass on one undamped spring moving along it (a linear oscillator
+// about its equilibrium, w = 20 rad/s), `steps` steps of h = wh / w by `implicit-euler`; the amplitude
+// sqrt(w^2 u^2 + v^2) each step keeps, to compare with 1 / sqrt(1 + w^2 h^2)
+std::vector<double> implicit_euler_amplitude_ratios(double wh, int steps);
 
 }  // namespace stepwise
