@@ -79,12 +79,16 @@ int main(int argc, char** argv) {
   study->add_option("name", study_name, "study name")->required();
   study->add_flag("--quick", study_quick, "reduced sweep");
   study->add_option("--out", study_out, "output directory")->required();
+  int study_threads = 0;
+  study->add_option("--threads", study_threads, "threads the sweep's points run on (default: one per core)")->check(CLI::Range(1, 1024));
 
   std::string report_out;
   bool report_quick = false;
   auto* report = app.add_subcommand("report", "run every study and write the report");
   report->add_flag("--quick", report_quick, "reduced sweeps");
   report->add_option("--out", report_out, "output directory")->required();
+  int report_threads = 0;
+  report->add_option("--threads", report_threads, "threads the sweeps' points run on (default: one per core)")->check(CLI::Range(1, 1024));
 
   try {
     app.parse(argc, argv);
@@ -101,8 +105,8 @@ int main(int argc, char** argv) {
     if (*methods) return list_methods(json);
     if (*scenes) return list_scenes();
     if (*run_cmd) return stepwise::run_command(run);
-    if (*study) return stepwise::study_command(study_name, study_quick, study_out);
-    if (*report) return stepwise::report_command(report_quick, report_out);
+    if (*study) return stepwise::study_command(study_name, study_quick, study_threads, study_out);
+    if (*report) return stepwise::report_command(report_quick, report_threads, report_out);
   } catch (const stepwise::InputError& e) {
     std::cerr << "stepwise: " << e.what() << '\n';
     return 2;

@@ -2,12 +2,20 @@
 
 #include "atomic_write.hpp"
 #include "studies.hpp"
+#include "solvers/integrator.hpp"
 
 #include <fmt/format.h>
 
+#include <spawn.h>
+#include <sys/wait.h>
+
 #include <chrono>
 #include <filesystem>
+#include <cstring>
 #include <iostream>
+#include <thread>
+
+extern char** environ;
 
 namespace stepwise {
 namespace fs = std::filesystem;
@@ -26,25 +34,52 @@ const Study* find_study(const std::string& name) {
   return nullptr;
 }
 
-// run one study, write its CSVs into dir, return its Markdown section
-std::string run_study(const Study& study, bool quick, const fs::path& dir) {
+// run one study, write its CSVs into dir, add its figures to the list; return its Markdown section
+std::string run_study(const Study& study, const StudyContext& ctx, const fs::path& dir, std::vector<Figure>& figures) {
   const auto start = std::chrono::steady_clock::now();
-  std::cerr << "stepwise: study " << study.name << (quick ? " (quick)" : "") << " ..." << std::flush;
-  StudyOutput output = study.run(quick);
+  ctx.progress->begin_study(fmt::format("{}{}", study.name, ctx.quick ? " (quick)" : ""));
+  StudyOutput output = study.run(ctx);
   std::string md = fmt::format("## {}\n\n{}", study.title, output.markdown);
   md += "Data: ";
   for (const auto& [stem, table] : output.tables) {
     write_file_atomic(dir / (stem + ".csv"), to_csv(table));
     md += fmt::format("[{0}.csv]({0}.csv) ", stem);
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cerr << fmt::format(" {:.1f} s\n", seconds);
+  figures.insert(figures.end(), output.figures.begin(), output.figures.end());
+  ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return md + "\n\n";
 }
 
+// the figures' list for plot.py (figures.csv), then plot.py drawing them, and with `html` report.md as index.html
+void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, bool html) {
+  Table list{{"stem", "kind", "subject"}, {}};
+  for (const auto& f : figures) list.rows.push_back({f.stem(), f.kind, f.subject});
+  write_file_atomic(dir / "figures.csv", to_csv(list));
+  Table method_table{{"name", "order", "source", "kind"}, {}};
+  for (const auto& m : methods()) method_table.rows.push_back({std::string(m.name), std::string(m.order), std::string(m.source), std::string(m.kind)});
+  write_file_atomic(dir / "methods.csv", to_csv(method_table));
+  const std::string python = STEPWISE_PYTHON, script = fs::path(STEPWISE_REPORT_DIR) / "plot.py", where = dir.string();
+  std::vector<std::string> args{python, script, where};
+  if (html) args.push_back("--html");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (const int error = posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ); error != 0)
+    throw std::runtime_error(fmt::format("cannot start {} for the figures ({}): install python3 (Debian's, with python3-matplotlib)", python,
+                                         std::strerror(error)));
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw std::runtime_error(fmt::format("{} {} failed (exit status {}): the figures were not drawn", python, script,
+                                         WIFEXITED(status) ? WEXITSTATUS(status) : -1));
+}
+
+int default_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+
 }  // namespace
 
-int study_command(const std::string& name, bool quick, const std::string& out) {
+int study_command(const std::string& name, bool quick, int threads, const std::string& out) {
   const Study* study = find_study(name);
   if (!study) {
     std::cerr << fmt::format("stepwise study: unknown study '{}' (one of {})\n", name, study_names());
@@ -52,15 +87,24 @@ int study_command(const std::string& name, bool quick, const std::string& out) {
   }
   try {
     ensure_writable_directory(out);
-    write_file_atomic(fs::path(out) / (name + ".md"), run_study(*study, quick, out));
   } catch (const std::runtime_error& e) {
     std::cerr << "stepwise study: " << e.what() << '\n';
     return 2;
   }
+  try {
+    Progress progress(true);
+    const StudyContext ctx{quick, threads > 0 ? threads : default_threads(), &progress};
+    std::vector<Figure> figures;
+    write_file_atomic(fs::path(out) / (name + ".md"), run_study(*study, ctx, out, figures));
+    draw_figures(figures, out, false);
+  } catch (const std::runtime_error& e) {
+    std::cerr << "stepwise study: " << e.what() << '\n';
+    return 1;
+  }
   return 0;
 }
 
-int report_command(bool quick, const std::string& out) {
+int report_command(bool quick, int threads, const std::string& out) {
   const fs::path target = fs::absolute(out).lexically_normal();
   const fs::path parent = target.parent_path();
   fs::path staging;
@@ -80,16 +124,27 @@ int report_command(bool quick, const std::string& out) {
   }
 
   const auto start = std::chrono::steady_clock::now();
+  Progress progress(true);
+  const StudyContext ctx{quick, threads > 0 ? threads : default_threads(), &progress};
   std::string md = fmt::format("# stepwise report{}\n\n", quick ? " (quick)" : "");
-  md += "Every table below is computed by this run from the CSV file named under it.\n\n";
-  for (const auto& study : studies()) md += run_study(study, quick, staging);
+  md += "Every table and figure below is computed by this run from the CSV files named under it, in this directory.\n\n";
+  std::vector<Figure> figures;
+  std::error_code ec;
+  try {
+    for (const auto& study : studies()) md += run_study(study, ctx, staging, figures);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    md += fmt::format("---\nStudies run in {:.1f} s of wall time on {} threads.\n", seconds, ctx.threads);
+    write_file_atomic(staging / "report.md", md);
+    draw_figures(figures, staging, true);
+  } catch (const std::exception& e) {
+    fs::remove_all(staging, ec);
+    std::cerr << "stepwise report: " << e.what() << '\n';
+    return 1;
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  md += fmt::format("---\nGenerated in {:.1f} s of wall time.\n", seconds);
-  write_file_atomic(staging / "report.md", md);
 
   // swap: the old report is moved aside, the new one renamed into place, then the old one removed
   const fs::path old = parent / fmt::format(".{}.old", target.filename().string());
-  std::error_code ec;
   fs::remove_all(old, ec);
   if (fs::exists(target)) fs::rename(target, old);
   fs::rename(staging, target);

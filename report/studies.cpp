@@ -23,162 +23,10 @@
 namespace stepwise {
 namespace {
 
-// a scene of the studies: a model with parameters, integrated from t = 0 to t_end
-struct StudyScene {
-  std::string label;
-  std::string model;
-  Params params;
-  double t_end;
-  double time_scale;  // fastest time scale (s): 1/w for the pendulum, 1/rate for the flow
-};
-
-std::vector<StudyScene> ode_scenes() {
-  return {{"pendulum", "pendulum", {{"theta0", 1.0}}, 10.0, 0.25},
-          {"flow-particle", "flow-particle", {}, 1.0, 1.0},
-          {"projectile", "projectile", {{"drag", 0.5}}, 2.0, 1.0},
-          // one particle of the particle system without repulsion: three damped oscillators, w = 2 rad/s
-          {"particle-system", "particle-system", {{"count", 1}, {"repulsion", 0}}, 2.0, 0.5},
-          // the (1, 2) mode of a 17^2 height field against its exact semi-discrete solution: the seeds' scheme
-          // beside the method of lines. The time scale is 16 times the scheme's stability limit (0.044 s), so
-          // wave-fd starts at half its limit and rk4 and the Euler family start past theirs (shown diverged)
-          // and halve into stability
-          {"standing-wave", "standing-wave", {{"size", 17}, {"spacing", 1.0 / 16}, {"c", 1}, {"mu", 0.5}, {"mode_m", 1}, {"mode_n", 2}, {"amplitude", 1}}, 2.0,
-           16 * wave_stable_dt({17, 1.0 / 16, 1, 0.5})}};
-}
-
-// methods whose dense n x n matrices exceed this (362 unknowns) are left out of a scene's sweeps: a dense
-// LU of the standing wave's 578 unknowns (64 MFLOP) at every step of every point would take the report's
-// whole budget, and cvode-bdf (KLU on the sparse Jacobian) is there to represent the implicit methods
-constexpr double dense_matrix_budget = 1 << 20;
-
-constexpr std::string_view dense_note =
-    "Methods that would keep dense n x n matrices larger than 1 MiB (the standing wave's 578 unknowns: implicit-euler, GSL's implicit "
-    "steppers) are left out of a scene; cvode-bdf, with KLU on the sparse Jacobian, stands for the implicit methods there.\n\n";
-
-bool in_sweep(const MethodInfo& method, const Model& model) {
-  return method_applies(method, model) && dense_matrix_bytes(method, model) <= dense_matrix_budget;
-}
-
-std::string sci(double v) { return std::isfinite(v) ? fmt::format("{:.2e}", v) : "—"; }
-
-// ---- convergence: error against dt for every fixed-step method, with the fitted order
-
-StudyOutput convergence(bool quick) {
-  const int halvings = quick ? 4 : 6;
-  Table points{{"scene", "method", "dt", "steps", "rhs_evals", "error", "status"}, {}};
-  Table orders{{"scene", "method", "documented_order", "observed_order"}, {}};
-  std::string md = "Observed order: least-squares slope of log(error at t_end) against log(dt) over the halvings, fitted to "
-                   "the errors between 1e-12 (round-off) and 1e-1 (pre-asymptotic), against the order of the method table. "
-                   "GSL's multistep and extrapolation steppers (bsimp, msadams, msbdf) choose their order from the error "
-                   "control, so their slope is only reported (nan: every error at round-off).\n\n" + std::string(dense_note);
-  for (const auto& scene : ode_scenes()) {
-    const auto model = make_model(scene.model, scene.params);
-    md += fmt::format("### {}\n\n| method | order (method table) | observed order | error at coarsest dt | error at finest dt |\n|---|---|---|---|---|\n", scene.label);
-    for (const auto& method : methods()) {
-      if (!method.fixed_step || !in_sweep(method, *model)) continue;
-      const ConvergenceSweep sweep = convergence_sweep(*model, method, scene.t_end, halvings, coarse_dt(method, scene.time_scale));
-      for (size_t k = 0; k < sweep.runs.size(); ++k) {
-        const Measured& m = sweep.runs[k];
-        points.rows.push_back({scene.label, std::string(method.name), sweep.dt[k], m.result.stats.steps,
-                               m.result.stats.rhs_evals, m.error.value_or(std::numeric_limits<double>::quiet_NaN()),
-                               std::string(to_string(m.result.status))});
-      }
-      // errors of the coarsest and finest runs that succeeded, whether or not they entered the fit
-      std::vector<double> errors;
-      for (const auto& m : sweep.runs)
-        if (m.error) errors.push_back(*m.error);
-      const double slope = sweep.observed_order;
-      orders.rows.push_back({scene.label, std::string(method.name), std::string(method.order), slope});
-      md += fmt::format("| {} | {} | {:.2f} | {} | {} |\n", method.name, method.order, slope,
-                        sci(errors.empty() ? NAN : errors.front()), sci(errors.empty() ? NAN : errors.back()));
-    }
-    md += "\n";
-  }
-  return {{{"convergence", std::move(points)}, {"convergence_orders", std::move(orders)}}, md};
-}
-
-// ---- work-precision: error against cost for every method
-
-// minimum thread CPU time over `repeats` runs after one discarded warm-up run
-Measured timed_run(const Model& model, std::string_view method, const StepControl& control, double t_end, int repeats) {
-  Measured best = run_and_measure(model, method, control, t_end, t_end);
-  for (int r = 0; r < repeats; ++r) {
-    Measured m = run_and_measure(model, method, control, t_end, t_end);
-    if (m.result.stats.cpu_seconds < best.result.stats.cpu_seconds || r == 0) best = std::move(m);
-  }
-  return best;
-}
-
-StudyOutput work_precision(bool quick) {
-  const int repeats = quick ? 1 : 3;
-  const int halvings = quick ? 4 : 7;
-  std::vector<double> rtols;
-  for (int e = 2; e <= 12; e += quick ? 2 : 1) rtols.push_back(std::pow(10.0, -e));
-  const std::vector<double> targets{1e-3, 1e-6, 1e-9};
-
-  Table points{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}};
-  std::string md = "Error at t_end (max norm against the exact solution) against cost. Fixed-step methods are swept over "
-                   "dt halvings, adaptive ones over rtol (atol = 1e-3 rtol). CPU time is the minimum over repeated runs "
-                   "after a discarded warm-up. Failed or diverged points stay in the CSV with their status.\n\n" + std::string(dense_note);
-  for (const auto& scene : ode_scenes()) {
-    const auto model = make_model(scene.model, scene.params);
-    // cheapest (by RHS evaluations and by CPU time) method reaching each target
-    std::map<double, std::pair<std::string, double>> by_rhs, by_cpu;
-    auto consider = [&](const std::string& label, const Measured& m) {
-      if (!m.error) return;
-      for (const double target : targets) {
-        if (*m.error > target) continue;
-        const double rhs = static_cast<double>(m.result.stats.rhs_evals);
-        if (!by_rhs.contains(target) || rhs < by_rhs[target].second) by_rhs[target] = {label, rhs};
-        if (!by_cpu.contains(target) || m.result.stats.cpu_seconds < by_cpu[target].second) by_cpu[target] = {label, m.result.stats.cpu_seconds};
-      }
-    };
-    for (const auto& method : methods()) {
-      if (!in_sweep(method, *model)) continue;
-      if (method.fixed_step) {
-        for (int k = 0; k <= halvings; ++k) {
-          StepControl control;
-          control.dt = coarse_dt(method, scene.time_scale) / std::pow(2.0, k);
-          const Measured m = timed_run(*model, method.name, control, scene.t_end, repeats);
-          points.rows.push_back({scene.label, std::string(method.name), std::string("fixed"), *control.dt, NAN,
-                                 m.error.value_or(NAN), m.result.stats.rhs_evals, m.result.stats.steps,
-                                 m.result.stats.cpu_seconds, std::string(to_string(m.result.status))});
-          consider(fmt::format("{} (dt {:.3g})", method.name, *control.dt), m);
-        }
-      }
-      if (method.adaptive) {
-        for (const double rtol : rtols) {
-          StepControl control;
-          control.rtol = rtol;
-          control.atol = 1e-3 * rtol;
-          // a low-order method at a tight tolerance needs millions of steps (gsl-rk1imp at 1e-12: 3e7 steps,
-          // 30 s): such a point is reported as failed past this budget rather than allowed to stall the report
-          control.max_steps = 200'000;
-          const Measured m = timed_run(*model, method.name, control, scene.t_end, repeats);
-          points.rows.push_back({scene.label, std::string(method.name), std::string("adaptive"), NAN, rtol,
-                                 m.error.value_or(NAN), m.result.stats.rhs_evals, m.result.stats.steps,
-                                 m.result.stats.cpu_seconds, std::string(to_string(m.result.status))});
-          consider(fmt::format("{} (rtol {:.0e})", method.name, rtol), m);
-        }
-      }
-    }
-    md += fmt::format("### {}\n\n| error target | cheapest in RHS evaluations | RHS evals | cheapest in CPU time | CPU s |\n|---|---|---|---|---|\n", scene.label);
-    for (const double target : targets) {
-      if (!by_rhs.contains(target)) {
-        md += fmt::format("| {:.0e} | none reached it | | | |\n", target);
-        continue;
-      }
-      md += fmt::format("| {:.0e} | {} | {:.0f} | {} | {:.2e} |\n", target, by_rhs[target].first, by_rhs[target].second,
-                        by_cpu[target].first, by_cpu[target].second);
-    }
-    md += "\n";
-  }
-  return {{{"work_precision", std::move(points)}}, md};
-}
-
 // ---- energy: the pendulum over many periods
 
-StudyOutput energy(bool quick) {
+StudyOutput energy(const StudyContext& ctx) {
+  const bool quick = ctx.quick;
   const int periods = quick ? 100 : 1000;
   const int samples = 20;  // per period: the error oscillates within a period, so one sample a period would alias it
   const double theta0 = 0.5;
@@ -211,12 +59,15 @@ StudyOutput energy(bool quick) {
     md += fmt::format("| {} | {:.3e} | {:.3e} | {:+.3e} |\n", method, max_abs(0, tenth), max_abs(n - tenth, n),
                       errors.empty() ? NAN : errors.back());
   }
-  return {{{"energy", std::move(table)}}, md + "\n"};
+  std::vector<Figure> figures;
+  md += "\n";
+  md += add_figure(figures, "energy", "", "Relative energy error of the pendulum over time, per method");
+  return {{{"energy", std::move(table)}}, md, figures};
 }
 
 // ---- adequacy: where the small-angle model stops being enough
 
-StudyOutput adequacy(bool) {
+StudyOutput adequacy(const StudyContext&) {
   Table table{{"phase_tolerance_rad", "periods", "max_amplitude_rad", "max_amplitude_deg"}, {}};
   std::string md = "Largest amplitude at which the small-angle pendulum (theta'' = -(g/L) theta) stays within a phase "
                    "error of the exact (elliptic) solution after N periods. Below it the linear model, which costs one "
@@ -228,12 +79,15 @@ StudyOutput adequacy(bool) {
       table.rows.push_back({tolerance, periods, amplitude, amplitude * 180 / std::numbers::pi});
       md += fmt::format("| {} | {:.0f} | {:.2f} |\n", tolerance, periods, amplitude * 180 / std::numbers::pi);
     }
-  return {{{"adequacy", std::move(table)}}, md + "\n"};
+  std::vector<Figure> figures;
+  md += "\n";
+  md += add_figure(figures, "adequacy", "", "Largest amplitude the small-angle pendulum serves, against the periods shown");
+  return {{{"adequacy", std::move(table)}}, md, figures};
 }
 
 // ---- the seeds' animated bouncing ball against the physical one
 
-StudyOutput bouncing_ball_curve(bool) {
+StudyOutput bouncing_ball_curve(const StudyContext&) {
   // the seeds' OpenGL example animates y(p) = A |cos(w p)| e^(-k p): its bounces (zeros of cos) are equally
   // spaced, pi / w apart, and its apexes fall by e^(-k pi / w) per bounce. Matched to the physical ball of
   // height A and restitution eps on the first rebound (flight 2 eps v0 / g) and on the apex ratio (eps^2),
@@ -259,12 +113,16 @@ StudyOutput bouncing_ball_curve(bool) {
     table.rows.push_back({static_cast<long>(n + 1), flight, spacing, apex, curve_apex});
     if (n < 5 || n + 2 == impacts.size()) md += fmt::format("| {} | {:.4f} | {:.4f} | {:.2f} |\n", n + 1, flight, spacing, spacing / flight);
   }
-  return {{{"bouncing_ball_curve", std::move(table)}}, md + "\n"};
+  std::vector<Figure> figures;
+  md += "\n";
+  md += add_figure(figures, "bouncing_ball_curve", "", "The seeds' animation curve against the physical ball, bounce by bounce");
+  return {{{"bouncing_ball_curve", std::move(table)}}, md, figures};
 }
 
 // ---- event times and heights of the bouncing ball against its closed form, per method and step or tolerance
 
-StudyOutput event_times(bool quick) {
+StudyOutput event_times(const StudyContext& ctx) {
+  const bool quick = ctx.quick;
   const Params ball{{"height", 1.0}, {"restitution", 0.8}, {"g", 9.81}, {"rest_speed", 0.01}};
   const auto model = make_model("bouncing-ball", ball);
   const auto exact = bouncing_ball_impacts(ball, 1000);
@@ -311,13 +169,14 @@ StudyOutput event_times(bool quick) {
       control.event_location = EventLocation::restep;
       record(method, method.starts_with("cvode") ? "rootfinding" : "restep", std::nullopt, rtol, control);
     }
-  return {{{"event_times", std::move(table)}}, md + "\n"};
+  return {{{"event_times", std::move(table)}}, md + "\n", {}};
 }
 
 
 // ---- wave stability: the largest stable dt of the seeds' two height-field schemes, against mu
 
-StudyOutput wave_stability_study(bool quick) {
+StudyOutput wave_stability_study(const StudyContext& ctx) {
+  const bool quick = ctx.quick;
   const int points = 32;
   const long steps = quick ? 1000 : 3000;
   const std::vector<double> mus = quick ? std::vector<double>{0, 0.5, 2, 10} : std::vector<double>{0, 0.5, 1, 2, 5, 10, 20, 50};
@@ -330,10 +189,25 @@ StudyOutput wave_stability_study(bool quick) {
       "|---|---|---|---|---|---|---|---|---|\n",
       steps, points);
   double worst_derived = 0, seeds_at_rest = 0, seeds_damped = 0;
+  struct Point {
+    std::string method;
+    double c, d, mu;
+  };
+  std::vector<Point> plan;
+  std::vector<std::string> labels;
   for (const std::string method : {"wave-fd", "symplectic-euler"})
     for (const auto& [c, d] : {std::pair{1.0, 0.02}, {2.0, 0.05}})
       for (const double mu : mus) {
-        const WaveStability w = wave_stability(method, points, d, c, mu, steps);
+        plan.push_back({method, c, d, mu});
+        labels.push_back(fmt::format("{} c {:g} d {:g} mu {:g}", method, c, d, mu));
+      }
+  const auto found = ctx.sweep<WaveStability>(labels, [&](size_t i) {
+    const Point& p = plan[i];
+    return wave_stability(p.method, points, p.d, p.c, p.mu, steps);
+  });
+  for (size_t i = 0; i < plan.size(); ++i) {
+        const auto& [method, c, d, mu] = plan[i];
+        const WaveStability& w = found[i];
         table.rows.push_back({method, c, d, mu, w.measured, w.derived, w.seeds, w.measured / w.derived, w.seeds / w.measured});
         md += fmt::format("| {} | {} | {} | {} | {:.5g} | {:.5g} | {:.5g} | {:.4f} | {:.4f} |\n", method, c, d, mu, w.measured, w.derived,
                           w.seeds, w.measured / w.derived, w.seeds / w.measured);
@@ -348,12 +222,15 @@ StudyOutput wave_stability_study(bool quick) {
       "explicit, shrinks), and promises up to {:.1f}% more than the schemes give — a run at the seeds' dt diverges. It is the "
       "limit of the scheme with the damping taken implicitly.\n\n",
       100 * worst_derived, 100 * seeds_at_rest, 100 * seeds_damped);
-  return {{{"wave_stability", std::move(table)}}, md};
+  std::vector<Figure> figures;
+  md += add_figure(figures, "wave_stability", "", "Largest stable step of the height field against damping: measured, derived, the seeds' condition");
+  return {{{"wave_stability", std::move(table)}}, md, figures};
 }
 
 // ---- rigid body: what the structure-preserving splitting buys over rk4 and CVODE at equal cost
 
-StudyOutput rigid_body_invariants(bool quick) {
+StudyOutput rigid_body_invariants(const StudyContext& ctx) {
+  const bool quick = ctx.quick;
   // a generic tumble (I = 1, 2, 3; w0 = (0.3, 1, 0.2): period 21 s), long enough for drift to show
   const double t_end = quick ? 200 : 2000;
   const Eigen::Vector3d inertia(1, 2, 3), w0(0.3, 1.0, 0.2);
@@ -400,10 +277,11 @@ StudyOutput rigid_body_invariants(bool quick) {
   }
   md += "\n" + findings +
         "\nCVODE Adams cannot project (SUNDIALS projects for BDF only): its |q| - 1 column is the quaternion's drift.\n\n";
-  return {{{"rigid_body_invariants", std::move(table)}}, md};
+  return {{{"rigid_body_invariants", std::move(table)}}, md, {}};
 }
 
-StudyOutput contacts(bool quick) {
+StudyOutput contacts(const StudyContext& ctx) {
+  const bool quick = ctx.quick;
   // per step: the tumbling box (the model's defaults, the scene's drop), a box resting on a slope inside its friction cone and
   // one sliding down a steeper slope (Coulomb's acceleration exact), and the collapsing wall
   const double rest_time = quick ? 2 : 10, collapse_time = quick ? 1 : 3;
@@ -424,36 +302,50 @@ StudyOutput contacts(bool quick) {
       rest_time, collapse_time);
   double worst_creep = 0, worst_slide = 0, fewest_kept = 1, most_kept = 0;
   std::pair<size_t, size_t> impacts{std::numeric_limits<size_t>::max(), 0};
-  for (const double dt : {4e-3, 2e-3, 1e-3, 5e-4}) {
-    const StepControl control = StepControl::fixed(dt);
+  struct Row {
+    size_t tumble_impacts = 0, collapse_impacts = 0;
+    double rest = 0, sink = 0, creep = 0, slide_error = 0, rate = 0, kept = 0;
+    bool ok = false;
+  };
+  const std::vector<double> dts{4e-3, 2e-3, 1e-3, 5e-4};
+  std::vector<std::string> labels;
+  for (const double dt : dts) labels.push_back(fmt::format("dt {:g}", dt));
+  const auto rows = ctx.sweep<Row>(labels, [&](size_t i) {
+    Row row;
+    const StepControl control = StepControl::fixed(dts[i]);
     const auto box = make_model("dropped-body");  // its defaults are the scene's drop
     const Measured t = run_and_measure(*box, "sequential-impulses", control, 5.0, 0.01);
     const auto names = box->summary_names();
     const auto kinetic_at = std::find(names.begin(), names.end(), "kinetic") - names.begin();
     const double k0 = box->summary(box->initial_state())[kinetic_at];
-    double rest = 0;
     for (size_t k = 0; k < t.result.trajectory.y.size(); ++k)
-      if (box->summary(t.result.trajectory.y[k])[kinetic_at] > 1e-9 * k0) rest = t.result.trajectory.t[k];
-    const double sink = hz - t.result.y_stop[2];
+      if (box->summary(t.result.trajectory.y[k])[kinetic_at] > 1e-9 * k0) row.rest = t.result.trajectory.t[k];
+    row.tumble_impacts = t.result.events.size();
+    row.sink = hz - t.result.y_stop[2];
     const auto gentle_box = make_model("dropped-body", box_on_slope(gentle, mu));
-    const SlopeMotion held = slope_motion(run_and_measure(*gentle_box, "sequential-impulses", control, rest_time, 0.01).result, gentle, 0.05);
+    row.creep = slope_motion(run_and_measure(*gentle_box, "sequential-impulses", control, rest_time, 0.01).result, gentle, 0.05).creep;
     const auto steep_box = make_model("dropped-body", box_on_slope(steep, mu));
     const SlopeMotion slid = slope_motion(run_and_measure(*steep_box, "sequential-impulses", control, 1.0, 0.1).result, steep, 0.05);
-    const double slide_error = std::abs(slid.speed / coulomb - 1);
+    row.slide_error = std::abs(slid.speed / coulomb - 1);
     const auto wall = make_model("box-stack");
     const RunResult c = make_integrator("sequential-impulses", control)->integrate(*wall, 0, wall->initial_state(), std::vector<double>{collapse_time});
-    const double kept = *wall->energy(c.y_stop) / *wall->energy(wall->initial_state());
-    const double rate = static_cast<double>(c.stats.steps) / c.stats.cpu_seconds;
-    const bool ok = t.result.status == Status::ok && c.status == Status::ok;
-    table.rows.push_back({dt, static_cast<double>(t.result.events.size()), rest, sink, held.creep, slide_error, rate,
-                          static_cast<double>(c.events.size()), kept, std::string(ok ? "ok" : "failed")});
-    worst_creep = std::max(worst_creep, held.creep);
-    worst_slide = std::max(worst_slide, slide_error);
-    fewest_kept = std::min(fewest_kept, kept);
-    most_kept = std::max(most_kept, kept);
-    impacts = {std::min(impacts.first, c.events.size()), std::max(impacts.second, c.events.size())};
-    md += fmt::format("| {:g} | {} | {:.2f} | {} | {} | {} | {:.0f} | {} | {:.3f} |\n", dt, t.result.events.size(), rest, sci(sink), sci(held.creep),
-                      sci(slide_error), rate, c.events.size(), kept);
+    row.kept = *wall->energy(c.y_stop) / *wall->energy(wall->initial_state());
+    row.rate = static_cast<double>(c.stats.steps) / c.stats.cpu_seconds;
+    row.collapse_impacts = c.events.size();
+    row.ok = t.result.status == Status::ok && c.status == Status::ok;
+    return row;
+  });
+  for (size_t i = 0; i < dts.size(); ++i) {
+    const Row& r = rows[i];
+    table.rows.push_back({dts[i], static_cast<double>(r.tumble_impacts), r.rest, r.sink, r.creep, r.slide_error, r.rate,
+                          static_cast<double>(r.collapse_impacts), r.kept, std::string(r.ok ? "ok" : "failed")});
+    worst_creep = std::max(worst_creep, r.creep);
+    worst_slide = std::max(worst_slide, r.slide_error);
+    fewest_kept = std::min(fewest_kept, r.kept);
+    most_kept = std::max(most_kept, r.kept);
+    impacts = {std::min(impacts.first, r.collapse_impacts), std::max(impacts.second, r.collapse_impacts)};
+    md += fmt::format("| {:g} | {} | {:.2f} | {} | {} | {} | {:.0f} | {} | {:.3f} |\n", dts[i], r.tumble_impacts, r.rest, sci(r.sink), sci(r.creep),
+                      sci(r.slide_error), r.rate, r.collapse_impacts, r.kept);
   }
   md += fmt::format(
       "\n- Over every dt the resting box moved at most {} m along the slope and the sliding box's speed was within {} of "
@@ -461,13 +353,14 @@ StudyOutput contacts(bool quick) {
       "- The collapse is chaotic: from dt to dt its impacts range over {}-{} and the energy it keeps over {:.3f}-{:.3f}, though "
       "a run repeated is bit-identical. The bounce changes with the step too (a step resolves one approach at a time).\n\n",
       sci(worst_creep), sci(worst_slide), impacts.first, impacts.second, fewest_kept, most_kept);
-  return {{{"contacts", std::move(table)}}, md};
+  return {{{"contacts", std::move(table)}}, md, {}};
 }
 
 
 // ---- cloth: where explicit methods fail against stiffness, implicit Euler's damping, what each spring family adds
 
-StudyOutput cloth_study(bool quick) {
+StudyOutput cloth_study(const StudyContext& ctx) {
+  const bool quick = ctx.quick;
   const long steps = 2000;
   const std::vector<double> stiffnesses = quick ? std::vector<double>{10, 100, 1000} : std::vector<double>{10, 100, 1000, 10000};
   Table limits{{"stiffness", "method", "omega_max", "mode_damping", "predicted_dt", "measured_dt", "measured_over_predicted"}, {}};
@@ -482,27 +375,47 @@ StudyOutput cloth_study(bool quick) {
       "|---|---|---|---|---|---|---|\n",
       steps);
   double worst_symplectic = 0, rk4_low = 10, rk4_high = 0, euler_low = 1e9, euler_high = 0;
-  std::string implicit_note;
   bool implicit_all_ok = true;
+  // the bisections, one point per (stiffness, method), and implicit Euler at 100 times symplectic Euler's limit
+  const std::vector<std::string> explicit_methods{"symplectic-euler", "rk4", "euler"};
+  std::vector<std::string> labels;
   for (const double c : stiffnesses) {
-    const auto model = stability_sheet(c);
+    for (const auto& method : explicit_methods) labels.push_back(fmt::format("c {:g} {}", c, method));
+    labels.push_back(fmt::format("c {:g} implicit-euler", c));
+  }
+  const size_t per_stiffness = explicit_methods.size() + 1;
+  const auto found = ctx.sweep<std::pair<StiffestMode, double>>(labels, [&](size_t i) {
+    const auto model = stability_sheet(stiffnesses[i / per_stiffness]);
     const StiffestMode mode = stiffest_mode(*model, 0, model->initial_state());
-    for (const std::string method : {"symplectic-euler", "rk4", "euler"}) {
-      const double predicted = *mass_spring_stable_dt(method, mode);
-      const double measured = measured_stable_dt(*model, method, steps, predicted);
-      const double ratio = measured / predicted;
-      limits.rows.push_back({c, method, mode.omega, mode.damping, predicted, measured, ratio});
-      md += fmt::format("| {} | {:.1f} | {:.3g} | {} | {:.4g} | {:.4g} | {:.3f} |\n", c, mode.omega, mode.damping, method, predicted, measured, ratio);
-      if (method == "symplectic-euler") worst_symplectic = std::max(worst_symplectic, std::abs(ratio - 1));
-      if (method == "rk4") rk4_low = std::min(rk4_low, ratio), rk4_high = std::max(rk4_high, ratio);
-      if (method == "euler") euler_low = std::min(euler_low, ratio), euler_high = std::max(euler_high, ratio);
-    }
+    const size_t k = i % per_stiffness;
+    if (k < explicit_methods.size())
+      return std::pair{mode, measured_stable_dt(*model, explicit_methods[k], steps, *mass_spring_stable_dt(explicit_methods[k], mode))};
+    // implicit Euler's point: 1 if it stayed bounded and lost energy, else 0
     const double dt = 100 * *mass_spring_stable_dt("symplectic-euler", mode);
     const Measured m = run_and_measure(*model, "implicit-euler", StepControl::fixed(dt), 2.0, 2.0);
     const bool ok = m.result.status == Status::ok && *model->energy(m.result.y_stop) < *model->energy(model->initial_state());
-    implicit_all_ok = implicit_all_ok && ok;
-    limits.rows.push_back({c, std::string("implicit-euler"), mode.omega, mode.damping, NAN, dt, NAN});
+    return std::pair{mode, ok ? 1.0 : 0.0};
+  });
+  for (size_t i = 0; i < labels.size(); ++i) {
+    const double c = stiffnesses[i / per_stiffness];
+    const auto& [mode, value] = found[i];
+    const size_t k = i % per_stiffness;
+    if (k == explicit_methods.size()) {
+      implicit_all_ok = implicit_all_ok && value == 1.0;
+      limits.rows.push_back({c, std::string("implicit-euler"), mode.omega, mode.damping, NAN, 100 * *mass_spring_stable_dt("symplectic-euler", mode), NAN});
+      continue;
+    }
+    const std::string& method = explicit_methods[k];
+    const double predicted = *mass_spring_stable_dt(method, mode), measured = value, ratio = measured / predicted;
+    limits.rows.push_back({c, method, mode.omega, mode.damping, predicted, measured, ratio});
+    md += fmt::format("| {} | {:.1f} | {:.3g} | {} | {:.4g} | {:.4g} | {:.3f} |\n", c, mode.omega, mode.damping, method, predicted, measured, ratio);
+    if (method == "symplectic-euler") worst_symplectic = std::max(worst_symplectic, std::abs(ratio - 1));
+    if (method == "rk4") rk4_low = std::min(rk4_low, ratio), rk4_high = std::max(rk4_high, ratio);
+    if (method == "euler") euler_low = std::min(euler_low, ratio), euler_high = std::max(euler_high, ratio);
   }
+  std::vector<Figure> figures;
+  md += "\n";
+  md += add_figure(figures, "cloth_stability", "", "Largest stable step against the sheet's stiffness: measured points, predicted lines");
   md += fmt::format(
       "\nSymplectic Euler's measured limit is its predicted one to {:.2f}% at every stiffness: it falls as 1/sqrt(c), three "
       "decades of stiffness costing a factor {:.0f} in step. rk4's measured limit lies {:.1f}-{:.1f}% above its prediction: near its "
@@ -528,6 +441,8 @@ StudyOutput cloth_study(bool quick) {
     worst_damping = std::max(worst_damping, std::abs(ratio / predicted - 1));
     md += fmt::format("| {} | {:.12f} | {:.12f} | {:.3g} |\n", wh, ratio, predicted, halve);
   }
+  md += "\n";
+  md += add_figure(figures, "cloth_implicit_damping", "", "Implicit Euler's amplitude kept per step against w h");
   md += fmt::format(
       "\nThe measured ratio is 1 / sqrt(1 + w^2 h^2) to {:.1e}. A mode at w h = 0.01 (628 steps a period) loses half its amplitude "
       "in {:.3g} periods, at w h = 0.1 (63 steps a period) in {:.3g}; a cloth's stiff in-plane modes (w h >> 1) are gone within a step or two: "
@@ -554,15 +469,22 @@ StudyOutput cloth_study(bool quick) {
       "its largest stretch from {:.3f} to {:.3f}. The bend springs then move the lowest point by only {:.4f} m: a sheet hanging "
       "in its own plane barely bends, so for this scene they are model it does not need.\n\n",
       ends[1][5] - ends[0][5], ends[0][6], ends[1][6], ends[2][5] - ends[1][5]);
-  return {{{"cloth_stability", std::move(limits)}, {"cloth_implicit_damping", std::move(damping)}, {"cloth_families", std::move(families)}}, md};
+  return {{{"cloth_stability", std::move(limits)}, {"cloth_implicit_damping", std::move(damping)}, {"cloth_families", std::move(families)}}, md, figures};
 }
 
 }  // namespace
 
+std::string sci(double v) { return std::isfinite(v) ? fmt::format("{:.2e}", v) : "—"; }
+
+std::string add_figure(std::vector<Figure>& figures, const std::string& kind, const std::string& subject, const std::string& caption) {
+  figures.push_back({kind, subject});
+  return fmt::format("![{}]({}.png)\n\n", caption, figures.back().stem());
+}
+
 const std::vector<Study>& studies() {
-  static const std::vector<Study> all{
-      {"convergence", "Convergence", convergence},
-      {"work-precision", "Accuracy against cost", work_precision},
+  static const std::vector<Study> all = [] {
+    std::vector<Study> list = accuracy_studies();
+    list.insert(list.end(), {
       {"energy", "Energy over long runs", energy},
       {"adequacy", "Model adequacy: small-angle pendulum", adequacy},
       {"bouncing-ball-curve", "Model adequacy: the seeds' animated bouncing ball", bouncing_ball_curve},
@@ -571,7 +493,9 @@ const std::vector<Study>& studies() {
       {"rigid-body-invariants", "Energy and invariants: the torque-free rigid body per method at equal cost", rigid_body_invariants},
       {"contacts", "Contacts: a tumbling box, resting and sliding on slopes, and the collapsing wall, by step", contacts},
       {"cloth", "Cloth: explicit methods' limits against stiffness, implicit Euler's damping, the spring families", cloth_study},
-  };
+    });
+    return list;
+  }();
   return all;
 }
 

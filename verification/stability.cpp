@@ -2,6 +2,7 @@
 
 #include "models/hanging_chain.hpp"
 #include "models/height_field.hpp"
+#include "solvers/fd_jacobian.hpp"
 #include "solvers/wave_step.hpp"
 #include "tolerances.hpp"
 #include "wave_modes.hpp"
@@ -10,6 +11,7 @@
 
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <stdexcept>
 #include <memory>
 
@@ -90,10 +92,7 @@ std::optional<double> mass_spring_stable_dt(std::string_view method, const Stiff
   const std::complex<double> lambda(-a, std::sqrt(std::max(w * w - a * a, 0.0)));
   if (method == "euler") return 2 * a / (w * w);
   if (method == "rk4") {
-    const auto grows = [&](double h) {
-      const std::complex<double> z = h * lambda;
-      return std::abs(1.0 + z + z * z / 2.0 + z * z * z / 6.0 + z * z * z * z / 24.0) > 1;
-    };
+    const auto grows = [&](double h) { return std::abs(*stability_function(method, h * lambda)) > 1; };
     // |R| < 1 just above h = 0 for a > 0 (and = 1 - O(h^6) for a = 0); the boundary lies below 3 / w
     double low = 1e-6 / w, high = 3 / w;
     while (high - low > 1e-12 * high) (grows((low + high) / 2) ? high : low) = (low + high) / 2;
@@ -107,6 +106,53 @@ double measured_stable_dt(const Model& model, std::string_view method, long step
   const auto bounded = [&](double dt) { return stays_bounded(model, method, y0, dt, steps); };
   const double low = predicted > 0 ? predicted / 10 : 1e-6, high = predicted > 0 ? predicted * 10 : 1;
   return bisect_stability(bounded, low, high, tolerance::stability_bisection_width);
+}
+
+std::optional<std::complex<double>> stability_function(std::string_view method, std::complex<double> z) {
+  if (method == "euler") return 1.0 + z;
+  if (method == "rk4") return 1.0 + z * (1.0 + z / 2.0 * (1.0 + z / 3.0 * (1.0 + z / 4.0)));
+  if (method == "implicit-euler") return 1.0 / (1.0 - z);
+  return std::nullopt;
+}
+
+Eigen::VectorXcd jacobian_spectrum(const OdeSystem& system, double t, const Eigen::VectorXd& y) {
+  Eigen::MatrixXd j(system.size(), system.size());
+  jacobian_or_fd(system, t, y, j);
+  return Eigen::EigenSolver<Eigen::MatrixXd>(j, false).eigenvalues();
+}
+
+std::optional<double> spectrum_stable_dt(std::string_view method, const Eigen::VectorXcd& eigenvalues) {
+  if (!stability_function(method, 0) || eigenvalues.size() == 0) return std::nullopt;
+  // the spectrum is as accurate as the Jacobian: a difference Jacobian's relative error is ~sqrt(machine
+  // epsilon) = 1.5e-8, so an eigenvalue on the imaginary axis (an undamped mode) may come out with a positive real
+  // part of that order of the largest |lambda|, and a zero (a fixed boundary value, an invariant) as a speck of
+  // that size. Real parts up to this fraction of the largest are taken as 0, and eigenvalues smaller than it are
+  // left out: R(0) = 1 for every consistent method, so zeros never grow.
+  constexpr double jacobian_resolution = 1e-6;
+  // what remains is exact to round-off: this much growth per step is taken as none
+  constexpr double spectrum_growth_allowance = 1e-9;
+  const double largest = eigenvalues.cwiseAbs().maxCoeff();
+  std::vector<std::complex<double>> spectrum;
+  for (const auto& lambda : eigenvalues)
+    if (std::abs(lambda) > jacobian_resolution * largest)
+      spectrum.emplace_back(lambda.real() > 0 && lambda.real() < jacobian_resolution * largest ? 0.0 : lambda.real(), lambda.imag());
+  const auto grows = [&](double h) {
+    for (const auto& lambda : spectrum)
+      if (std::abs(*stability_function(method, h * lambda)) > 1 + spectrum_growth_allowance) return true;
+    return false;
+  };
+  double smallest = largest;
+  for (const auto& lambda : spectrum) smallest = std::min(smallest, std::abs(lambda));
+  double low = 1e-3 / largest;
+  if (grows(low)) return 0.0;
+  double high = 2 * low;
+  while (!grows(high)) {
+    low = high;
+    high *= 2;
+    if (low > 1e6 / smallest) return std::numeric_limits<double>::infinity();
+  }
+  while (high - low > 1e-9 * high) (grows((low + high) / 2) ? high : low) = (low + high) / 2;
+  return low;
 }
 
 std::unique_ptr<Model> stability_sheet(double stiffness) {

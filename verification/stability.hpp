@@ -5,6 +5,7 @@
 #include "models/model.hpp"
 #include "solvers/integrator.hpp"
 
+#include <complex>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -60,6 +61,22 @@ std::optional<double> mass_spring_stable_dt(std::string_view method, const Stiff
 // tolerance::stability_bisection_width) between a tenth and ten times the predicted limit (or 1e-6 s and 1 s
 // where none is predicted): `steps` steps from the model's initial state stay within 1e6 of its size.
 double measured_stable_dt(const Model& model, std::string_view method, long steps, double predicted);
+
+// The stability function R(z) of a one-step method on y' = lambda y, z = h lambda: explicit Euler 1 + z, rk4
+// 1 + z + z^2/2 + z^3/6 + z^4/24, implicit Euler 1 / (1 - z). Empty for a method without one (symplectic Euler
+// is a map on (x, v) pairs, not a function of z alone; multistep and adaptive methods).
+std::optional<std::complex<double>> stability_function(std::string_view method, std::complex<double> z);
+
+// The eigenvalues of the system's Jacobian df/dy at (t, y) (its own Jacobian, else central differences), dense:
+// for systems of a few hundred unknowns
+Eigen::VectorXcd jacobian_spectrum(const OdeSystem& system, double t, const Eigen::VectorXd& y);
+
+// The largest h with |R(h lambda)| <= 1 for every eigenvalue: h is raised by factors of 2 from 1e-3 / max |lambda|
+// until some |R| exceeds 1 + 1e-9, then bisected to 1e-9. Positive real parts below 1e-6 of the largest |lambda|
+// are taken as 0 and smaller eigenvalues left out (a difference Jacobian resolves no finer). 0 where even the
+// first h grows (explicit Euler on an undamped spectrum), infinity where no h up to 1e6 / min |lambda| grows
+// (implicit Euler), empty without R(z).
+std::optional<double> spectrum_stable_dt(std::string_view method, const Eigen::VectorXcd& eigenvalues);
 
 // The sheet the cloth's stability checks use (the test and the report's table): 8 x 8 nodes, 0.5 kg, hanging
 // from its two top corners, no wind, shear and bend springs at 1/2 and 1/10 of the structural stiffness c.

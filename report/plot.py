@@ -1,0 +1,315 @@
+#!/usr/bin/python3
+"""Draw the report's figures from the CSV files a stepwise study or report wrote, and turn report.md into index.html.
+
+    plot.py DIR [--html]
+
+DIR/figures.csv lists the figures (stem, kind, subject): each is drawn by the function of that kind below, from
+the CSVs in DIR only, into DIR/stem.png. DIR/methods.csv (the method table) fixes one colour and marker per
+method, the same in every figure. With --html, DIR/report.md becomes DIR/index.html (Python-Markdown, tables).
+Needs Debian's python3-matplotlib (and python3-markdown for --html); exit status 3 names a missing one.
+"""
+import csv
+import math
+import os
+import sys
+
+try:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+except ImportError as e:
+    print(f"plot.py: {e.name} is missing: install Debian's python3-matplotlib (apt-get install python3-matplotlib)", file=sys.stderr)
+    sys.exit(3)
+
+DPI = 100
+FAILED_MARKER = dict(marker="x", linestyle="none", markersize=7)
+
+
+def read(directory, stem):
+    """A CSV as a list of dicts, numbers as floats (nan for empty or nan)."""
+    with open(os.path.join(directory, stem + ".csv"), newline="") as f:
+        rows = list(csv.DictReader(f))
+    for row in rows:
+        for key, value in row.items():
+            try:
+                row[key] = float(value)
+            except ValueError:
+                pass
+    return rows
+
+
+class Styles:
+    """One colour and marker per method, fixed by the method table's order."""
+
+    def __init__(self, directory):
+        names = [row["name"] for row in read(directory, "methods")]
+        colours = plt.get_cmap("tab20").colors + plt.get_cmap("tab20b").colors
+        markers = "os^vD<>phP*Xd"
+        self.style = {name: dict(color=colours[i % len(colours)], marker=markers[i % len(markers)]) for i, name in enumerate(names)}
+
+    def __call__(self, method):
+        return self.style.get(method, dict(color="black", marker="."))
+
+
+def finish(fig, directory, stem):
+    fig.tight_layout()
+    path = os.path.join(directory, stem + ".png")
+    fig.savefig(path + ".tmp.png", dpi=DPI)
+    os.replace(path + ".tmp.png", path)
+    plt.close(fig)
+
+
+def legend(ax, **kw):
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7, ncol=kw.pop("ncol", 2), **kw)
+
+
+def ok(row):
+    return row["status"] == "ok" and not math.isnan(row["error"])
+
+
+def by_method(rows):
+    methods = {}
+    for row in rows:
+        methods.setdefault(row["method"], []).append(row)
+    return methods
+
+
+# ---- figures, one function per kind
+
+
+def convergence(directory, scene, styles):
+    rows = [r for r in read(directory, "convergence") if r["scene"] == scene]
+    orders = {r["method"]: r for r in read(directory, "convergence_orders") if r["scene"] == scene}
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    for method, points in by_method(rows).items():
+        good = [r for r in points if ok(r) and r["error"] > 0]
+        order = orders[method]
+        label = f"{method}: {order['observed_order']:.2f} (order {order['documented_order']:g})" if isinstance(
+            order["documented_order"], float) else f"{method}: {order['observed_order']:.2f} ({order['documented_order']})"
+        ax.loglog([r["dt"] for r in good], [r["error"] for r in good], label=label, **styles(method), markersize=4, linewidth=1)
+        failed = [r for r in points if not ok(r)]
+        if failed:
+            ax.loglog([r["dt"] for r in failed], [1e2] * len(failed), color=styles(method)["color"], **FAILED_MARKER)
+    ax.set_xlabel("step dt (s)")
+    ax.set_ylabel("max-norm error at t_end")
+    ax.set_title(f"{scene}: convergence (legend: observed slope, documented order; x: diverged or failed, drawn at 1e2)", fontsize=9)
+    ax.grid(True, which="major", alpha=0.3)
+    legend(ax)
+    finish(fig, directory, f"convergence_{scene}")
+
+
+def work_precision(directory, scene, styles):
+    rows = [r for r in read(directory, "work_precision") if r["scene"] == scene]
+    fronts = [r for r in read(directory, "work_precision_pareto") if r["scene"] == scene]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5.5), sharey=True)
+    for ax, cost, label in ((axes[0], "cpu_seconds", "CPU time (s)"), (axes[1], "rhs_evals", "right-hand-side evaluations")):
+        top = max([r["error"] for r in rows if ok(r)] + [1.0]) * 10
+        for method, points in by_method(rows).items():
+            style = styles(method)
+            for mode, line in (("fixed", "-"), ("adaptive", "--")):
+                good = sorted((r for r in points if r["mode"] == mode and ok(r) and r["error"] > 0 and r[cost] > 0), key=lambda r: r[cost])
+                if good:
+                    ax.loglog([r[cost] for r in good], [r["error"] for r in good], linestyle=line, linewidth=1, markersize=3,
+                              label=method if mode == "fixed" or not any(r["mode"] == "fixed" for r in points) else None, **style)
+            failed = [r for r in points if not ok(r) and r[cost] > 0]
+            if failed:
+                ax.loglog([r[cost] for r in failed], [top] * len(failed), color=style["color"], **FAILED_MARKER)
+        front = [r for r in fronts if r["cost"] == cost and r["error"] > 0]
+        if front:
+            ax.step([r[cost] for r in front], [r["error"] for r in front], where="post", color="black", linewidth=2, alpha=0.5,
+                    label="Pareto front")
+        ax.set_xlabel(label)
+        ax.grid(True, which="major", alpha=0.3)
+    axes[0].set_ylabel("max-norm error at t_end")
+    axes[0].set_title(f"{scene}: error against CPU time (dashed: adaptive; x: failed)", fontsize=9)
+    axes[1].set_title(f"{scene}: error against evaluations", fontsize=9)
+    legend(axes[1], ncol=2, loc="upper right")
+    finish(fig, directory, f"work_precision_{scene}")
+
+
+def energy(directory, _, styles):
+    rows = read(directory, "energy")
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for method, points in by_method(rows).items():
+        style = dict(styles(method), marker=None)
+        ax.semilogy([r["t"] for r in points], [max(abs(r["relative_energy_error"]), 1e-17) for r in points], label=method, linewidth=1, **style)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("|E - E0| / E0")
+    ax.set_title("Pendulum energy over the run (theta0 = 0.5 rad, dt = T/100)", fontsize=9)
+    ax.grid(True, which="major", alpha=0.3)
+    legend(ax)
+    finish(fig, directory, "energy")
+
+
+def adequacy(directory, _, styles):
+    rows = read(directory, "adequacy")
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for tolerance in sorted({r["phase_tolerance_rad"] for r in rows}):
+        mine = [r for r in rows if r["phase_tolerance_rad"] == tolerance]
+        ax.loglog([r["periods"] for r in mine], [r["max_amplitude_deg"] for r in mine], marker="o", label=f"phase error {tolerance:g} rad")
+    ax.set_xlabel("periods shown")
+    ax.set_ylabel("largest amplitude (degrees)")
+    ax.set_title("Where the small-angle pendulum is enough", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    legend(ax, ncol=1)
+    finish(fig, directory, "adequacy")
+
+
+def bouncing_ball_curve(directory, _, styles):
+    rows = read(directory, "bouncing_ball_curve")
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+    n = [r["bounce"] for r in rows]
+    axes[0].plot(n, [r["physical_flight_s"] for r in rows], marker="o", label="physical ball")
+    axes[0].plot(n, [r["curve_flight_s"] for r in rows], marker="s", label="seeds' curve")
+    axes[0].set_ylabel("flight time (s)")
+    axes[1].semilogy(n, [r["physical_apex_m"] for r in rows], marker="o", label="physical ball")
+    axes[1].semilogy(n, [r["curve_apex_m"] for r in rows], marker="s", linestyle="--", label="seeds' curve")
+    axes[1].set_ylabel("apex height (m)")
+    for ax in axes:
+        ax.set_xlabel("bounce")
+        ax.grid(True, alpha=0.3)
+        legend(ax, ncol=1)
+    axes[0].set_title("Flights: the curve's never shorten", fontsize=9)
+    axes[1].set_title("Apexes: matched bounce for bounce", fontsize=9)
+    finish(fig, directory, "bouncing_ball_curve")
+
+
+def wave_stability(directory, _, styles):
+    rows = read(directory, "wave_stability")
+    grids = sorted({(r["c"], r["d"]) for r in rows})
+    fig, axes = plt.subplots(1, len(grids), figsize=(6 * len(grids), 4.8), squeeze=False)
+    for ax, (c, d) in zip(axes[0], grids):
+        mine = [r for r in rows if (r["c"], r["d"]) == (c, d)]
+        for method, points in by_method(mine).items():
+            style = styles(method)
+            mu = [r["mu"] for r in points]
+            ax.plot(mu, [r["measured_dt"] for r in points], linestyle="none", label=f"{method}: measured", **style)
+            ax.plot(mu, [r["derived_dt"] for r in points], color=style["color"], label=f"{method}: derived")
+        seeds = sorted({(r["mu"], r["seeds_dt"]) for r in mine})
+        ax.plot([m for m, _ in seeds], [s for _, s in seeds], color="black", linestyle="--", label="seeds' condition")
+        ax.set_xscale("symlog", linthresh=0.5)
+        ax.set_xlabel("damping mu (1/s)")
+        ax.set_ylabel("largest stable dt (s)")
+        ax.set_title(f"c = {c:g} m/s, d = {d:g} m", fontsize=9)
+        ax.grid(True, alpha=0.3)
+        legend(ax, ncol=1)
+    finish(fig, directory, "wave_stability")
+
+
+def cloth_stability(directory, _, styles):
+    rows = [r for r in read(directory, "cloth_stability") if not math.isnan(r["predicted_dt"])]
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    for method, points in by_method(rows).items():
+        style = styles(method)
+        c = [r["stiffness"] for r in points]
+        ax.loglog(c, [r["predicted_dt"] for r in points], color=style["color"], label=f"{method}: predicted")
+        ax.loglog(c, [r["measured_dt"] for r in points], linestyle="none", label=f"{method}: measured", **style)
+    ax.set_xlabel("structural stiffness c (N/m)")
+    ax.set_ylabel("largest stable dt (s)")
+    ax.set_title("8 x 8 sheet: explicit methods' limits from the stiffest mode", fontsize=9)
+    ax.grid(True, which="major", alpha=0.3)
+    legend(ax, ncol=1)
+    finish(fig, directory, "cloth_stability")
+
+
+def cloth_implicit_damping(directory, _, styles):
+    rows = read(directory, "cloth_implicit_damping")
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    wh = np.logspace(math.log10(min(r["omega_h"] for r in rows)), math.log10(max(r["omega_h"] for r in rows)), 200)
+    ax.semilogx(wh, 1 / np.sqrt(1 + wh ** 2), color="black", label="1 / sqrt(1 + w^2 h^2)")
+    ax.semilogx([r["omega_h"] for r in rows], [r["measured_ratio"] for r in rows], linestyle="none", label="implicit-euler, measured",
+                **styles("implicit-euler"))
+    ax.set_xlabel("w h")
+    ax.set_ylabel("amplitude kept per step")
+    ax.set_title("Implicit Euler's numerical damping of one spring", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    legend(ax, ncol=1)
+    finish(fig, directory, "cloth_implicit_damping")
+
+
+REGIONS = {
+    "euler": lambda z: 1 + z,
+    "rk4": lambda z: 1 + z + z ** 2 / 2 + z ** 3 / 6 + z ** 4 / 24,
+    "implicit-euler": lambda z: 1 / (1 - z),
+}
+
+
+def stability_regions(directory, _, styles):
+    spectrum = read(directory, "stability_spectrum")
+    limits = read(directory, "stability_limits")
+    scenes = list(dict.fromkeys(r["scene"] for r in spectrum))
+    fig, axes = plt.subplots(1, len(scenes), figsize=(5.2 * len(scenes), 5.5), squeeze=False)
+    for ax, scene in zip(axes[0], scenes):
+        h = next(r["spectrum_dt"] for r in limits if r["scene"] == scene and r["method"] == "rk4")
+        z = np.array([complex(r["re"], r["im"]) for r in spectrum if r["scene"] == scene]) * h
+        reach = max(3.2, 1.15 * np.abs(z).max())
+        x, y = np.meshgrid(np.linspace(-reach, 0.6 * reach, 600), np.linspace(-reach, reach, 600))
+        for method, region in REGIONS.items():
+            with np.errstate(divide="ignore"):
+                magnitude = np.abs(region(x + 1j * y))
+            ax.contour(x, y, magnitude, levels=[1], colors=[styles(method)["color"]], linewidths=1.5)
+            ax.plot([], [], color=styles(method)["color"], label=f"|R(z)| = 1, {method}")
+        ax.plot(z.real, z.imag, linestyle="none", marker=".", markersize=4, color="black", label="h lambda, h = rk4's predicted limit")
+        ax.plot((1.5 * z).real, (1.5 * z).imag, linestyle="none", marker=".", markersize=3, color="grey", alpha=0.6, label="at 1.5 h")
+        ax.axhline(0, color="grey", linewidth=0.5)
+        ax.axvline(0, color="grey", linewidth=0.5)
+        ax.set_aspect("equal")
+        ax.set_xlabel("Re z")
+        ax.set_ylabel("Im z")
+        ax.set_title(f"{scene}: spectrum times h = {h:.3g} s", fontsize=9)
+        legend(ax, ncol=1, loc="lower left")
+    finish(fig, directory, "stability_regions")
+
+
+# ---- the page
+
+
+def html(directory):
+    try:
+        import markdown
+    except ImportError:
+        print("plot.py: markdown is missing: install Debian's python3-markdown (apt-get install python3-markdown)", file=sys.stderr)
+        sys.exit(3)
+    with open(os.path.join(directory, "report.md")) as f:
+        body = markdown.markdown(f.read(), extensions=["tables"])
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>stepwise report</title>
+<style>
+body {{ font-family: sans-serif; max-width: 1250px; margin: 2em auto; padding: 0 1em; line-height: 1.45; }}
+table {{ border-collapse: collapse; margin: 1em 0; font-size: 0.85em; }}
+th, td {{ border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; }}
+th {{ background: #f0f0f0; }}
+td:first-child, th:first-child {{ text-align: left; }}
+img {{ max-width: 100%; }}
+code {{ background: #f4f4f4; }}
+</style></head><body>
+{body}
+</body></html>
+"""
+    path = os.path.join(directory, "index.html")
+    with open(path + ".tmp", "w") as f:
+        f.write(page)
+    os.replace(path + ".tmp", path)
+
+
+def main():
+    if len(sys.argv) < 2:
+        sys.exit(__doc__)
+    directory = sys.argv[1]
+    styles = Styles(directory)
+    drawers = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
+                                        cloth_implicit_damping, stability_regions)}
+    for figure in read(directory, "figures"):
+        kind = figure["kind"]
+        if kind not in drawers:
+            sys.exit(f"plot.py: figures.csv: no drawing for kind '{kind}'")
+        drawers[kind](directory, figure["subject"], styles)
+    if "--html" in sys.argv[2:]:
+        html(directory)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,51 @@
+// A study's sweep: independent points run on a pool of threads, results kept in point order, progress shown.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace stepwise {
+
+// progress of the running study: a bar redrawn in place on a terminal, plain lines otherwise
+class Progress {
+ public:
+  explicit Progress(bool enabled);
+  void begin_study(std::string_view name);
+  void begin_sweep(size_t points);
+  void point_done(const std::string& label);  // thread-safe
+  void end_study(double seconds);
+
+ private:
+  void draw(const std::string& label);
+  bool enabled_, terminal_;
+  std::mutex mutex_;
+  std::string study_;
+  size_t total_ = 0, done_ = 0, last_line_ = 0;  // last_line_: points done at the last plain line
+  std::chrono::steady_clock::time_point sweep_start_;
+};
+
+// what a study runs with: the sweep size and the pool its points share
+struct StudyContext {
+  bool quick = false;
+  int threads = 1;
+  Progress* progress = nullptr;
+
+  // task(i) for each i < labels.size(), on up to `threads` threads; results in index order, whatever the
+  // thread count (a point never reads another's result). An exception from any point is rethrown here.
+  template <class R>
+  std::vector<R> sweep(const std::vector<std::string>& labels, const std::function<R(size_t)>& task) const {
+    std::vector<R> results(labels.size());
+    run_points(labels, [&](size_t i) { results[i] = task(i); });
+    return results;
+  }
+
+ private:
+  void run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point) const;
+};
+
+}  // namespace stepwise
