@@ -220,7 +220,9 @@ StudyOutput work_precision(const StudyContext& ctx) {
 
   Table points{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}};
   Table fronts{{"scene", "cost", "method", "setting", "error", "rhs_evals", "cpu_seconds"}, {}};
-  Table advice{{"scene", "purpose", "target", "method", "setting", "error", "cpu_seconds", "rhs_evals", "runner_up", "runner_up_cpu_seconds"}, {}};
+  Table advice{{"scene", "frame_m", "purpose", "target", "method", "setting", "error", "cpu_seconds", "rhs_evals", "runner_up",
+                "runner_up_cpu_seconds", "runner_up_over_best"},
+               {}};
   for (const auto& p : runs)
     points.rows.push_back({p.scene->label, std::string(p.method->name), std::string(p.control.dt ? "fixed" : "adaptive"),
                            p.control.dt.value_or(NAN), p.control.dt ? NAN : p.control.rtol, p.error.value_or(NAN), p.rhs_evals, p.steps,
@@ -248,7 +250,7 @@ StudyOutput work_precision(const StudyContext& ctx) {
     for (const auto& [purpose, target] : {std::pair<std::string, double>{"animation", 0.5 * scene.frame_extent / frame_pixels}, {"verification", verification_target}}) {
       const WorkPoint* best = cheapest_reaching(by_cpu, target);
       if (!best) {
-        advice.rows.push_back({scene.label, purpose, target, std::string("none"), std::string(), NAN, NAN, NAN, std::string("none"), NAN});
+        advice.rows.push_back({scene.label, scene.frame_extent, purpose, target, std::string("none"), std::string(), NAN, NAN, NAN, std::string("none"), NAN, NAN});
         recommendations += fmt::format("| {} | {} | {:.1e} | none reached it | | | | | |\n", scene.label, purpose, target);
         continue;
       }
@@ -258,8 +260,8 @@ StudyOutput work_precision(const StudyContext& ctx) {
         if (p->error && *p->error <= target && p->method != best->method && (!runner || p->cpu_seconds < runner->cpu_seconds)) runner = p;
       const std::string runner_name = runner ? fmt::format("{} ({})", runner->method->name, runner->setting()) : "none";
       const double runner_cpu = runner ? runner->cpu_seconds : NAN;
-      advice.rows.push_back({scene.label, purpose, target, std::string(best->method->name), best->setting(), *best->error, best->cpu_seconds,
-                             best->rhs_evals, runner_name, runner_cpu});
+      advice.rows.push_back({scene.label, scene.frame_extent, purpose, target, std::string(best->method->name), best->setting(), *best->error,
+                             best->cpu_seconds, best->rhs_evals, runner_name, runner_cpu, runner_cpu / best->cpu_seconds});
       recommendations += fmt::format("| {} ({:g} m frame) | {} | {:.1e} | {} | {} | {:.1e} | {:.1e} | {} | {:.1f} |\n", scene.label, scene.frame_extent,
                                      purpose, target, best->method->name, best->setting(), *best->error, best->cpu_seconds, runner_name,
                                      runner_cpu / best->cpu_seconds);

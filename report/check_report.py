@@ -1,0 +1,115 @@
+#!/usr/bin/python3
+"""Check a written report: every figure and table there and non-empty, and the tables' numbers the CSVs' numbers.
+
+    check_report.py DIR
+
+- every image report.md shows is a PNG in DIR of at least MIN_PNG_BYTES, and index.html shows the same images;
+- every CSV a section links exists, with a header and at least one row;
+- every number in a section's Markdown tables is a value of that section's CSVs as shown: within half a unit
+  of its last digit (the table rounds, the CSV keeps 17 digits). A number typed in, computed only for the
+  table, or left from another run, fails.
+Prints each problem on a line and exits 1 if there is any.
+"""
+import bisect
+import csv
+import math
+import os
+import re
+import sys
+
+MIN_PNG_BYTES = 5000  # a drawn figure with axes, labels and lines; an empty canvas at 100 dpi is ~3 kB
+NUMBER = re.compile(r"(?<![\w.\-+])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\w.])")
+
+
+def sections(md):
+    """(title, text) per '## ' section."""
+    parts = re.split(r"^## ", md, flags=re.M)
+    return [(p.splitlines()[0], p) for p in parts[1:]]
+
+
+def table_cells(text):
+    """The cells of every table row of the text, header and separator rows left out."""
+    cells = []
+    lines = text.splitlines()
+    for i, line in enumerate(lines):
+        if not line.startswith("|") or set(line) <= set("|-: "):
+            continue
+        if i + 1 < len(lines) and lines[i + 1].startswith("|") and set(lines[i + 1]) <= set("|-: "):
+            continue  # a header
+        cells.extend(c.strip() for c in line.strip().strip("|").split("|"))
+    return cells
+
+
+def csv_values(directory, names):
+    values = []
+    for name in names:
+        with open(os.path.join(directory, name), newline="") as f:
+            for row in csv.reader(f):
+                for cell in row:
+                    try:
+                        values.append(float(cell))
+                    except ValueError:
+                        values.extend(float(m) for m in NUMBER.findall(cell))
+    return sorted(v for v in values if math.isfinite(v))
+
+
+def shown_precision(token):
+    """Half a unit in the last digit shown."""
+    mantissa, _, exponent = token.lower().partition("e")
+    decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
+    return 0.5 * 10 ** (-decimals + (int(exponent) if exponent else 0))
+
+
+def matches(value, half_unit, candidates):
+    """Some candidate (sorted) within half_unit of value."""
+    i = bisect.bisect_left(candidates, value - half_unit * (1 + 1e-9))
+    return i < len(candidates) and candidates[i] <= value + half_unit * (1 + 1e-9)
+
+
+def main():
+    directory = sys.argv[1]
+    problems = []
+    md = open(os.path.join(directory, "report.md")).read()
+    page = open(os.path.join(directory, "index.html")).read()
+    images = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", md)
+    if not images:
+        problems.append("report.md shows no figures")
+    for image in images:
+        path = os.path.join(directory, image)
+        if not os.path.isfile(path):
+            problems.append(f"{image}: missing")
+            continue
+        with open(path, "rb") as f:
+            head = f.read(8)
+        if head != b"\x89PNG\r\n\x1a\n" or os.path.getsize(path) < MIN_PNG_BYTES:
+            problems.append(f"{image}: not a drawn PNG ({os.path.getsize(path)} bytes)")
+        if f'src="{image}"' not in page:
+            problems.append(f"{image}: not shown by index.html")
+    if page.count("<table>") != md.count("\n|---"):
+        problems.append(f"index.html has {page.count('<table>')} tables, report.md {md.count(chr(10) + '|---')}")
+
+    checked = 0
+    for title, text in sections(md):
+        links = re.findall(r"\[[^\]]+\.csv\]\(([^)]+\.csv)\)", text)
+        if not links:
+            problems.append(f"section '{title}': links no CSV")
+            continue
+        for link in links:
+            path = os.path.join(directory, link)
+            if not os.path.isfile(path) or sum(1 for _ in open(path)) < 2:
+                problems.append(f"section '{title}': {link} missing or empty")
+        values = csv_values(directory, links)
+        for cell in table_cells(text):
+            for token in NUMBER.findall(cell):
+                value, half = float(token), shown_precision(token)
+                checked += 1
+                if not matches(value, half, values):
+                    problems.append(f"section '{title}': table value {token} (cell '{cell}') is in none of {', '.join(links)}")
+    for p in problems:
+        print(p)
+    print(f"check_report: {len(images)} figures, {checked} table numbers checked, {len(problems)} problems")
+    sys.exit(1 if problems else 0)
+
+
+if __name__ == "__main__":
+    main()
