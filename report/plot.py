@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Draw the report's figures from the CSV files a stepwise study or report wrote, and turn report.md into index.html.
 
-    plot.py DIR [--html]
+    plot.py DIR [--html] [--dpi N]
 
 DIR/figures.csv lists the figures (stem, kind, subject): each is drawn by the function of that kind below, from
 the CSVs in DIR only, into DIR/stem.png. DIR/methods.csv (the method table) fixes one colour and marker per
@@ -23,7 +23,7 @@ except ImportError as e:
     print(f"plot.py: {e.name} is missing: install Debian's python3-matplotlib (apt-get install python3-matplotlib)", file=sys.stderr)
     sys.exit(3)
 
-DPI = 100
+DPI = 100  # 1200 x 550 pixels for a two-panel figure; --dpi changes it (the README's copies are drawn smaller)
 FAILED_MARKER = dict(marker="x", linestyle="none", markersize=7)
 
 
@@ -61,6 +61,16 @@ def finish(fig, directory, stem):
     plt.close(fig)
 
 
+def single(fig, ax, directory, stem, xlabel, ylabel, title, grid="major"):
+    """Label a one-panel figure, add its grid and legend, and write it."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+    ax.grid(True, which=grid, alpha=0.3)
+    legend(ax, ncol=1 if len(ax.get_legend_handles_labels()[0]) < 8 else 2)
+    finish(fig, directory, stem)
+
+
 def legend(ax, **kw):
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=7, ncol=kw.pop("ncol", 2), **kw)
@@ -93,12 +103,8 @@ def convergence(directory, scene, styles):
         failed = [r for r in points if not ok(r)]
         if failed:
             ax.loglog([r["dt"] for r in failed], [1e2] * len(failed), color=styles(method)["color"], **FAILED_MARKER)
-    ax.set_xlabel("step dt (s)")
-    ax.set_ylabel("max-norm error at t_end")
-    ax.set_title(f"{scene}: convergence (legend: observed slope, documented order; x: diverged or failed, drawn at 1e2)", fontsize=9)
-    ax.grid(True, which="major", alpha=0.3)
-    legend(ax)
-    finish(fig, directory, f"convergence_{scene}")
+    single(fig, ax, directory, f"convergence_{scene}", "step dt (s)", "max-norm error at t_end",
+           f"{scene}: convergence (legend: observed slope, documented order; x: diverged or failed, drawn at 1e2)", grid="major")
 
 
 def work_precision(directory, scene, styles):
@@ -136,12 +142,8 @@ def energy(directory, _, styles):
     for method, points in by_method(rows).items():
         style = dict(styles(method), marker=None)
         ax.semilogy([r["t"] for r in points], [max(abs(r["relative_energy_error"]), 1e-17) for r in points], label=method, linewidth=1, **style)
-    ax.set_xlabel("t (s)")
-    ax.set_ylabel("|E - E0| / E0")
-    ax.set_title("Pendulum energy over the run (theta0 = 0.5 rad, dt = T/100)", fontsize=9)
-    ax.grid(True, which="major", alpha=0.3)
-    legend(ax)
-    finish(fig, directory, "energy")
+    single(fig, ax, directory, "energy", "t (s)", "|E - E0| / E0",
+           "Pendulum energy over the run (theta0 = 0.5 rad, dt = T/100)", grid="major")
 
 
 def adequacy(directory, _, styles):
@@ -150,12 +152,8 @@ def adequacy(directory, _, styles):
     for tolerance in sorted({r["phase_tolerance_rad"] for r in rows}):
         mine = [r for r in rows if r["phase_tolerance_rad"] == tolerance]
         ax.loglog([r["periods"] for r in mine], [r["max_amplitude_deg"] for r in mine], marker="o", label=f"phase error {tolerance:g} rad")
-    ax.set_xlabel("periods shown")
-    ax.set_ylabel("largest amplitude (degrees)")
-    ax.set_title("Where the small-angle pendulum is enough", fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
-    legend(ax, ncol=1)
-    finish(fig, directory, "adequacy")
+    single(fig, ax, directory, "adequacy", "periods shown", "largest amplitude (degrees)",
+           "Where the small-angle pendulum is enough", grid="both")
 
 
 def bouncing_ball_curve(directory, _, styles):
@@ -207,12 +205,8 @@ def cloth_stability(directory, _, styles):
         c = [r["stiffness"] for r in points]
         ax.loglog(c, [r["predicted_dt"] for r in points], color=style["color"], label=f"{method}: predicted")
         ax.loglog(c, [r["measured_dt"] for r in points], linestyle="none", label=f"{method}: measured", **style)
-    ax.set_xlabel("structural stiffness c (N/m)")
-    ax.set_ylabel("largest stable dt (s)")
-    ax.set_title("8 x 8 sheet: explicit methods' limits from the stiffest mode", fontsize=9)
-    ax.grid(True, which="major", alpha=0.3)
-    legend(ax, ncol=1)
-    finish(fig, directory, "cloth_stability")
+    single(fig, ax, directory, "cloth_stability", "structural stiffness c (N/m)", "largest stable dt (s)",
+           "8 x 8 sheet: explicit methods' limits from the stiffest mode", grid="major")
 
 
 def cloth_implicit_damping(directory, _, styles):
@@ -222,12 +216,8 @@ def cloth_implicit_damping(directory, _, styles):
     ax.semilogx(wh, 1 / np.sqrt(1 + wh ** 2), color="black", label="1 / sqrt(1 + w^2 h^2)")
     ax.semilogx([r["omega_h"] for r in rows], [r["measured_ratio"] for r in rows], linestyle="none", label="implicit-euler, measured",
                 **styles("implicit-euler"))
-    ax.set_xlabel("w h")
-    ax.set_ylabel("amplitude kept per step")
-    ax.set_title("Implicit Euler's numerical damping of one spring", fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
-    legend(ax, ncol=1)
-    finish(fig, directory, "cloth_implicit_damping")
+    single(fig, ax, directory, "cloth_implicit_damping", "w h", "amplitude kept per step",
+           "Implicit Euler's numerical damping of one spring", grid="both")
 
 
 REGIONS = {
@@ -298,7 +288,10 @@ code {{ background: #f4f4f4; }}
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
+    global DPI
     directory = sys.argv[1]
+    if "--dpi" in sys.argv:
+        DPI = int(sys.argv[sys.argv.index("--dpi") + 1])
     styles = Styles(directory)
     drawers = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
                                         cloth_implicit_damping, stability_regions)}

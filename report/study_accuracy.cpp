@@ -154,6 +154,7 @@ struct WorkPoint {
   double rhs_evals = 0, cpu_seconds = 0;
   long steps = 0;
   Status status = Status::ok;
+  bool coarsest = false;  // the method's coarsest point in the sweep: a coarser one might have met the target too
 
   std::string setting() const { return control.dt ? fmt::format("dt {:.3g}", *control.dt) : fmt::format("rtol {:.0e}", control.rtol); }
 };
@@ -190,15 +191,17 @@ StudyOutput work_precision(const StudyContext& ctx) {
   std::vector<std::string> labels;
   for (const auto& scene : scenes)
     for (const MethodInfo* method : scene_methods(scene, false)) {
-      WorkPoint point{&scene, method, {}, {}, 0, 0, 0, Status::ok};
+      WorkPoint point{&scene, method, {}, {}, 0, 0, 0, Status::ok, false};
       if (method->fixed_step)
         for (int k = 0; k <= halvings; ++k) {
           point.control = StepControl::fixed(coarse_dt(*method, scene.time_scale) / std::pow(2.0, k));
+          point.coarsest = k == 0;
           plan.push_back(point);
         }
       if (method->adaptive)
         for (const double rtol : rtols) {
           point.control = StepControl::adaptive(rtol, 1e-3 * rtol);
+          point.coarsest = rtol == rtols.front();
           // a low-order method at a tight tolerance needs millions of steps (gsl-rk1imp at 1e-12: 3e7 steps,
           // 30 s): such a point is reported as failed past this budget rather than allowed to stall the report
           point.control.max_steps = 200'000;
@@ -220,7 +223,7 @@ StudyOutput work_precision(const StudyContext& ctx) {
 
   Table points{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}};
   Table fronts{{"scene", "cost", "method", "setting", "error", "rhs_evals", "cpu_seconds"}, {}};
-  Table advice{{"scene", "frame_m", "purpose", "target", "method", "setting", "error", "cpu_seconds", "rhs_evals", "runner_up",
+  Table advice{{"scene", "frame_m", "purpose", "target", "method", "setting", "coarsest_swept", "error", "cpu_seconds", "rhs_evals", "runner_up",
                 "runner_up_cpu_seconds", "runner_up_over_best"},
                {}};
   for (const auto& p : runs)
@@ -233,7 +236,8 @@ StudyOutput work_precision(const StudyContext& ctx) {
       fmt::format("### Recommendations\n\nPer scene, the cheapest method in CPU time that meets each target, read off the Pareto front "
                   "below: for animation, half a pixel of a {:.0f}-pixel-high frame showing the scene (the frame's height in metres is given; "
                   "the target applies to the state's max-norm error, velocities included, so it errs strict), and for verification "
-                  "{:.0e}. The runner-up is the cheapest other method meeting the same target, with its cost as a ratio.\n\n"
+                  "{:.0e}. The runner-up is the cheapest other method meeting the same target, with its cost as a ratio. A setting marked * is "
+                  "the coarsest its method was swept at: a coarser one might meet the target for less.\n\n"
                   "| scene | purpose | target | method | setting | error | CPU (s) | runner-up | its CPU / the best's |\n|---|---|---|---|---|---|---|---|---|\n",
                   frame_pixels, verification_target);
   std::string sections;
@@ -250,7 +254,7 @@ StudyOutput work_precision(const StudyContext& ctx) {
     for (const auto& [purpose, target] : {std::pair<std::string, double>{"animation", 0.5 * scene.frame_extent / frame_pixels}, {"verification", verification_target}}) {
       const WorkPoint* best = cheapest_reaching(by_cpu, target);
       if (!best) {
-        advice.rows.push_back({scene.label, scene.frame_extent, purpose, target, std::string("none"), std::string(), NAN, NAN, NAN, std::string("none"), NAN, NAN});
+        advice.rows.push_back({scene.label, scene.frame_extent, purpose, target, std::string("none"), std::string(), 0L, NAN, NAN, NAN, std::string("none"), NAN, NAN});
         recommendations += fmt::format("| {} | {} | {:.1e} | none reached it | | | | | |\n", scene.label, purpose, target);
         continue;
       }
@@ -260,10 +264,10 @@ StudyOutput work_precision(const StudyContext& ctx) {
         if (p->error && *p->error <= target && p->method != best->method && (!runner || p->cpu_seconds < runner->cpu_seconds)) runner = p;
       const std::string runner_name = runner ? fmt::format("{} ({})", runner->method->name, runner->setting()) : "none";
       const double runner_cpu = runner ? runner->cpu_seconds : NAN;
-      advice.rows.push_back({scene.label, scene.frame_extent, purpose, target, std::string(best->method->name), best->setting(), *best->error,
-                             best->cpu_seconds, best->rhs_evals, runner_name, runner_cpu, runner_cpu / best->cpu_seconds});
-      recommendations += fmt::format("| {} ({:g} m frame) | {} | {:.1e} | {} | {} | {:.1e} | {:.1e} | {} | {:.1f} |\n", scene.label, scene.frame_extent,
-                                     purpose, target, best->method->name, best->setting(), *best->error, best->cpu_seconds, runner_name,
+      advice.rows.push_back({scene.label, scene.frame_extent, purpose, target, std::string(best->method->name), best->setting(),
+                             static_cast<long>(best->coarsest), *best->error, best->cpu_seconds, best->rhs_evals, runner_name, runner_cpu, runner_cpu / best->cpu_seconds});
+      recommendations += fmt::format("| {} ({:g} m frame) | {} | {:.1e} | {} | {}{} | {:.1e} | {:.1e} | {} | {:.1f} |\n", scene.label, scene.frame_extent,
+                                     purpose, target, best->method->name, best->setting(), best->coarsest ? " *" : "", *best->error, best->cpu_seconds, runner_name,
                                      runner_cpu / best->cpu_seconds);
     }
 
