@@ -208,15 +208,15 @@ StudyOutput wave_stability_study(const StudyContext& ctx) {
     return wave_stability(p.method, points, p.d, p.c, p.mu, steps);
   });
   for (size_t i = 0; i < plan.size(); ++i) {
-        const auto& [method, c, d, mu] = plan[i];
-        const WaveStability& w = found[i];
-        table.rows.push_back({method, c, d, mu, w.measured, w.derived, w.seeds, w.measured / w.derived, w.seeds / w.measured});
-        md += fmt::format("| {} | {} | {} | {} | {:.5g} | {:.5g} | {:.5g} | {:.4f} | {:.4f} |\n", method, c, d, mu, w.measured, w.derived,
-                          w.seeds, w.measured / w.derived, w.seeds / w.measured);
-        worst_derived = std::max(worst_derived, std::abs(w.measured / w.derived - 1));
-        if (mu == 0) seeds_at_rest = std::max(seeds_at_rest, 1 - w.seeds / w.derived);
-        else seeds_damped = std::max(seeds_damped, w.seeds / w.measured - 1);
-      }
+    const auto& [method, c, d, mu] = plan[i];
+    const WaveStability& w = found[i];
+    table.rows.push_back({method, c, d, mu, w.measured, w.derived, w.seeds, w.measured / w.derived, w.seeds / w.measured});
+    md += fmt::format("| {} | {} | {} | {} | {:.5g} | {:.5g} | {:.5g} | {:.4f} | {:.4f} |\n", method, c, d, mu, w.measured, w.derived,
+                      w.seeds, w.measured / w.derived, w.seeds / w.measured);
+    worst_derived = std::max(worst_derived, std::abs(w.measured / w.derived - 1));
+    if (mu == 0) seeds_at_rest = std::max(seeds_at_rest, 1 - w.seeds / w.derived);
+    else seeds_damped = std::max(seeds_damped, w.seeds / w.measured - 1);
+  }
   md += fmt::format(
       "\nThe derived limits hold to {:.2f}% everywhere. The seeds' condition is right without damping (its 8 c^2/d^2 "
       "bounds the grid's highest eigenvalue from above, so it errs safe, by {:.2f}%), and wrong with damping: it grows with "

@@ -172,6 +172,8 @@ inline constexpr double method_of_lines_rtol_multiple = 1e3;
 // the stability limit found by bisection (to 1e-3) against the derivation: the 1%
 inline constexpr double stability_match = 0.01;
 inline constexpr double stability_bisection_width = 1e-3;
+// spectrum_stable_dt bisects its step to 1e-9 of the bracket's top, which lies within a factor 2 of the limit
+inline constexpr double spectrum_limit_bisection = 2e-9;
 
 // the scheme's energy E^{k+1/2} at mu = 0 is conserved exactly in exact arithmetic; each step's rounding
 // (~ eps per cell, random-walked over K = 10^4 steps) moves it by ~ eps sqrt(K) ~ 2e-14 of E

@@ -156,6 +156,34 @@ TEST(Wave, StabilityLimitMatchesTheDerivationAndTheSeedsConditionOnlyWithoutDamp
     }
 }
 
+// the stability regions' limits from a spectrum, against their closed forms: explicit Euler 2 / lambda on a real
+// negative eigenvalue and no step at all on the imaginary axis, rk4 2 sqrt 2 / omega up the imaginary axis,
+// implicit Euler any step on the left half-plane
+TEST(Stability, SpectrumLimitsMatchTheRegionsClosedForms) {
+  const double omega = 45.0, lambda = 30.0;
+  Eigen::VectorXcd imaginary(2), real(1);
+  imaginary << std::complex<double>(0, omega), std::complex<double>(0, -omega);
+  real << -lambda;
+  EXPECT_NEAR(*spectrum_stable_dt("euler", real) * lambda / 2, 1.0, tolerance::spectrum_limit_bisection);
+  EXPECT_EQ(*spectrum_stable_dt("euler", imaginary), 0.0);
+  EXPECT_NEAR(*spectrum_stable_dt("rk4", imaginary) * omega / (2 * std::numbers::sqrt2), 1.0, tolerance::spectrum_limit_bisection);
+  EXPECT_TRUE(std::isinf(*spectrum_stable_dt("implicit-euler", imaginary)));
+  EXPECT_FALSE(spectrum_stable_dt("symplectic-euler", imaginary).has_value());
+}
+
+// rk4 on the standing wave's 17^2 grid: the limit predicted from its (difference) Jacobian's spectrum is the one a
+// random field measures, though the undamped modes come out of the difference Jacobian a little right of the axis
+TEST(Stability, Rk4LimitFromTheWaveSpectrumIsTheMeasuredOne) {
+  const int points = 17;
+  const double spacing = 1.0 / 16, c = 1, mu = 0.5;
+  const auto model = make_model("standing-wave", {{"size", points}, {"spacing", spacing}, {"c", c}, {"mu", mu}});
+  const double predicted = *spectrum_stable_dt("rk4", jacobian_spectrum(*model, 0, model->initial_state()));
+  const double measured = bisect_stability(wave_stays_bounded("rk4", points, spacing, c, mu, 2000), predicted / 2, predicted * 2,
+                                           tolerance::stability_bisection_width);
+  std::cout << "rk4 on the 17^2 wave: predicted " << predicted << " s, measured " << measured << " s\n";
+  EXPECT_NEAR(measured / predicted, 1.0, tolerance::stability_match);
+}
+
 TEST(Wave, SchemeEnergyIsConservedWithoutDampingAndDecaysAsItsModesPredict) {
   const int points = 33;
   for (const double mu : {0.0, 2.0}) {
