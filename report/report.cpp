@@ -75,7 +75,8 @@ void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, bool 
                                          WIFEXITED(status) ? WEXITSTATUS(status) : -1));
 }
 
-int default_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+// the threads asked for, or one per core
+int threads_or_default(int requested) { return requested > 0 ? requested : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 }  // namespace
 
@@ -92,8 +93,8 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
     return 2;
   }
   try {
-    Progress progress(true);
-    const StudyContext ctx{quick, threads > 0 ? threads : default_threads(), &progress};
+    Progress progress;
+    const StudyContext ctx{quick, threads_or_default(threads), &progress};
     std::vector<Figure> figures;
     write_file_atomic(fs::path(out) / (name + ".md"), run_study(*study, ctx, out, figures));
     draw_figures(figures, out, false);
@@ -124,8 +125,8 @@ int report_command(bool quick, int threads, const std::string& out) {
   }
 
   const auto start = std::chrono::steady_clock::now();
-  Progress progress(true);
-  const StudyContext ctx{quick, threads > 0 ? threads : default_threads(), &progress};
+  Progress progress;
+  const StudyContext ctx{quick, threads_or_default(threads), &progress};
   std::string md = fmt::format("# stepwise report{}\n\n", quick ? " (quick)" : "");
   md += "Every table and figure below is computed by this run from the CSV files named under it, in this directory.\n\n";
   std::vector<Figure> figures;

@@ -301,8 +301,9 @@ StudyOutput stability_regions(const StudyContext& ctx) {
   {
     const auto scene = ode_scenes().back();
     std::shared_ptr<const Model> model = make_model(scene.model, scene.params);
-    scenes.push_back({"standing-wave", model, model->initial_state(), [](std::string_view method, double dt) {
-                        return wave_stays_bounded(method, 17, 1.0 / 16, 1, 0.5, steps)(dt);
+    const WaveGridView grid = *model->wave_grid();
+    scenes.push_back({scene.label, model, model->initial_state(), [grid](std::string_view method, double dt) {
+                        return wave_stays_bounded(method, grid.points, grid.spacing, grid.c, grid.mu, steps)(dt);
                       }});
     std::shared_ptr<const Model> sheet = stability_sheet(1000);
     scenes.push_back({"cloth-sheet", sheet, sheet->initial_state(), [sheet](std::string_view method, double dt) {

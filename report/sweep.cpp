@@ -11,13 +11,13 @@
 
 namespace stepwise {
 
-Progress::Progress(bool enabled) : enabled_(enabled), terminal_(isatty(STDERR_FILENO) != 0) {}
+Progress::Progress() : terminal_(isatty(STDERR_FILENO) != 0) {}
 
 void Progress::begin_study(std::string_view name) {
   std::lock_guard lock(mutex_);
   study_ = name;
   total_ = done_ = last_line_ = 0;
-  if (enabled_ && !terminal_) fmt::print(stderr, "stepwise: study {} ...\n", study_);
+  if (!terminal_) fmt::print(stderr, "stepwise: study {} ...\n", study_);
 }
 
 void Progress::begin_sweep(size_t points) {
@@ -33,7 +33,7 @@ void Progress::point_done(const std::string& label) {
 }
 
 void Progress::draw(const std::string& label) {
-  if (!enabled_ || total_ == 0) return;
+  if (total_ == 0) return;
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - sweep_start_).count();
   const double left = elapsed / static_cast<double>(done_) * static_cast<double>(total_ - done_);
   if (terminal_) {
@@ -51,7 +51,6 @@ void Progress::draw(const std::string& label) {
 
 void Progress::end_study(double seconds) {
   std::lock_guard lock(mutex_);
-  if (!enabled_) return;
   if (terminal_) fmt::print(stderr, "\r\033[Kstepwise: study {} {:.1f} s\n", study_, seconds);
   else fmt::print(stderr, "stepwise: study {} done in {:.1f} s\n", study_, seconds);
 }

@@ -14,7 +14,7 @@ namespace stepwise {
 // progress of the running study: a bar redrawn in place on a terminal, plain lines otherwise
 class Progress {
  public:
-  explicit Progress(bool enabled);
+  Progress();
   void begin_study(std::string_view name);
   void begin_sweep(size_t points);
   void point_done(const std::string& label);  // thread-safe
@@ -22,7 +22,7 @@ class Progress {
 
  private:
   void draw(const std::string& label);
-  bool enabled_, terminal_;
+  bool terminal_;
   std::mutex mutex_;
   std::string study_;
   size_t total_ = 0, done_ = 0, last_line_ = 0;  // last_line_: points done at the last plain line

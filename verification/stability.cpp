@@ -91,13 +91,8 @@ std::optional<double> mass_spring_stable_dt(std::string_view method, const Stiff
   // explicit Euler and rk4: |R(h lambda)| <= 1 at lambda = -a + i sqrt(w^2 - a^2), |lambda| = w
   const std::complex<double> lambda(-a, std::sqrt(std::max(w * w - a * a, 0.0)));
   if (method == "euler") return 2 * a / (w * w);
-  if (method == "rk4") {
-    const auto grows = [&](double h) { return std::abs(*stability_function(method, h * lambda)) > 1; };
-    // |R| < 1 just above h = 0 for a > 0 (and = 1 - O(h^6) for a = 0); the boundary lies below 3 / w
-    double low = 1e-6 / w, high = 3 / w;
-    while (high - low > 1e-12 * high) (grows((low + high) / 2) ? high : low) = (low + high) / 2;
-    return low;
-  }
+  // rk4 has no closed form: the step where |R(h lambda)| reaches 1 on the mode's pair of eigenvalues
+  if (method == "rk4") return spectrum_stable_dt(method, Eigen::Vector2cd(lambda, std::conj(lambda)));
   return std::nullopt;
 }
 
