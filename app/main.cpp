@@ -1,4 +1,5 @@
 // The stepwise command line: methods, scenes, run, study, report (DESIGN.md's contract).
+#include "render_command.hpp"
 #include "run_command.hpp"
 #include "scene.hpp"
 
@@ -90,6 +91,14 @@ int main(int argc, char** argv) {
   int report_threads = 0;
   report->add_option("--threads", report_threads, "threads the sweeps' points run on (default: one per core)")->check(CLI::Range(1, 1024));
 
+  stepwise::RenderOptions render;
+  auto* render_cmd = app.add_subcommand("render", "draw a scene's animation headlessly (OpenGL): PNG frames, MP4 and GIF");
+  render_cmd->add_option("scene", render.scene_file, "scene file (TOML)")->required();
+  render_cmd->add_option("--frames", render.frames, "frames from t = 0 to t_end (default 60)");
+  render_cmd->add_option("--size", render.size, "WIDTHxHEIGHT in pixels (default 1280x720)");
+  render_cmd->add_option("--backend", render.backend, "osmesa (default) or egl (Mesa surfaceless)");
+  render_cmd->add_option("--out", render.out, "output directory")->required();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -105,6 +114,7 @@ int main(int argc, char** argv) {
     if (*methods) return list_methods(json);
     if (*scenes) return list_scenes();
     if (*run_cmd) return stepwise::run_command(run);
+    if (*render_cmd) return stepwise::render_command(render);
     if (*study) return stepwise::study_command(study_name, study_quick, study_threads, study_out);
     if (*report) return stepwise::report_command(report_quick, report_threads, report_out);
   } catch (const stepwise::InputError& e) {

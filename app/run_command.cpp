@@ -31,18 +31,10 @@ void require_positive(std::optional<double> value, const std::string& where) {
     throw InputError(fmt::format("{}: must be a positive finite number, got {}", where, *value));
 }
 
-struct Prepared {
-  Scene scene;
-  std::unique_ptr<Model> model;
-  Params params;  // resolved: defaults overlaid by the scene and --set
-  std::string method;
-  StepControl control;
-  double t_end = 0;
-  double output_dt = 0;
-};
+}  // namespace
 
-Prepared prepare(const RunOptions& o) {
-  Prepared p;
+PreparedRun prepare_run(const RunOptions& o) {
+  PreparedRun p;
   p.scene = load_scene(o.scene_file);
   Scene& s = p.scene;
 
@@ -138,6 +130,8 @@ Prepared prepare(const RunOptions& o) {
   return p;
 }
 
+namespace {
+
 // columns: the state's names, or the model's summary of a large state; energy beside them where it exists
 std::vector<std::string> sample_names(const Model& model) {
   auto names = model.summary_names();
@@ -164,7 +158,7 @@ std::string trajectory_csv(const Model& model, const Measured& m) {
   return to_csv(table);
 }
 
-nlohmann::json summary_json(const Prepared& p, const Measured& m) {
+nlohmann::json summary_json(const PreparedRun& p, const Measured& m) {
   const RunResult& r = m.result;
   nlohmann::json j;
   j["scene"] = p.scene.name;
@@ -207,9 +201,9 @@ nlohmann::json summary_json(const Prepared& p, const Measured& m) {
 }  // namespace
 
 int run_command(const RunOptions& options) {
-  Prepared p;
+  PreparedRun p;
   try {
-    p = prepare(options);
+    p = prepare_run(options);
     ensure_writable_directory(options.out);
   } catch (const InputError& e) {
     std::cerr << "stepwise run: " << e.what() << '\n';

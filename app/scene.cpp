@@ -61,6 +61,53 @@ std::vector<std::array<T, 3>> rows_of_three(const toml::node& node, const Scene&
   return out;
 }
 
+// [render]: the camera, the light, colours and the pool's depth (render/camera.hpp's Look)
+render::Look render_table(const toml::node& node, Scene& scene) {
+  const auto* table = node.as_table();
+  if (!table) throw InputError(fmt::format("{}:{}: render: expected a table", scene.file, line_of(node)));
+  render::Look look;
+  for (auto&& [k, value] : *table) {
+    const std::string name(k.str()), full = "render." + name;
+    scene.lines[full] = line_of(value);
+    const auto vector = [&]() {
+      const auto* array = value.as_array();
+      if (!array || array->size() != 3) throw InputError(fmt::format("{}:{}: {}: expected three numbers [x, y, z]", scene.file, line_of(value), full));
+      Eigen::Vector3d v;
+      for (size_t c = 0; c < 3; ++c) v[static_cast<Eigen::Index>(c)] = number(*array->get(c), scene, full);
+      return v;
+    };
+    const auto direction = [&]() {
+      const Eigen::Vector3d v = vector();
+      if (!(v.norm() > 0)) throw InputError(fmt::format("{}:{}: {}: a direction cannot be zero", scene.file, line_of(value), full));
+      return v;
+    };
+    const auto colour = [&]() {
+      const Eigen::Vector3d v = vector();
+      if ((v.array() < 0).any() || (v.array() > 1).any())
+        throw InputError(fmt::format("{}:{}: {}: colour components lie in [0, 1]", scene.file, line_of(value), full));
+      return Eigen::Vector3f(v.cast<float>());
+    };
+    if (name == "eye") look.eye = vector();
+    else if (name == "target") look.target = vector();
+    else if (name == "up") look.up = direction();
+    else if (name == "light") look.light = direction();
+    else if (name == "color") look.color = colour();
+    else if (name == "background") look.background = colour();
+    else if (name == "fov") {
+      look.fov_deg = number(value, scene, full);
+      if (!(look.fov_deg > 1 && look.fov_deg < 170)) throw InputError(fmt::format("{}:{}: {}: field of view {} is not within (1, 170) degrees", scene.file, line_of(value), full, look.fov_deg));
+    } else if (name == "pool_depth") {
+      look.pool_depth = number(value, scene, full);
+      if (!(*look.pool_depth > 0)) throw InputError(fmt::format("{}:{}: {}: must be positive", scene.file, line_of(value), full));
+    } else {
+      throw InputError(fmt::format("{}:{}: {}: unknown key (render takes eye, target, up, fov, light, color, background, pool_depth)", scene.file, line_of(value), full));
+    }
+  }
+  if (look.eye && look.target && (*look.eye - *look.target).norm() == 0)
+    throw InputError(fmt::format("{}: the eye and the target are the same point", scene.where("render.eye")));
+  return look;
+}
+
 // [mesh]: vertices and triangles, every index naming a vertex
 TriangleMesh mesh_table(const toml::node& node, Scene& scene) {
   const auto* table = node.as_table();
@@ -144,8 +191,10 @@ Scene load_scene(const std::string& file) {
       }
     } else if (key == "mesh") {
       scene.mesh = mesh_table(node, scene);
+    } else if (key == "render") {
+      scene.look = render_table(node, scene);
     } else {
-      throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run], [mesh])", file, line_of(node), key));
+      throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run], [mesh], [render])", file, line_of(node), key));
     }
   }
   if (scene.model.empty()) throw InputError(fmt::format("{}: model: missing", file));

@@ -10,10 +10,13 @@
 //   [mesh]         # for models that take a triangle mesh (particle-mesh): positions (m) and
 //   vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]   # counter-clockwise faces seen from outside
 //   triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+//   [render]       # how `stepwise render` sees it: eye, target, up ([x, y, z], m), fov (degrees), light
+//   eye = [0, -3, 2]   # (a direction towards it), color and background ([r, g, b] in 0-1), pool_depth (m)
 #pragma once
 
 #include "models/model.hpp"
 #include "models/triangle_mesh.hpp"
+#include "render/camera.hpp"
 
 #include <map>
 #include <optional>
@@ -37,6 +40,7 @@ struct Scene {
   std::optional<std::string> method;
   std::optional<std::string> event_location;
   std::optional<TriangleMesh> mesh;       // [mesh], indices in range and vertices finite (checked on loading)
+  render::Look look;                      // [render]
 
   // "file:line: key" where the key was written, "file: key" otherwise
   std::string where(const std::string& key) const;

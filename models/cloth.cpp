@@ -111,7 +111,8 @@ class Cloth final : public Model {
       pin(0, 0), pin(0, columns_ - 1), pin(rows_ - 1, 0), pin(rows_ - 1, columns_ - 1);
     }
     if (p.at("pin_top_corners") == 1) pin(0, 0), pin(0, columns_ - 1);
-    if (p.at("pin_left_edge") == 1)
+    pole_ = p.at("pin_left_edge") == 1;
+    if (pole_)
       for (int r = 0; r < rows_; ++r) pin(r, 0);
     const int pin_row = grid_index(p, "pin_row", 0, rows_ - 1, true), pin_column = grid_index(p, "pin_column", 0, columns_ - 1, true);
     if ((pin_row < 0) != (pin_column < 0))
@@ -177,6 +178,25 @@ class Cloth final : public Model {
   }
 
   std::string_view name() const override { return "cloth"; }
+  // the sheet (pinned nodes where they were pinned), the sphere, the ground, and the pole along a pinned left edge
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    TriangleMesh sheet;
+    sheet.vertices.resize(static_cast<Eigen::Index>(rest_.size()), 3);
+    for (size_t k = 0; k < rest_.size(); ++k) sheet.vertices.row(static_cast<Eigen::Index>(k)) = corner(static_cast<int>(k), y.data()).transpose();
+    sheet.faces.resize(static_cast<Eigen::Index>(triangles_.size()), 3);
+    for (size_t f = 0; f < triangles_.size(); ++f)
+      sheet.faces.row(static_cast<Eigen::Index>(f)) << triangles_[f][0], triangles_[f][1], triangles_[f][2];
+    s.surfaces.push_back(std::move(sheet));
+    if (sphere_radius_ > 0) s.balls.push_back({sphere_centre_, sphere_radius_, false});
+    if (ground_) s.ground = make_plane(Eigen::Vector3d(0, ground_y_, 0), Eigen::Vector3d::UnitY());
+    if (pole_) {
+      s.lines.emplace_back();
+      for (int r = 0; r < rows_; ++r) s.lines.back().push_back(rest_[static_cast<size_t>(r * columns_)]);
+    }
+    s.up = Eigen::Vector3d::UnitY();
+    return s;
+  }
   int size() const override { return 6 * free_; }
   bool autonomous() const override { return gust_ == 0 || wind_k_ == 0; }
   std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * free_}; }
@@ -329,6 +349,7 @@ class Cloth final : public Model {
   Eigen::Vector3d pick_force_, sphere_centre_;
   double sphere_radius_;
   bool ground_;
+  bool pole_ = false;  // the left edge pinned to a pole
   double ground_y_, friction_;
   double node_mass_ = 0;
   std::vector<Eigen::Vector3d> rest_;  // every grid node's starting place (a pinned node stays there)

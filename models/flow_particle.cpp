@@ -22,6 +22,13 @@ class FlowParticle final : public Model {
  public:
   explicit FlowParticle(const Params& p) : x0_(p.at("x0")), y0_(p.at("y0")) {}
   std::string_view name() const override { return "flow-particle"; }
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    s.balls.push_back({Eigen::Vector3d(y[0], y[1], 0), 0, true});
+    s.up = Eigen::Vector3d::UnitY();
+    s.planar = true;
+    return s;
+  }
   int size() const override { return 2; }
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"x", "y"}; }
@@ -53,6 +60,11 @@ class FlowParticle3d final : public Model {
  public:
   explicit FlowParticle3d(const Params& p) : x0_(p.at("x0")), y0_(p.at("y0")), z0_(p.at("z0")) {}
   std::string_view name() const override { return "flow-particle-3d"; }
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    s.balls.push_back({y.head<3>(), 0, true});
+    return s;
+  }
   int size() const override { return 3; }
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"x", "y", "z"}; }

@@ -41,6 +41,15 @@ class HangingChain final : public Model {
   }
 
   std::string_view name() const override { return "hanging-chain"; }
+  // the pin at the origin, then the nodes, y up
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    s.balls = particle_balls(y, n_);
+    s.lines.emplace_back(1, Eigen::Vector3d::Zero());
+    for (const auto& ball : s.balls) s.lines.back().push_back(ball.center);
+    s.up = Eigen::Vector3d::UnitY();
+    return s;
+  }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
   std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }

@@ -118,6 +118,11 @@ class HeightField final : public Model {
   std::string_view name() const override {
     return scene_ == Scene::drop ? "water-drop" : scene_ == Scene::standing ? "standing-wave" : "pool";
   }
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    s.water = Shapes::Water{n_, grid_.spacing, y.head(cells_)};
+    return s;
+  }
   int size() const override { return static_cast<int>(2 * cells_); }
   bool autonomous() const override { return true; }
   std::optional<SecondOrderView> second_order() const override { return SecondOrderView{static_cast<int>(cells_)}; }

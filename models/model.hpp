@@ -3,6 +3,7 @@
 // It never steps, prints or draws.
 #pragma once
 
+#include "shapes.hpp"
 #include "solvers/ode_system.hpp"
 
 #include <functional>
@@ -51,9 +52,10 @@ class Model : public OdeSystem {
   // exact solution y(t) where one is known for these parameters
   virtual bool has_exact() const { return false; }
   virtual Eigen::VectorXd exact(double t) const;
+  // what the state y looks like in space (for render/); none for a model with nothing to show
+  virtual std::optional<Shapes> shapes(const Eigen::VectorXd& y) const { (void)y; return std::nullopt; }
 };
 
-struct TriangleMesh;
 
 struct ModelInfo {
   std::string_view name;

@@ -27,6 +27,12 @@ unsigned long particle_seed(const Params& params) {
   return static_cast<unsigned long>(seed);
 }
 
+std::vector<Shapes::Ball> particle_balls(const Eigen::VectorXd& y, int n, bool trail) {
+  std::vector<Shapes::Ball> balls(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) balls[static_cast<size_t>(i)] = Shapes::Ball{y.segment<3>(3 * i), 0, trail};
+  return balls;
+}
+
 std::vector<std::string> particle_state_names(int n) {
   std::vector<std::string> names;
   for (const char* c : {"", "v"})

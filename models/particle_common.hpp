@@ -21,6 +21,8 @@ unsigned long particle_seed(const Params& params);
 
 // the state layout every particle model shares: x[i], y[i], z[i] for i < n, then vx[i], vy[i], vz[i]
 std::vector<std::string> particle_state_names(int n);
+// the n point particles of a state (x, v) as balls the renderer sizes, each leaving a trail or not
+std::vector<Shapes::Ball> particle_balls(const Eigen::VectorXd& y, int n, bool trail = false);
 
 // sum |v_i|^2 / 2 + g z_i over the particles of that layout (per unit mass)
 double kinetic_and_gravity(const Eigen::VectorXd& y, double g);

@@ -37,10 +37,10 @@ constexpr double contact_tolerance = 1e-7;
 
 class ParticleMesh final : public Model {
  public:
-  ParticleMesh(const Params& p, std::vector<Plane> faces)
+  ParticleMesh(const Params& p, TriangleMesh mesh, std::vector<Plane> faces)
       : n_(particle_count(p, "count", bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
         drop_(p.at("drop")), eps_(p.at("restitution")), mu_(p.at("friction")), g_(p.at("g")),
-        rest_speed_(p.at("rest_speed")), faces_(std::move(faces)) {
+        rest_speed_(p.at("rest_speed")), mesh_(std::move(mesh)), faces_(std::move(faces)) {
     const Eigen::Vector3d normal(p.at("plane_nx"), p.at("plane_ny"), p.at("plane_nz"));
     if (!(normal.norm() > 0))
       throw BadParameter("plane_nx", "parameters plane_nx, plane_ny, plane_nz: the ground plane's normal is zero");
@@ -56,6 +56,13 @@ class ParticleMesh final : public Model {
   }
 
   std::string_view name() const override { return "particle-mesh"; }
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    s.balls = particle_balls(y, n_);
+    s.bodies.push_back({&mesh_});
+    s.ground = ground_;
+    return s;
+  }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
   std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }
@@ -124,6 +131,7 @@ class ParticleMesh final : public Model {
   int n_;
   unsigned long seed_;
   double spread_, drop_, eps_, mu_, g_, rest_speed_;
+  TriangleMesh mesh_;  // the obstacle, as drawn
   std::vector<Plane> faces_;
   Plane ground_;
   std::vector<Event> events_;
@@ -150,7 +158,7 @@ std::unique_ptr<Model> make_particle_mesh(const Params& params, const TriangleMe
   } catch (const std::invalid_argument& e) {
     throw BadParameter("mesh", e.what());
   }
-  return std::make_unique<ParticleMesh>(params, std::move(faces));
+  return std::make_unique<ParticleMesh>(params, mesh, std::move(faces));
 }
 
 }  // namespace stepwise

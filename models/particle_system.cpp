@@ -33,6 +33,11 @@ class ParticleSystem final : public Model {
         rc_(p.at("radius")) {}
 
   std::string_view name() const override { return "particle-system"; }
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    s.balls = particle_balls(y, n_);
+    return s;
+  }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
   std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }

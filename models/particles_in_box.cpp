@@ -45,6 +45,12 @@ class ParticlesInBox final : public Model {
   }
 
   std::string_view name() const override { return "particles-in-box"; }
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    s.balls = particle_balls(y, n_);
+    s.container = Aabb{Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(size_)};
+    return s;
+  }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return particle_state_names(n_); }

@@ -36,6 +36,16 @@ class Pendulum final : public Model {
   }
 
   std::string_view name() const override { return small_angle_ ? "pendulum-small-angle" : "pendulum"; }
+  // the pivot at the origin, the bob at angle theta from straight down, in the xy plane with y up
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    const Eigen::Vector3d bob(length_ * std::sin(y[0]), -length_ * std::cos(y[0]), 0);
+    s.lines.push_back({Eigen::Vector3d::Zero(), bob});
+    s.balls.push_back({bob, 0.08 * length_, true});
+    s.up = Eigen::Vector3d::UnitY();
+    s.planar = true;
+    return s;
+  }
   int size() const override { return 2; }
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"theta", "omega"}; }

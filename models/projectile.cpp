@@ -21,6 +21,15 @@ class Projectile final : public Model {
       : x0_(p.at("x0")), y0_(p.at("y0")), vx0_(p.at("vx0")), vy0_(p.at("vy0")), g_(p.at("g")), k_(p.at("drag")),
         mass_(p.at("mass")) {}
   std::string_view name() const override { return "projectile"; }
+  // in the xy plane, y up, over the ground y = 0
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    s.balls.push_back({Eigen::Vector3d(y[0], y[1], 0), 0, true});
+    s.ground = make_plane(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitY());
+    s.up = Eigen::Vector3d::UnitY();
+    s.planar = true;
+    return s;
+  }
   int size() const override { return 4; }
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"x", "y", "vx", "vy"}; }

@@ -48,9 +48,18 @@ const ParamSpec params[] = {
     {"density", 1000.0, "kg/m^3", "with a [mesh]: its uniform density, from which mass and I1-I3 follow (they may not be given then)", Bound::positive},
 };
 
+// half-extents of the uniform box of mass m with principal moments I: I1 = m (b^2 + c^2) / 3 and its
+// cyclic twins give a^2 = 3 (I2 + I3 - I1) / (2 m); moments at the triangle inequality's edge, a flat box
+Eigen::Vector3d equivalent_box(double m, const Eigen::Vector3d& I) {
+  Eigen::Vector3d h;
+  for (int k = 0; k < 3; ++k) h[k] = std::sqrt(std::max(0.0, 3 * (I.sum() - 2 * I[k]) / (2 * m)));
+  return h.cwiseMax(1e-2 * h.maxCoeff());
+}
+
 class RigidBody final : public Model {
  public:
-  explicit RigidBody(const Params& p)
+  // shape: the body's surface in its principal frame; empty: the box with these principal moments
+  explicit RigidBody(const Params& p, std::optional<TriangleMesh> shape = std::nullopt)
       : mass_(p.at("mass")), inertia_(p.at("I1"), p.at("I2"), p.at("I3")), gravity_(0, 0, -p.at("g")), drag_(p.at("drag")),
         angular_drag_(p.at("angular_drag")), force_(p.at("fx"), p.at("fy"), p.at("fz")), point_(p.at("px"), p.at("py"), p.at("pz")) {
     if (const int k = moment_beyond_the_others(inertia_); k >= 0)
@@ -60,9 +69,16 @@ class RigidBody final : public Model {
     y0_.resize(13);
     y0_ << p.at("x0"), p.at("y0"), p.at("z0"), p.at("vx0"), p.at("vy0"), p.at("vz0"), q.w(), q.x(), q.y(), q.z(), p.at("wx0"), p.at("wy0"),
         p.at("wz0");
+    shape_ = shape ? std::move(*shape) : box_mesh(equivalent_box(mass_, inertia_));
   }
 
   std::string_view name() const override { return "rigid-body"; }
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    const Eigen::Quaterniond q(y[6], y[7], y[8], y[9]);
+    s.bodies.push_back({&shape_, q.normalized().toRotationMatrix(), y.head<3>()});
+    return s;
+  }
   int size() const override { return 13; }
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return rigid_body_state_names(1); }
@@ -110,6 +126,7 @@ class RigidBody final : public Model {
   double drag_, angular_drag_;
   Eigen::Vector3d force_, point_;
   Eigen::VectorXd y0_;
+  TriangleMesh shape_;  // as drawn, body frame
 };
 
 // F(phi, k) for phi in [-pi, pi], through F(pi - phi) = 2K - F(phi) and oddness
@@ -160,8 +177,9 @@ std::unique_ptr<Model> make_rigid_body(const Params& p, const TriangleMesh& mesh
       throw BadParameter(std::string(spec.key), fmt::format("parameter '{}' follows from the [mesh] and its density: give one or the other", spec.key));
   Params with = p;
   PrincipalFrame frame;
+  MassProperties props;
   try {
-    const MassProperties props = mass_properties(mesh, p.at("density"));
+    props = mass_properties(mesh, p.at("density"));
     frame = principal_frame(props.inertia);
     with["mass"] = props.mass;
   } catch (const std::invalid_argument& e) {
@@ -174,7 +192,10 @@ std::unique_ptr<Model> make_rigid_body(const Params& p, const TriangleMesh& mesh
   with["qx0"] = body.x();
   with["qy0"] = body.y();
   with["qz0"] = body.z();
-  return std::make_unique<RigidBody>(with);
+  // the mesh in the principal frame: p_body = A^T (p_mesh - c)
+  TriangleMesh shape = mesh;
+  shape.vertices = (mesh.vertices.rowwise() - props.center.transpose()) * frame.axes;
+  return std::make_unique<RigidBody>(with, std::move(shape));
 }
 
 TorqueFreeRotation::TorqueFreeRotation(const Eigen::Vector3d& I, const Eigen::Vector3d& w0) : w0_(w0) {

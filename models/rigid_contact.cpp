@@ -70,6 +70,16 @@ class RigidContact final : public Model {
   }
 
   std::string_view name() const override { return name_; }
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
+    Shapes s;
+    for (size_t b = 0; b < bodies_.size(); ++b) {
+      const Eigen::Index o = 13 * static_cast<Eigen::Index>(b);
+      const Eigen::Quaterniond q(y[o + 6], y[o + 7], y[o + 8], y[o + 9]);
+      s.bodies.push_back({&bodies_[b].mesh, q.normalized().toRotationMatrix(), y.segment<3>(o)});
+    }
+    s.ground = ground_;
+    return s;
+  }
   int size() const override { return static_cast<int>(y0_.size()); }
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return rigid_body_state_names(static_cast<int>(bodies_.size())); }

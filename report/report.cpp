@@ -1,21 +1,16 @@
 #include "report.hpp"
 
 #include "atomic_write.hpp"
+#include "process.hpp"
 #include "studies.hpp"
 #include "solvers/integrator.hpp"
 
 #include <fmt/format.h>
 
-#include <spawn.h>
-#include <sys/wait.h>
-
 #include <chrono>
 #include <filesystem>
-#include <cstring>
 #include <iostream>
 #include <thread>
-
-extern char** environ;
 
 namespace stepwise {
 namespace fs = std::filesystem;
@@ -61,18 +56,12 @@ void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, bool 
   const std::string python = STEPWISE_PYTHON, script = fs::path(STEPWISE_REPORT_DIR) / "plot.py", where = dir.string();
   std::vector<std::string> args{python, script, where};
   if (html) args.push_back("--html");
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (const int error = posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ); error != 0)
-    throw std::runtime_error(fmt::format("cannot start {} for the figures ({}): install python3 (Debian's, with python3-matplotlib)", python,
-                                         std::strerror(error)));
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw std::runtime_error(fmt::format("{} {} failed (exit status {}): the figures were not drawn", python, script,
-                                         WIFEXITED(status) ? WEXITSTATUS(status) : -1));
+  std::string why;
+  const std::optional<int> status = run_process(args, &why);
+  if (!status)
+    throw std::runtime_error(fmt::format("cannot start {} for the figures ({}): install python3 (Debian's, with python3-matplotlib)", python, why));
+  if (*status != 0)
+    throw std::runtime_error(fmt::format("{} {} failed (exit status {}): the figures were not drawn", python, script, *status));
 }
 
 // the threads asked for, or one per core

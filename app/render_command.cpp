@@ -1,0 +1,208 @@
+#include "render_command.hpp"
+
+#include "report/atomic_write.hpp"
+#include "report/process.hpp"
+#include "run_command.hpp"
+#include "render/renderer.hpp"
+#include "verification/measure.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+namespace stepwise {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int max_side = 16384;  // GL_MAX_RENDERBUFFER_SIZE of llvmpipe
+
+// "WxH" as two whole numbers in [1, max_side]
+std::pair<int, int> parse_size(const std::string& text) {
+  const auto x = text.find('x');
+  int w = 0, h = 0;
+  const auto whole = [](std::string_view s, int& v) {
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    return ec == std::errc() && end == s.data() + s.size();
+  };
+  if (x == std::string::npos || !whole(std::string_view(text).substr(0, x), w) || !whole(std::string_view(text).substr(x + 1), h))
+    throw InputError(fmt::format("--size {}: expected WIDTHxHEIGHT in pixels, such as 1280x720", text));
+  if (w < 1 || h < 1 || w > max_side || h > max_side)
+    throw InputError(fmt::format("--size {}: each side must lie in 1..{} pixels", text, max_side));
+  return {w, h};
+}
+
+// the frames' states: the run sampled every `interval` (a whole number of steps for a fixed-step method)
+struct Frames {
+  std::vector<double> t;
+  std::vector<Eigen::VectorXd> y;
+  RunResult result;
+};
+
+Frames simulate(PreparedRun& p, int frames) {
+  double interval = frames > 1 ? p.t_end / (frames - 1) : p.t_end;
+  if (p.control.dt) interval = std::max(1.0, std::round(interval / *p.control.dt)) * *p.control.dt;
+  const int count = frames > 1 ? std::min(frames, 1 + static_cast<int>(std::floor(p.t_end / interval * (1 + 1e-12)))) : 1;
+  Frames f;
+  f.t.push_back(0);
+  f.y.push_back(p.model->initial_state());
+  if (count == 1) return f;
+  p.control.observe = [](const Eigen::VectorXd& y) { return y; };
+  Measured m = run_and_measure(*p.model, p.method, p.control, interval * (count - 1), interval);
+  for (size_t k = 0; k < m.result.trajectory.t.size(); ++k) {
+    f.t.push_back(m.result.trajectory.t[k]);
+    f.y.push_back(std::move(m.result.trajectory.y[k]));
+  }
+  f.result = std::move(m.result);
+  return f;
+}
+
+// ffmpeg's MP4 (H.264, even sides) and GIF (480 px wide, its own palette) from the PNGs, each written to a
+// temporary name and renamed
+void encode_movies(const fs::path& dir, int fps) {
+  if (!on_path("ffmpeg")) {
+    std::cerr << "stepwise render: ffmpeg is not installed: wrote the PNG frames only (apt-get install ffmpeg for animation.mp4 "
+                 "and animation.gif)\n";
+    return;
+  }
+  const std::string input = (dir / "frame_%04d.png").string(), rate = std::to_string(fps);
+  const std::vector<std::pair<std::string, std::vector<std::string>>> movies{
+      {"animation.mp4", {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-f", "mp4"}},
+      {"animation.gif", {"-vf", "scale=480:-1:flags=lanczos,split[a][b];[a]palettegen[p];[b][p]paletteuse", "-f", "gif"}}};
+  for (const auto& [name, options] : movies) {
+    const fs::path target = dir / name, temporary = dir / ("." + name + ".tmp");
+    std::vector<std::string> args{"ffmpeg", "-y", "-loglevel", "error", "-framerate", rate, "-i", input};
+    args.insert(args.end(), options.begin(), options.end());
+    args.push_back(temporary.string());
+    std::string why;
+    const auto status = run_process(args, &why);
+    if (!status || *status != 0) {
+      fs::remove(temporary);
+      throw std::runtime_error(fmt::format("ffmpeg ({}) failed: {}", name, status ? fmt::format("exit status {}", *status) : why));
+    }
+    fs::rename(temporary, target);
+  }
+}
+
+}  // namespace
+
+int render_command(const RenderOptions& options) {
+  PreparedRun p;
+  std::pair<int, int> size;
+  render::Backend backend{};
+  try {
+    size = parse_size(options.size);
+    const auto parsed = render::parse_backend(options.backend);
+    if (!parsed) throw InputError(fmt::format("--backend {}: unknown backend (osmesa or egl)", options.backend));
+    backend = *parsed;
+    if (options.frames < 1 || options.frames > 100000) throw InputError(fmt::format("--frames {}: must lie in 1..100000", options.frames));
+    RunOptions run;
+    run.scene_file = options.scene_file;
+    p = prepare_run(run);
+    if (!p.model->shapes(p.model->initial_state()))
+      throw InputError(fmt::format("{}: model {} has nothing to draw", p.scene.where("model"), p.scene.model));
+    ensure_writable_directory(options.out);
+  } catch (const InputError& e) {
+    std::cerr << "stepwise render: " << e.what() << '\n';
+    return 2;
+  } catch (const BadMethod& e) {
+    std::cerr << "stepwise render: " << p.scene.where("run.method") << ": " << e.what() << '\n';
+    return 2;
+  } catch (const std::runtime_error& e) {
+    std::cerr << "stepwise render: --out: " << e.what() << '\n';
+    return 2;
+  }
+
+  std::unique_ptr<render::Context> context;
+  try {
+    context = render::make_context(backend);
+  } catch (const render::GlError& e) {
+    std::cerr << "stepwise render: --backend " << options.backend << ": " << e.what() << '\n';
+    return 2;
+  }
+
+  const auto [width, height] = size;
+  const fs::path out(options.out);
+  const auto start = std::chrono::steady_clock::now();
+  Frames frames = simulate(p, options.frames);
+  const double simulate_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // one view for the whole animation: the union of the frames' bounds
+  std::vector<Shapes> shapes;
+  for (const auto& y : frames.y) shapes.push_back(*p.model->shapes(y));
+  const double depth = render::pool_depth(shapes.front(), p.scene.look);
+  Aabb box;
+  for (const auto& s : shapes) {
+    const Aabb b = render::bounds(s, depth);
+    box.extend(b.lo);
+    box.extend(b.hi);
+  }
+  const render::View view = render::make_view(box, shapes.front(), p.scene.look, width, height);
+
+  nlohmann::json summary;
+  try {
+    render::Renderer renderer(*context, width, height);
+    render::EncodeQueue queue([&](size_t k, const std::string& png) { write_file_atomic(out / fmt::format("frame_{:04d}.png", k), png); });
+    std::vector<std::vector<Eigen::Vector3d>> trails;
+    summary["frames"] = nlohmann::json::array();
+    double draw_seconds = 0;
+    for (size_t k = 0; k < shapes.size(); ++k) {
+      size_t trail = 0;
+      for (const auto& ball : shapes[k].balls)
+        if (ball.trail) {
+          if (trails.size() <= trail) trails.emplace_back();
+          trails[trail++].push_back(ball.center);
+        }
+      const auto before = std::chrono::steady_clock::now();
+      render::Image image = renderer.draw(shapes[k], trails, view);
+      draw_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
+      summary["frames"].push_back({{"file", fmt::format("frame_{:04d}.png", k)}, {"t", frames.t[k]}, {"hash", render::pixel_hash(image)}});
+      queue.push(std::move(image));
+    }
+    queue.finish();
+    summary["draw_seconds"] = draw_seconds;
+    const double span = frames.t.back();
+    const int fps = span > 0 ? std::clamp(static_cast<int>(std::lround((frames.t.size() - 1) / span)), 1, 60) : 1;
+    if (shapes.size() > 1) encode_movies(out, fps);
+    summary["fps"] = fps;
+  } catch (const render::GlError& e) {
+    std::cerr << "stepwise render: " << e.what() << '\n';
+    return 2;
+  } catch (const std::runtime_error& e) {
+    std::cerr << "stepwise render: " << e.what() << '\n';
+    return 2;
+  }
+
+  summary["scene"] = p.scene.name;
+  summary["model"] = std::string(p.model->name());
+  summary["method"] = p.method;
+  summary["status"] = std::string(to_string(frames.result.status));
+  summary["message"] = frames.result.message.empty() ? nlohmann::json(nullptr) : nlohmann::json(frames.result.message);
+  summary["width"] = width;
+  summary["height"] = height;
+  summary["backend"] = options.backend;
+  summary["renderer"] = context->description();
+  summary["simulate_seconds"] = simulate_seconds;
+  summary["camera"] = {{"eye", {view.camera.eye.x(), view.camera.eye.y(), view.camera.eye.z()}},
+                       {"target", {view.camera.target.x(), view.camera.target.y(), view.camera.target.z()}},
+                       {"up", {view.camera.up.x(), view.camera.up.y(), view.camera.up.z()}},
+                       {"fov_deg", view.camera.fov_deg}};
+  try {
+    write_file_atomic(out / "render.json", summary.dump(2) + "\n");
+  } catch (const std::runtime_error& e) {
+    std::cerr << "stepwise render: " << e.what() << '\n';
+    return 2;
+  }
+  if (frames.result.status != Status::ok) {
+    std::cerr << "stepwise render: " << p.method << ": " << frames.result.message << " (frames drawn up to t = " << frames.t.back() << " s)\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace stepwise

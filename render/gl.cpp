@@ -1,0 +1,64 @@
+#include "gl.hpp"
+
+#include <fmt/format.h>
+
+#include <vector>
+
+namespace stepwise::render {
+
+Gl load_gl(void* (*get_proc)(const char* name)) {
+  Gl gl;
+#define STEPWISE_GL_LOAD(type, name)                                                   \
+  gl.name = reinterpret_cast<type>(get_proc("gl" #name));                              \
+  if (!gl.name) throw GlError("OpenGL 4.5: the context has no function gl" #name);
+  STEPWISE_GL_FUNCTIONS(STEPWISE_GL_LOAD)
+#undef STEPWISE_GL_LOAD
+  return gl;
+}
+
+void check_gl(const Gl& gl, const std::string& what) {
+  if (const GLenum code = gl.GetError(); code != GL_NO_ERROR) throw GlError(fmt::format("{}: glGetError() = 0x{:04x}", what, code));
+}
+
+namespace {
+
+GLuint compile(const Gl& gl, GLenum stage, const char* source, const std::string& name) {
+  const GLuint shader = gl.CreateShader(stage);
+  gl.ShaderSource(shader, 1, &source, nullptr);
+  gl.CompileShader(shader);
+  GLint ok = 0;
+  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    GLint length = 0;
+    gl.GetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
+    std::vector<char> log(static_cast<size_t>(std::max(length, 1)));
+    gl.GetShaderInfoLog(shader, length, nullptr, log.data());
+    gl.DeleteShader(shader);
+    throw GlError(fmt::format("glCompileShader ({} shader of {}): {}", stage == GL_VERTEX_SHADER ? "vertex" : stage == GL_GEOMETRY_SHADER ? "geometry" : "fragment", name, log.data()));
+  }
+  return shader;
+}
+
+}  // namespace
+
+GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, const char* fragment, const std::string& name) {
+  const GLuint program = gl.CreateProgram();
+  std::vector<GLuint> shaders{compile(gl, GL_VERTEX_SHADER, vertex, name), compile(gl, GL_FRAGMENT_SHADER, fragment, name)};
+  if (geometry && *geometry) shaders.push_back(compile(gl, GL_GEOMETRY_SHADER, geometry, name));
+  for (const GLuint s : shaders) gl.AttachShader(program, s);
+  gl.LinkProgram(program);
+  for (const GLuint s : shaders) gl.DeleteShader(s);
+  GLint ok = 0;
+  gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint length = 0;
+    gl.GetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
+    std::vector<char> log(static_cast<size_t>(std::max(length, 1)));
+    gl.GetProgramInfoLog(program, length, nullptr, log.data());
+    gl.DeleteProgram(program);
+    throw GlError(fmt::format("glLinkProgram ({}): {}", name, log.data()));
+  }
+  return program;
+}
+
+}  // namespace stepwise::render

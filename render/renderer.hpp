@@ -1,0 +1,45 @@
+// Draws a model's shapes (models/shapes.hpp) into an offscreen frame: lit balls (instanced), bodies (flat
+// shaded), sheets (smooth, two-sided with a second colour behind), rods and trails as tubes, the ground
+// (a checkered plane, or its line in a planar scene) and the container's edges; water in its pool with
+// refraction, Fresnel reflection and caustics from a photon map (render/caustics.hpp).
+#pragma once
+
+#include "camera.hpp"
+#include "context.hpp"
+#include "image.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace stepwise::render {
+
+// how every frame of one animation is seen
+struct View {
+  Camera camera;
+  Eigen::Vector3d light;        // unit, towards the light
+  double point_radius = 0;      // drawn radius of point particles (m)
+  double pool_depth = 0;        // water: floor at z = -pool_depth (m)
+  int photon_resolution = 512;  // water: photon map texels per side
+  Look look;
+};
+
+// the view of an animation whose frames all lie in `box`, first frame `first`, for width x height images
+View make_view(const Aabb& box, const Shapes& first, const Look& look, int width, int height);
+
+class Renderer {
+ public:
+  // GlError if a program fails to build or the framebuffer is incomplete
+  Renderer(const Context& context, int width, int height);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // trails: for each ball with trail set, in order, the centres it has passed through
+  Image draw(const Shapes& shapes, const std::vector<std::vector<Eigen::Vector3d>>& trails, const View& view);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stepwise::render
