@@ -266,3 +266,47 @@ inline constexpr double rk4_probe_excess = 0.10;
 inline constexpr double obstacle_roundoff = 1e-12;
 
 }  // namespace stepwise::tolerance
+
+namespace stepwise::tolerance {
+
+// ---- rendering and caustics
+
+// the photon map of still water is E0 cos(theta) T at every texel: the shader forms each triangle's area and
+// its projection from differences of float coordinates of size `spacing` on a square of `side`, each off by
+// up to 2 eps_f side / spacing relative, four of them in the ratio and the refraction step's rounding: 16
+// eps_f side / spacing bounds the relative error
+inline double still_photon_map(double side, double spacing) { return 16 * 0x1p-23 * side / spacing; }
+
+// total flux on the floor against sum A cos(theta) T over the surface triangles: rasterising at texel
+// centres misplaces at most the texels the union's outline crosses, perimeter 4 side over texel side / M,
+// each carrying at most the texel's area times the irradiance: 4 / M relative
+inline double photon_flux(int resolution) { return 4.0 / resolution; }
+
+// a sinusoidal surface h = A sin(kx) over depth D against the small-slope (paraxial) intensity: the slope
+// approximations (sin, tan and cos of angles ~ A k) drop terms of relative size (A k)^2, the ray's start at
+// z = h instead of 0 one of A / D times the focusing D (1 - 1/n) A k^2, and the grid's central-difference
+// normals and linear triangles one of (k d)^2 times the focusing; bounded by the sum, a factor 4 on each.
+// A triangle's flat irradiance is its mean, met somewhere inside it, so a texel centre within a grid step d
+// of that point reads it off by up to |d ln I / dx| d (log_slope: the largest |d ln I / dx|)
+inline double paraxial_caustic(double A, double k, double D, double d, double focusing, double log_slope) {
+  return 4 * ((A * k) * (A * k) + (A / D + (k * d) * (k * d)) * focusing) + log_slope * d;
+}
+
+// the GPU photon map against the CPU photon tracer, bin by bin in units of the tracer's standard error:
+// over ~1000 bins a Gaussian exceeds 4.5 sigma with probability 7e-6 each, 0.7% for the largest; the mean
+// of z^2 over the bins is 1 +- sqrt(2 / bins) ~ 0.04, and a bias in the map would push it up: within 1.3
+inline constexpr double photon_trace_max_z = 4.5;
+inline constexpr double photon_trace_mean_z2 = 1.3;
+
+// a ball's pixel centroid against the projection of its centre: the pixel grid quantises the disc's
+// centroid by at most half a pixel, and perspective moves the centroid of a sphere's image off the
+// projected centre by (r / distance)^2 times the centre's offset from the image's middle
+inline double ball_centroid_px(double radius, double distance, double offset_px) {
+  return 0.5 + (radius / distance) * (radius / distance) * offset_px;
+}
+
+// the pixels a flat sheet covers against its projected area: at most the pixels its outline crosses, one
+// per pixel of outline length, and the rest exact
+inline double coverage_px(double outline_px) { return outline_px; }
+
+}  // namespace stepwise::tolerance

@@ -1,0 +1,317 @@
+// Rendering: the photon map against closed forms (still water, flux, a sinusoid's paraxial caustic and its
+// focus) and against an independent CPU photon tracer; frames against the simulation (a ball's centroid,
+// a sheet's covered area); OSMesa and EGL giving the same bytes; the render command's contract.
+#include "render/caustics.hpp"
+#include "render/renderer.hpp"
+#include "render/water_optics.hpp"
+#include "verification/photon_trace.hpp"
+#include "verification/tolerances.hpp"
+#include "models/model.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <numbers>
+
+namespace stepwise {
+namespace {
+
+namespace fs = std::filesystem;
+
+render::Context& context() {
+  static const std::unique_ptr<render::Context> c = render::make_osmesa_context();
+  return *c;
+}
+
+// a square height field of `points` per side over [0, side]^2 from h(x, y)
+Shapes::Water water_of(int points, double side, const std::function<double(double, double)>& h) {
+  Shapes::Water w{points, side / (points - 1), Eigen::VectorXd(static_cast<Eigen::Index>(points) * points)};
+  for (int i = 0; i < points; ++i)
+    for (int j = 0; j < points; ++j) w.z[static_cast<Eigen::Index>(i) * points + j] = h(j * w.spacing, i * w.spacing);
+  return w;
+}
+
+std::vector<float> photon_map(const Shapes::Water& water, const Eigen::Vector3d& light, double depth, int resolution) {
+  render::PhotonMap map(context(), resolution);
+  map.build(water, light, depth);
+  return map.read();
+}
+
+TEST(Caustics, StillWaterIsUniformBeamTimesCosineTimesTransmittance) {
+  const auto water = water_of(33, 1.0, [](double, double) { return 0.0; });
+  const double tol = tolerance::still_photon_map(1.0, water.spacing);
+  for (const double theta : {0.0, 0.5}) {
+    const Eigen::Vector3d light(std::sin(theta), 0, std::cos(theta));
+    const int m = 128;
+    const auto map = photon_map(water, light, 0.25, m);
+    const double expected = std::cos(theta) * render::fresnel_transmittance(std::cos(theta), render::water_index);
+    // the beam refracted at theta_t shifts the lit square by depth tan(theta_t) towards -x: texels past that
+    // band (and one texel more) are lit by exactly one triangle
+    const double sin_t = std::sin(theta) / render::water_index, shift = 0.25 * sin_t / std::sqrt(1 - sin_t * sin_t);
+    double worst = 0;
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < m; ++j)
+        if ((j + 0.5) / m < 1 - shift - 1.0 / m) worst = std::max(worst, std::abs(map[static_cast<size_t>(i) * m + j] / expected - 1));
+    EXPECT_LE(worst, tol) << "theta = " << theta;
+  }
+}
+
+TEST(Caustics, FluxOnTheFloorIsTheTransmittedPower) {
+  // a Gaussian bump, still at the edges, under a vertical light, so that every ray lands on the floor (an
+  // oblique beam would shift the lit square off the floor by depth tan(theta_t): measured 1.2% lost at 3 degrees)
+  const auto water = water_of(65, 1.0, [](double x, double y) { return 0.01 * std::exp(-((x - 0.5) * (x - 0.5) + (y - 0.5) * (y - 0.5)) / 0.01); });
+  const Eigen::Vector3d light = Eigen::Vector3d::UnitZ();
+  // sum over the surface triangles of A cos(theta) T, in double
+  double transmitted = 0;
+  const int n = water.points;
+  const auto p = [&](int i, int j) { return Eigen::Vector3d(j * water.spacing, i * water.spacing, water.z[i * n + j]); };
+  for (int i = 0; i + 1 < n; ++i)
+    for (int j = 0; j + 1 < n; ++j)
+      for (const auto& tri : {std::array{p(i, j), p(i, j + 1), p(i + 1, j + 1)}, std::array{p(i, j), p(i + 1, j + 1), p(i + 1, j)}}) {
+        const Eigen::Vector3d area = (tri[1] - tri[0]).cross(tri[2] - tri[0]) / 2;
+        const double cos_i = area.normalized().dot(light);
+        transmitted += area.norm() * cos_i * render::fresnel_transmittance(cos_i, render::water_index);
+      }
+  double previous = INFINITY;
+  for (const int m : {64, 256, 1024}) {
+    const auto map = photon_map(water, light, 0.2, m);
+    double flux = 0;
+    for (const float e : map) flux += e;
+    flux /= static_cast<double>(m) * m;
+    const double error = std::abs(flux / transmitted - 1);
+    EXPECT_LE(error, tolerance::photon_flux(m)) << m << " texels a side";
+    EXPECT_LE(error, previous) << "the error shrinks with the map's resolution";
+    std::printf("flux on a %d^2 map: relative error %.3g\n", m, error);
+    previous = error;
+  }
+}
+
+// h = A sin(k x): under vertical light a ray from x lands at X = x + D (1 - 1/n) h'(x) (small slopes), so the
+// floor's irradiance is T(1) / |1 + D (1 - 1/n) h''(x)|, focusing under the crests first at D = n / ((n - 1) A k^2)
+struct Sinusoid {
+  double A = 0.002, k = 4 * std::numbers::pi, n = render::water_index;
+  double focus() const { return n / ((n - 1) * A * k * k); }
+  // the paraxial irradiance at floor point X: x found from X by Newton's method
+  double irradiance(double X, double D) const {
+    const double c = D * (1 - 1 / n);
+    double x = X;
+    for (int it = 0; it < 50; ++it) x -= (x + c * A * k * std::cos(k * x) - X) / (1 - c * A * k * k * std::sin(k * x));
+    return render::fresnel_transmittance(1, n) / std::abs(1 - c * A * k * k * std::sin(k * x));
+  }
+};
+
+TEST(Caustics, SinusoidMatchesTheParaxialIntensity) {
+  const Sinusoid s;
+  const int points = 513, m = 512;
+  const auto water = water_of(points, 1.0, [&](double x, double) { return s.A * std::sin(s.k * x); });
+  const double D = 0.5 * s.focus();
+  const auto map = photon_map(water, Eigen::Vector3d::UnitZ(), D, m);
+  // I = I0 / (1 - r sin(kx)) with r = D / f: focusing r / (1 - r) at most, |d ln I / dx| = k r cos / (1 - r sin) at most k r / sqrt(1 - r^2)
+  const double r = D / s.focus();
+  const double tol = tolerance::paraxial_caustic(s.A, s.k, D, water.spacing, r / (1 - r), s.k * r / std::sqrt(1 - r * r));
+  double worst = 0;
+  const int row = m / 2;
+  for (int j = m / 10; j < m - m / 10; ++j) {
+    const double X = (j + 0.5) / m;
+    worst = std::max(worst, std::abs(map[static_cast<size_t>(row) * m + j] / s.irradiance(X, D) - 1));
+  }
+  EXPECT_LE(worst, tol);
+  std::printf("sinusoid at half the focal depth: worst relative error %.3g (bound %.3g)\n", worst, tol);
+  // under a crest it is twice the still water's at half the focal depth
+  EXPECT_NEAR(s.irradiance(0.125, D) / render::fresnel_transmittance(1, s.n), 2.0, 1e-12);
+}
+
+TEST(Caustics, FirstFocusUnderTheCrestsAtTheParaxialDepth) {
+  // 1 / peak irradiance falls linearly in D, 1 - D / f: the line through the measured peaks meets zero at f
+  const Sinusoid s;
+  const int points = 513, m = 512;
+  const auto water = water_of(points, 1.0, [&](double x, double) { return s.A * std::sin(s.k * x); });
+  std::vector<double> depth, inverse;
+  for (const double fraction : {0.3, 0.45, 0.6, 0.75}) {
+    const double D = fraction * s.focus();
+    const auto map = photon_map(water, Eigen::Vector3d::UnitZ(), D, m);
+    double peak = 0;
+    for (int j = m / 10; j < m - m / 10; ++j) peak = std::max(peak, static_cast<double>(map[static_cast<size_t>(m / 2) * m + j]));
+    depth.push_back(D);
+    inverse.push_back(render::fresnel_transmittance(1, s.n) / peak);
+  }
+  const double slope = (inverse.back() - inverse.front()) / (depth.back() - depth.front());
+  const double focus = depth.front() - inverse.front() / slope;
+  std::printf("first focus: %.6g m measured, %.6g m paraxial\n", focus, s.focus());
+  EXPECT_NEAR(focus / s.focus(), 1.0, tolerance::paraxial_caustic(s.A, s.k, s.focus(), water.spacing, 1.0, 0.0));
+}
+
+TEST(Caustics, PhotonMapAgreesWithTheCpuPhotonTracer) {
+  // two crossing waves and a bump, under an oblique light, binned 32 x 32
+  const auto water = water_of(129, 1.0, [](double x, double y) {
+    return 0.004 * std::sin(2 * std::numbers::pi * 2 * x) * std::sin(2 * std::numbers::pi * y) + 0.01 * std::exp(-((x - 0.4) * (x - 0.4) + (y - 0.6) * (y - 0.6)) / 0.02);
+  });
+  const Eigen::Vector3d light = Eigen::Vector3d(0.2, -0.1, 1).normalized();
+  const double depth = 0.3;
+  const int m = 512, bins = 32, per = m / bins;
+  const auto map = photon_map(water, light, depth, m);
+  const PhotonTrace trace = trace_photons(water, light, depth, bins, 4'000'000, 20261121);
+  double max_z = 0, sum_z2 = 0;
+  int counted = 0;
+  for (int bi = 0; bi < bins; ++bi)
+    for (int bj = 0; bj < bins; ++bj) {
+      double mean = 0;
+      for (int i = 0; i < per; ++i)
+        for (int j = 0; j < per; ++j) mean += map[static_cast<size_t>(bi * per + i) * m + bj * per + j];
+      mean /= per * per;
+      const size_t b = static_cast<size_t>(bi) * bins + bj;
+      // bins along the edge see rays leave the pool (the map clips them, the tracer too, differently)
+      if (bi == 0 || bj == 0 || bi == bins - 1 || bj == bins - 1) continue;
+      const double z = (mean - trace.irradiance[b]) / trace.sigma[b];
+      max_z = std::max(max_z, std::abs(z));
+      sum_z2 += z * z;
+      ++counted;
+    }
+  std::printf("photon map against the tracer: max |z| %.3g, mean z^2 %.3g over %d bins\n", max_z, sum_z2 / counted, counted);
+  EXPECT_LE(max_z, tolerance::photon_trace_max_z);
+  EXPECT_LE(sum_z2 / counted, tolerance::photon_trace_mean_z2);
+}
+
+// the pixels of the ball's colour (red well above green)
+Eigen::Vector3d red_pixels(const render::Image& image) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();  // x, y, count
+  for (int r = 0; r < image.height; ++r)
+    for (int c = 0; c < image.width; ++c) {
+      const std::uint8_t* p = &image.rgba[(static_cast<size_t>(r) * image.width + c) * 4];
+      if (p[0] > p[1] + 25) sum += Eigen::Vector3d(c + 0.5, r + 0.5, 1);
+    }
+  return sum;
+}
+
+TEST(Frames, BallCentroidIsWhereTheSimulationPutIt) {
+  const auto model = make_model("bouncing-ball", {});
+  const int w = 320, h = 240;
+  Eigen::VectorXd y = model->initial_state();
+  const Shapes first = *model->shapes(y);
+  Aabb box = render::bounds(first, 0);
+  box.extend(Eigen::Vector3d::Zero());
+  const render::View view = render::make_view(box, first, {}, w, h);
+  render::Renderer renderer(context(), w, h);
+  for (const double height : {1.0, 0.6, 0.25, 0.0}) {
+    y[0] = height;
+    const Shapes shapes = *model->shapes(y);
+    const auto sum = red_pixels(renderer.draw(shapes, {}, view));
+    ASSERT_GT(sum.z(), 20) << "the ball is on screen";
+    const Eigen::Vector2d centroid = sum.head<2>() / sum.z();
+    const auto& ball = shapes.balls.front();
+    const Eigen::Vector2d expected = view.camera.pixel(ball.center, w, h);
+    const double distance = (view.camera.eye - ball.center).norm();
+    EXPECT_LE((centroid - expected).norm(),
+              tolerance::ball_centroid_px(ball.radius, distance, (expected - Eigen::Vector2d(w / 2.0, h / 2.0)).norm()))
+        << "ball at height " << height;
+  }
+}
+
+TEST(Frames, FlatSheetCoversItsProjectedArea) {
+  const auto model = make_model("cloth", {{"rows", 12}, {"columns", 16}});
+  const int w = 320, h = 240;
+  const Shapes shapes = *model->shapes(model->initial_state());
+  const render::View view = render::make_view(render::bounds(shapes, 0), shapes, {}, w, h);
+  render::Renderer renderer(context(), w, h);
+  const auto image = renderer.draw(shapes, {}, view);
+  // covered: not the background's grey (the sheet is red in front, blue behind)
+  double covered = 0;
+  for (size_t p = 0; p < image.rgba.size(); p += 4) {
+    const int r = image.rgba[p], g = image.rgba[p + 1], b = image.rgba[p + 2];
+    if (std::abs(r - g) > 12 || std::abs(b - g) > 12) ++covered;
+  }
+  // the projected triangles' areas (a flat sheet: they do not overlap) and the outline's length in pixels
+  const TriangleMesh& sheet = shapes.surfaces.front();
+  const auto px = [&](Eigen::Index v) { return view.camera.pixel(sheet.vertices.row(v).transpose(), w, h); };
+  double area = 0;
+  for (Eigen::Index f = 0; f < sheet.faces.rows(); ++f) {
+    const Eigen::Vector2d a = px(sheet.faces(f, 0)), b = px(sheet.faces(f, 1)), c = px(sheet.faces(f, 2));
+    area += std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x()) / 2;
+  }
+  const Eigen::Index rows = 12, columns = 16;
+  const Eigen::Vector2d c00 = px(0), c01 = px(columns - 1), c10 = px((rows - 1) * columns), c11 = px(rows * columns - 1);
+  const double outline = (c01 - c00).norm() + (c11 - c01).norm() + (c10 - c11).norm() + (c00 - c10).norm();
+  ASSERT_GT(area, 1000) << "the sheet fills a good part of the frame";
+  EXPECT_LE(std::abs(covered - area), tolerance::coverage_px(outline));
+}
+
+TEST(Frames, OsmesaAndEglDrawTheSameBytes) {
+  std::unique_ptr<render::Context> egl;
+  try {
+    egl = render::make_egl_context();
+  } catch (const render::GlError& e) {
+    GTEST_SKIP() << "no EGL here: " << e.what();
+  }
+  const auto model = make_model("water-drop", {{"size", 32}});
+  Eigen::VectorXd y = model->initial_state();
+  const Shapes shapes = *model->shapes(y);
+  const render::View view = render::make_view(render::bounds(shapes, 0.2), shapes, {}, 200, 150);
+  std::string hashes[2];
+  for (int k = 0; k < 2; ++k) {
+    render::Context& c = k == 0 ? *egl : context();
+    render::Renderer renderer(c, 200, 150);
+    hashes[k] = render::pixel_hash(renderer.draw(shapes, {}, view));
+  }
+  EXPECT_EQ(hashes[0], hashes[1]);
+}
+
+// ---- the command line
+
+struct Command {
+  int status;
+  std::string err;
+};
+
+Command stepwise_render(const std::string& args) {
+  const fs::path err = fs::temp_directory_path() / "stepwise_render_err.txt";
+  const int raw = std::system((std::string(STEPWISE_BIN) + " render " + args + " 2> " + err.string()).c_str());
+  std::ifstream in(err);
+  return {WEXITSTATUS(raw), std::string(std::istreambuf_iterator<char>(in), {})};
+}
+
+TEST(RenderCommand, WritesFramesTheirHashesAndAMovie) {
+  const fs::path out = fs::temp_directory_path() / "stepwise_render_test";
+  fs::remove_all(out);
+  const std::string scene = std::string(STEPWISE_SOURCE_DIR) + "/scenes/pendulum.toml";
+  const Command c = stepwise_render(scene + " --frames 5 --size 160x90 --out " + out.string());
+  ASSERT_EQ(c.status, 0) << c.err;
+  std::ifstream in(out / "render.json");
+  const auto j = nlohmann::json::parse(in);
+  ASSERT_EQ(j["frames"].size(), 5u);
+  for (const auto& f : j["frames"]) EXPECT_TRUE(fs::exists(out / f["file"].get<std::string>()));
+  EXPECT_EQ(j["status"], "ok");
+  // a swinging pendulum: the frames differ
+  EXPECT_NE(j["frames"][0]["hash"], j["frames"][2]["hash"]);
+  if (std::system("command -v ffmpeg > /dev/null") == 0) {
+    EXPECT_GT(fs::file_size(out / "animation.mp4"), 0u);
+    EXPECT_GT(fs::file_size(out / "animation.gif"), 0u);
+  }
+  // the same frames again: byte for byte (deterministic)
+  const fs::path again = out / "again";
+  ASSERT_EQ(stepwise_render(scene + " --frames 5 --size 160x90 --backend egl --out " + again.string()).status, 0);
+  std::ifstream in2(again / "render.json");
+  const auto j2 = nlohmann::json::parse(in2);
+  for (size_t k = 0; k < 5; ++k) EXPECT_EQ(j["frames"][k]["hash"], j2["frames"][k]["hash"]) << "frame " << k;
+}
+
+TEST(RenderCommand, BadInputIsExitTwoNamingTheOption) {
+  const std::string scene = std::string(STEPWISE_SOURCE_DIR) + "/scenes/pendulum.toml";
+  const std::string out = (fs::temp_directory_path() / "stepwise_render_bad").string();
+  for (const auto& [args, named] : std::vector<std::pair<std::string, std::string>>{
+           {"--size 0x10", "--size"}, {"--size 20000x10", "--size"}, {"--size wide", "--size"},
+           {"--backend vulkan", "--backend"}, {"--frames 0", "--frames"}}) {
+    const Command c = stepwise_render(scene + " " + args + " --out " + out);
+    EXPECT_EQ(c.status, 2) << args;
+    EXPECT_NE(c.err.find(named), std::string::npos) << c.err;
+    EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << "one line: " << c.err;
+  }
+}
+
+}  // namespace
+}  // namespace stepwise
