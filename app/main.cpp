@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
     if (*run_cmd) return stepwise::run_command(run);
     if (*render_cmd) return stepwise::render_command(render);
     if (*study) return stepwise::study_command(study_name, study_quick, study_threads, study_out);
-    if (*report) return stepwise::report_command(report_quick, report_threads, report_out);
+    if (*report) return stepwise::report_command(report_quick, report_threads, report_out, stepwise::scenes_directory());
   } catch (const stepwise::InputError& e) {
     std::cerr << "stepwise: " << e.what() << '\n';
     return 2;

@@ -84,7 +84,8 @@ Camera frame_camera(const Aabb& box, const Shapes& shapes, const Look& look, dou
   // far enough that the bounding sphere fits the narrower of the two fields of view
   const double half = std::min(camera.fov_deg, 2 * std::atan(aspect * std::tan(camera.fov_deg * std::numbers::pi / 360)) * 180 / std::numbers::pi) *
                       std::numbers::pi / 360;
-  camera.eye = look.eye.value_or(camera.target + direction * (1.05 * radius / std::sin(half)));
+  // a planar scene's box is its bounding circle's; a solid's bounding sphere overstates what is seen
+  camera.eye = look.eye.value_or(camera.target + direction * ((shapes.planar ? 1.05 : 0.8) * radius / std::sin(half)));
   const double distance = (camera.eye - camera.target).norm();
   camera.near = std::max(1e-4, (distance - 2 * radius) * 0.5);
   camera.far = distance + 4 * radius;

@@ -3,7 +3,7 @@
 
     check_report.py DIR
 
-- every image report.md shows is a PNG in DIR of at least MIN_PNG_BYTES, and index.html shows the same images;
+- every image report.md shows is a PNG (or an animation's GIF) in DIR of at least MIN_PNG_BYTES, and index.html shows the same images;
 - every CSV a section links exists, with a header and at least one row;
 - every number in a section's Markdown tables is a value of that section's CSVs as shown: within half a unit
   of its last digit (the table rounds, the CSV keeps 17 digits). A number typed in, computed only for the
@@ -18,6 +18,7 @@ import re
 import sys
 
 MIN_PNG_BYTES = 5000  # a drawn figure with axes, labels and lines; an empty canvas at 100 dpi is ~3 kB
+MIN_GIF_BYTES = 1000  # an animation of a small particle on a plain ground is ~3 kB; one empty frame ~0.1 kB
 NUMBER = re.compile(r"(?<![\w.\-+])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\w.])")
 
 
@@ -81,7 +82,10 @@ def main():
             continue
         with open(path, "rb") as f:
             head = f.read(8)
-        if head != b"\x89PNG\r\n\x1a\n" or os.path.getsize(path) < MIN_PNG_BYTES:
+        if image.endswith(".gif"):
+            if not head.startswith(b"GIF89a") or os.path.getsize(path) < MIN_GIF_BYTES:
+                problems.append(f"{image}: not a drawn GIF ({os.path.getsize(path)} bytes)")
+        elif head != b"\x89PNG\r\n\x1a\n" or os.path.getsize(path) < MIN_PNG_BYTES:
             problems.append(f"{image}: not a drawn PNG ({os.path.getsize(path)} bytes)")
         if f'src="{image}"' not in page:
             problems.append(f"{image}: not shown by index.html")

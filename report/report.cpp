@@ -1,6 +1,7 @@
 #include "report.hpp"
 
 #include "atomic_write.hpp"
+#include "pictures.hpp"
 #include "process.hpp"
 #include "studies.hpp"
 #include "solvers/integrator.hpp"
@@ -94,7 +95,7 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
   return 0;
 }
 
-int report_command(bool quick, int threads, const std::string& out) {
+int report_command(bool quick, int threads, const std::string& out, const std::string& scenes_dir) {
   const fs::path target = fs::absolute(out).lexically_normal();
   const fs::path parent = target.parent_path();
   fs::path staging;
@@ -122,6 +123,7 @@ int report_command(bool quick, int threads, const std::string& out) {
   std::error_code ec;
   try {
     for (const auto& study : studies()) md += run_study(study, ctx, staging, figures);
+    md += pictures_section(staging, scenes_dir, quick);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     md += fmt::format("---\nStudies run in {:.1f} s of wall time on {} threads.\n", seconds, ctx.threads);
     write_file_atomic(staging / "report.md", md);

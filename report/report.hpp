@@ -14,6 +14,6 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
 
 // every study, then out/report.md, the figures and out/index.html; written to a temporary directory and moved
 // into place at the end, so a failed or interrupted run leaves the previous report as it was
-int report_command(bool quick, int threads, const std::string& out);
+int report_command(bool quick, int threads, const std::string& out, const std::string& scenes_dir);
 
 }  // namespace stepwise
