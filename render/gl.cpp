@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <vector>
 
 namespace stepwise::render {
@@ -22,6 +23,16 @@ void check_gl(const Gl& gl, const std::string& what) {
 
 namespace {
 
+// a shader's or program's info log, through its pair of GL getters
+template <class GetIv, class GetLog>
+std::string info_log(GetIv get_iv, GetLog get_log, GLuint object) {
+  GLint length = 0;
+  get_iv(object, GL_INFO_LOG_LENGTH, &length);
+  std::vector<char> log(static_cast<size_t>(std::max(length, 1)));
+  get_log(object, length, nullptr, log.data());
+  return log.data();
+}
+
 GLuint compile(const Gl& gl, GLenum stage, const char* source, const std::string& name) {
   const GLuint shader = gl.CreateShader(stage);
   gl.ShaderSource(shader, 1, &source, nullptr);
@@ -29,12 +40,9 @@ GLuint compile(const Gl& gl, GLenum stage, const char* source, const std::string
   GLint ok = 0;
   gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
   if (!ok) {
-    GLint length = 0;
-    gl.GetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-    std::vector<char> log(static_cast<size_t>(std::max(length, 1)));
-    gl.GetShaderInfoLog(shader, length, nullptr, log.data());
+    const std::string log = info_log(gl.GetShaderiv, gl.GetShaderInfoLog, shader);
     gl.DeleteShader(shader);
-    throw GlError(fmt::format("glCompileShader ({} shader of {}): {}", stage == GL_VERTEX_SHADER ? "vertex" : stage == GL_GEOMETRY_SHADER ? "geometry" : "fragment", name, log.data()));
+    throw GlError(fmt::format("glCompileShader ({} shader of {}): {}", stage == GL_VERTEX_SHADER ? "vertex" : stage == GL_GEOMETRY_SHADER ? "geometry" : "fragment", name, log));
   }
   return shader;
 }
@@ -51,12 +59,9 @@ GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, cons
   GLint ok = 0;
   gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
   if (!ok) {
-    GLint length = 0;
-    gl.GetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-    std::vector<char> log(static_cast<size_t>(std::max(length, 1)));
-    gl.GetProgramInfoLog(program, length, nullptr, log.data());
+    const std::string log = info_log(gl.GetProgramiv, gl.GetProgramInfoLog, program);
     gl.DeleteProgram(program);
-    throw GlError(fmt::format("glLinkProgram ({}): {}", name, log.data()));
+    throw GlError(fmt::format("glLinkProgram ({}): {}", name, log));
   }
   return program;
 }
