@@ -135,14 +135,7 @@ int render_command(const RenderOptions& options) {
   // one view for the whole animation: the union of the frames' bounds
   std::vector<Shapes> shapes;
   for (const auto& y : frames.y) shapes.push_back(*p.model->shapes(y));
-  const double depth = render::pool_depth(shapes.front(), p.scene.look);
-  Aabb box;
-  for (const auto& s : shapes) {
-    const Aabb b = render::bounds(s, depth);
-    box.extend(b.lo);
-    box.extend(b.hi);
-  }
-  const render::View view = render::make_view(box, shapes.front(), p.scene.look, width, height);
+  const render::View view = render::make_view(shapes, p.scene.look, width, height);
 
   nlohmann::json summary;
   try {

@@ -33,7 +33,7 @@ struct WaterScene {
     Measured m = run_and_measure(*model, "wave-fd", StepControl::fixed(5e-3), 0.5, 0.5);
     y = m.result.y_stop;
     shapes = *model->shapes(y);
-    view = render::make_view(render::bounds(shapes, 0.3), shapes, {}, width, height);
+    view = render::make_view({&shapes, 1}, {}, width, height);
   }
 };
 

@@ -38,14 +38,13 @@ class BouncingBall final : public Model {
   // ball's lowest point (its contact point at an impact), so the sphere's centre is one radius above it
   std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
     Shapes s;
-    const double r = drawn_radius();
+    const double r = 0.08 * h0_;
     s.balls.push_back({Eigen::Vector3d(0, y[0] + r, 0), r, false});
     s.ground = make_plane(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitY());
     s.up = Eigen::Vector3d::UnitY();
     s.planar = true;
     return s;
   }
-  double drawn_radius() const { return 0.08 * h0_; }
   int size() const override { return 2; }
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"y", "vy"}; }

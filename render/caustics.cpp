@@ -96,7 +96,8 @@ void PhotonMap::build(const Shapes::Water& water, const Eigen::Vector3d& light, 
   // the surface as triangles, two per grid cell, each vertex its position and normal
   const int n = water.points;
   const auto normals = height_field_normals(water);
-  std::vector<float> vertices;
+  std::vector<float>& vertices = vertices_;
+  vertices.clear();
   vertices.reserve(static_cast<size_t>(n - 1) * (n - 1) * 36);
   const auto push = [&](int i, int j) {
     const Eigen::Index k = static_cast<Eigen::Index>(i) * n + j;

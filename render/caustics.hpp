@@ -30,11 +30,15 @@ class PhotonMap {
   // the map's irradiances (per unit floor area, per unit beam irradiance), row i at y = (i + 1/2) side / resolution
   std::vector<float> read() const;
   unsigned texture() const { return texture_; }
+  // the last build's surface: two triangles per cell, each vertex its position and normal (6 floats), the
+  // mesh the water surface is drawn with
+  const std::vector<float>& surface() const { return vertices_; }
   int resolution() const { return resolution_; }
 
  private:
   const Gl& gl_;
   int resolution_;
+  std::vector<float> vertices_;
   unsigned program_ = 0, texture_ = 0, framebuffer_ = 0, vertex_array_ = 0, buffer_ = 0;
 };
 

@@ -193,11 +193,17 @@ const Eigen::Vector3f body_palette[] = {{0.85f, 0.33f, 0.18f}, {0.20f, 0.45f, 0.
 
 }  // namespace
 
-View make_view(const Aabb& box, const Shapes& first, const Look& look, int width, int height) {
+View make_view(std::span<const Shapes> frames, const Look& look, int width, int height) {
   View view;
   view.look = look;
-  view.pool_depth = pool_depth(first, look);
-  view.camera = frame_camera(box, first, look, static_cast<double>(width) / height);
+  view.pool_depth = pool_depth(frames.front(), look);
+  Aabb box;
+  for (const auto& shapes : frames) {
+    const Aabb b = bounds(shapes, view.pool_depth);
+    box.extend(b.lo);
+    box.extend(b.hi);
+  }
+  view.camera = frame_camera(box, frames.front(), look, static_cast<double>(width) / height);
   view.light = light_direction(view.camera, look);
   view.point_radius = 0.008 * (box.hi - box.lo).norm();
   return view;
@@ -310,23 +316,8 @@ struct Renderer::Impl {
     gl.DrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(box.size() / 6));
     gl.Disable(GL_CULL_FACE);
 
-    // the surface, smooth normals from the height field
-    const auto normals = height_field_normals(water);
-    std::vector<float> mesh;
-    mesh.reserve(static_cast<size_t>(n - 1) * (n - 1) * 36);
-    const auto corner = [&](int i, int j, Eigen::Vector3d& p, Eigen::Vector3d& nrm) {
-      const Eigen::Index k = static_cast<Eigen::Index>(i) * n + j;
-      p = Eigen::Vector3d(j * water.spacing, i * water.spacing, water.z[k]);
-      nrm = normals.row(k).transpose();
-    };
-    for (int i = 0; i + 1 < n; ++i)
-      for (int j = 0; j + 1 < n; ++j) {
-        Eigen::Vector3d p[4], q[4];
-        corner(i, j, p[0], q[0]), corner(i, j + 1, p[1], q[1]), corner(i + 1, j + 1, p[2], q[2]), corner(i + 1, j, p[3], q[3]);
-        const Eigen::Vector3d a[3] = {p[0], p[1], p[2]}, an[3] = {q[0], q[1], q[2]}, b[3] = {p[0], p[2], p[3]}, bn[3] = {q[0], q[2], q[3]};
-        append_triangle(mesh, a, an);
-        append_triangle(mesh, b, bn);
-      }
+    // the surface: the mesh pass 1 refracted, smooth normals from the height field
+    const std::vector<float>& mesh = photons->surface();
     gl.UseProgram(surface);
     set_pool_uniforms(surface, view, side);
     gl.UniformMatrix4fv(gl.GetUniformLocation(surface, "view_projection"), 1, GL_FALSE, view_projection.data());

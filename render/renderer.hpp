@@ -9,6 +9,7 @@
 #include "image.hpp"
 
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace stepwise::render {
@@ -23,8 +24,9 @@ struct View {
   Look look;
 };
 
-// the view of an animation whose frames all lie in `box`, first frame `first`, for width x height images
-View make_view(const Aabb& box, const Shapes& first, const Look& look, int width, int height);
+// the view of an animation (frames: its shapes, at least one) for width x height images: the camera frames
+// the union of every frame's bounds, the pool's depth that of the first frame's water
+View make_view(std::span<const Shapes> frames, const Look& look, int width, int height);
 
 class Renderer {
  public:

@@ -193,10 +193,10 @@ TEST(Frames, BallCentroidIsWhereTheSimulationPutIt) {
   const auto model = make_model("bouncing-ball", {});
   const int w = 320, h = 240;
   Eigen::VectorXd y = model->initial_state();
-  const Shapes first = *model->shapes(y);
-  Aabb box = render::bounds(first, 0);
-  box.extend(Eigen::Vector3d::Zero());
-  const render::View view = render::make_view(box, first, {}, w, h);
+  Eigen::VectorXd ground = y;
+  ground[0] = 0;
+  const std::vector<Shapes> span{*model->shapes(y), *model->shapes(ground)};
+  const render::View view = render::make_view(span, {}, w, h);
   render::Renderer renderer(context(), w, h);
   for (const double height : {1.0, 0.6, 0.25, 0.0}) {
     y[0] = height;
@@ -214,10 +214,11 @@ TEST(Frames, BallCentroidIsWhereTheSimulationPutIt) {
 }
 
 TEST(Frames, FlatSheetCoversItsProjectedArea) {
-  const auto model = make_model("cloth", {{"rows", 12}, {"columns", 16}});
+  const Eigen::Index rows = 12, columns = 16;
+  const auto model = make_model("cloth", {{"rows", rows}, {"columns", columns}});
   const int w = 320, h = 240;
   const Shapes shapes = *model->shapes(model->initial_state());
-  const render::View view = render::make_view(render::bounds(shapes, 0), shapes, {}, w, h);
+  const render::View view = render::make_view({&shapes, 1}, {}, w, h);
   render::Renderer renderer(context(), w, h);
   const auto image = renderer.draw(shapes, {}, view);
   // covered: not the background's grey (the sheet is red in front, blue behind)
@@ -234,7 +235,6 @@ TEST(Frames, FlatSheetCoversItsProjectedArea) {
     const Eigen::Vector2d a = px(sheet.faces(f, 0)), b = px(sheet.faces(f, 1)), c = px(sheet.faces(f, 2));
     area += std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x()) / 2;
   }
-  const Eigen::Index rows = 12, columns = 16;
   const Eigen::Vector2d c00 = px(0), c01 = px(columns - 1), c10 = px((rows - 1) * columns), c11 = px(rows * columns - 1);
   const double outline = (c01 - c00).norm() + (c11 - c01).norm() + (c10 - c11).norm() + (c00 - c10).norm();
   ASSERT_GT(area, 1000) << "the sheet fills a good part of the frame";
@@ -251,7 +251,7 @@ TEST(Frames, OsmesaAndEglDrawTheSameBytes) {
   const auto model = make_model("water-drop", {{"size", 32}});
   Eigen::VectorXd y = model->initial_state();
   const Shapes shapes = *model->shapes(y);
-  const render::View view = render::make_view(render::bounds(shapes, 0.2), shapes, {}, 200, 150);
+  const render::View view = render::make_view({&shapes, 1}, {}, 200, 150);
   std::string hashes[2];
   for (int k = 0; k < 2; ++k) {
     render::Context& c = k == 0 ? *egl : context();
