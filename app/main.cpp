@@ -93,7 +93,11 @@ int main(int argc, char** argv) {
 
   stepwise::RenderOptions render;
   auto* render_cmd = app.add_subcommand("render", "draw a scene's animation headlessly (OpenGL): PNG frames, MP4 and GIF");
-  render_cmd->add_option("scene", render.scene_file, "scene file (TOML)")->required();
+  render_cmd->add_option("scene", render.run.scene_file, "scene file (TOML)")->required();
+  render_cmd->add_option("--set", render.run.sets, "override a scene parameter, key=value");
+  render_cmd->add_option("--method", render.run.method, "method name (see `stepwise methods`)");
+  render_cmd->add_option("--dt", render.run.dt, "fixed step (s)");
+  render_cmd->add_option("--t-end", render.run.t_end, "end time (s): the last frame's");
   render_cmd->add_option("--frames", render.frames, "frames from t = 0 to t_end (default 60)");
   render_cmd->add_option("--size", render.size, "WIDTHxHEIGHT in pixels (default 1280x720)");
   render_cmd->add_option("--backend", render.backend, "osmesa (default) or egl (Mesa surfaceless)");

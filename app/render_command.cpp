@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -37,29 +38,36 @@ std::pair<int, int> parse_size(const std::string& text) {
   return {w, h};
 }
 
-// the frames' states: the run sampled every `interval` (a whole number of steps for a fixed-step method)
-struct Frames {
+// the run sampled every `interval` (a whole number of steps for a fixed-step method); every `stride`-th
+// sample is a frame, the others only lengthen the trails, so a trail follows its path between frames (a
+// pendulum sampled at frame rate alone shows its aliased zigzag)
+struct Samples {
   std::vector<double> t;
   std::vector<Eigen::VectorXd> y;
+  size_t stride = 1;
   RunResult result;
 };
 
-Frames simulate(PreparedRun& p, int frames) {
-  double interval = frames > 1 ? p.t_end / (frames - 1) : p.t_end;
-  if (p.control.dt) interval = std::max(1.0, std::round(interval / *p.control.dt)) * *p.control.dt;
-  const int count = frames > 1 ? std::min(frames, 1 + static_cast<int>(std::floor(p.t_end / interval * (1 + 1e-12)))) : 1;
-  Frames f;
-  f.t.push_back(0);
-  f.y.push_back(p.model->initial_state());
-  if (count == 1) return f;
+Samples simulate(PreparedRun& p, int frames, bool trails) {
+  const size_t stride = trails ? 16 : 1;
+  double interval = (frames > 1 ? p.t_end / (frames - 1) : p.t_end) / static_cast<double>(stride);
+  // whole steps, rounded down so that the frames asked for fit before t_end
+  if (p.control.dt) interval = std::max(1.0, std::floor(interval / *p.control.dt * (1 + 1e-9))) * *p.control.dt;
+  const double frame_interval = interval * static_cast<double>(stride);
+  const int count = frames > 1 ? std::min(frames, 1 + static_cast<int>(std::floor(p.t_end / frame_interval * (1 + 1e-12)))) : 1;
+  Samples s;
+  s.stride = stride;
+  s.t.push_back(0);
+  s.y.push_back(p.model->initial_state());
+  if (count == 1) return s;
   p.control.observe = [](const Eigen::VectorXd& y) { return y; };
-  Measured m = run_and_measure(*p.model, p.method, p.control, interval * (count - 1), interval);
+  Measured m = run_and_measure(*p.model, p.method, p.control, frame_interval * (count - 1), interval);
   for (size_t k = 0; k < m.result.trajectory.t.size(); ++k) {
-    f.t.push_back(m.result.trajectory.t[k]);
-    f.y.push_back(std::move(m.result.trajectory.y[k]));
+    s.t.push_back(m.result.trajectory.t[k]);
+    s.y.push_back(std::move(m.result.trajectory.y[k]));
   }
-  f.result = std::move(m.result);
-  return f;
+  s.result = std::move(m.result);
+  return s;
 }
 
 // ffmpeg's MP4 (H.264, even sides) and GIF (480 px wide, its own palette) from the PNGs, each written to a
@@ -101,9 +109,7 @@ int render_command(const RenderOptions& options) {
     if (!parsed) throw InputError(fmt::format("--backend {}: unknown backend (osmesa or egl)", options.backend));
     backend = *parsed;
     if (options.frames < 1 || options.frames > 100000) throw InputError(fmt::format("--frames {}: must lie in 1..100000", options.frames));
-    RunOptions run;
-    run.scene_file = options.scene_file;
-    p = prepare_run(run);
+    p = prepare_run(options.run);
     if (!p.model->shapes(p.model->initial_state()))
       throw InputError(fmt::format("{}: model {} has nothing to draw", p.scene.where("model"), p.scene.model));
     ensure_writable_directory(options.out);
@@ -129,12 +135,18 @@ int render_command(const RenderOptions& options) {
   const auto [width, height] = size;
   const fs::path out(options.out);
   const auto start = std::chrono::steady_clock::now();
-  Frames frames = simulate(p, options.frames);
+  const Shapes first = *p.model->shapes(p.model->initial_state());
+  const bool has_trails = std::any_of(first.balls.begin(), first.balls.end(), [](const Shapes::Ball& b) { return b.trail; });
+  Samples samples = simulate(p, options.frames, has_trails);
   const double simulate_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  // one view for the whole animation: the union of the frames' bounds
+  // the frames: every stride-th sample, and the last one if the run stopped between frames (diverged)
   std::vector<Shapes> shapes;
-  for (const auto& y : frames.y) shapes.push_back(*p.model->shapes(y));
+  std::vector<size_t> frame_samples;
+  for (size_t k = 0; k < samples.y.size(); ++k)
+    if (k % samples.stride == 0 || k + 1 == samples.y.size()) frame_samples.push_back(k);
+  for (const size_t k : frame_samples) shapes.push_back(*p.model->shapes(samples.y[k]));
+  // one view for the whole animation: the union of the frames' bounds
   const render::View view = render::make_view(shapes, p.scene.look, width, height);
 
   nlohmann::json summary;
@@ -144,23 +156,28 @@ int render_command(const RenderOptions& options) {
     std::vector<std::vector<Eigen::Vector3d>> trails;
     summary["frames"] = nlohmann::json::array();
     double draw_seconds = 0;
-    for (size_t k = 0; k < shapes.size(); ++k) {
-      size_t trail = 0;
-      for (const auto& ball : shapes[k].balls)
-        if (ball.trail) {
-          if (trails.size() <= trail) trails.emplace_back();
-          trails[trail++].push_back(ball.center);
-        }
+    size_t sampled = 0;  // samples already on the trails
+    for (size_t f = 0; f < shapes.size(); ++f) {
+      for (; has_trails && sampled <= frame_samples[f]; ++sampled) {
+        const Shapes at = sampled == frame_samples[f] ? shapes[f] : *p.model->shapes(samples.y[sampled]);
+        size_t trail = 0;
+        for (const auto& ball : at.balls)
+          if (ball.trail) {
+            if (trails.size() <= trail) trails.emplace_back();
+            trails[trail++].push_back(ball.center);
+          }
+      }
       const auto before = std::chrono::steady_clock::now();
-      render::Image image = renderer.draw(shapes[k], trails, view);
+      render::Image image = renderer.draw(shapes[f], trails, view);
       draw_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
-      summary["frames"].push_back({{"file", fmt::format("frame_{:04d}.png", k)}, {"t", frames.t[k]}, {"hash", render::pixel_hash(image)}});
+      const double t = samples.t[frame_samples[f]];
+      summary["frames"].push_back({{"file", fmt::format("frame_{:04d}.png", f)}, {"t", t}, {"hash", render::pixel_hash(image)}});
       queue.push(std::move(image));
     }
     queue.finish();
     summary["draw_seconds"] = draw_seconds;
-    const double span = frames.t.back();
-    const int fps = span > 0 ? std::clamp(static_cast<int>(std::lround((frames.t.size() - 1) / span)), 1, 60) : 1;
+    const double span = samples.t[frame_samples.back()];
+    const int fps = span > 0 ? std::clamp(static_cast<int>(std::lround((shapes.size() - 1) / span)), 1, 60) : 1;
     if (shapes.size() > 1) encode_movies(out, fps);
     summary["fps"] = fps;
   } catch (const render::GlError& e) {
@@ -174,8 +191,8 @@ int render_command(const RenderOptions& options) {
   summary["scene"] = p.scene.name;
   summary["model"] = std::string(p.model->name());
   summary["method"] = p.method;
-  summary["status"] = std::string(to_string(frames.result.status));
-  summary["message"] = frames.result.message.empty() ? nlohmann::json(nullptr) : nlohmann::json(frames.result.message);
+  summary["status"] = std::string(to_string(samples.result.status));
+  summary["message"] = samples.result.message.empty() ? nlohmann::json(nullptr) : nlohmann::json(samples.result.message);
   summary["width"] = width;
   summary["height"] = height;
   summary["backend"] = options.backend;
@@ -191,8 +208,8 @@ int render_command(const RenderOptions& options) {
     std::cerr << "stepwise render: " << e.what() << '\n';
     return 2;
   }
-  if (frames.result.status != Status::ok) {
-    std::cerr << "stepwise render: " << p.method << ": " << frames.result.message << " (frames drawn up to t = " << frames.t.back() << " s)\n";
+  if (samples.result.status != Status::ok) {
+    std::cerr << "stepwise render: " << p.method << ": " << samples.result.message << " (frames drawn up to t = " << samples.t.back() << " s)\n";
     return 1;
   }
   return 0;

@@ -2,12 +2,14 @@
 // where ffmpeg is installed, an MP4 and a GIF.
 #pragma once
 
+#include "run_command.hpp"
+
 #include <string>
 
 namespace stepwise {
 
 struct RenderOptions {
-  std::string scene_file;
+  RunOptions run;                  // the scene, --set, --method, --dt, --t-end as `stepwise run` takes them
   int frames = 60;                 // frames from t = 0 to the scene's t_end
   std::string size = "1280x720";   // WxH in pixels
   std::string backend = "osmesa";  // osmesa | egl

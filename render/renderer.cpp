@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -217,8 +218,8 @@ struct Renderer::Impl {
   GLuint framebuffer = 0, color = 0, depth = 0;
   GLuint vertex_array = 0, vertices = 0, instances = 0;
   std::unique_ptr<PhotonMap> photons;
-  TriangleMesh unit_sphere = sphere_mesh(1, 3);
-  std::vector<float> sphere_vertices;
+  // the unit sphere at subdivision levels 0..3 (20·4^level triangles): many balls are drawn coarser
+  std::array<std::vector<float>, 4> sphere_vertices;
 
   Impl(const Context& context_, int w, int h) : context(context_), gl(context_.gl()), width(w), height(h) {
     lit = link_program(gl, lit_vertex, nullptr, lit_fragment, "lit");
@@ -246,10 +247,13 @@ struct Renderer::Impl {
       gl.VertexArrayAttribBinding(vertex_array, a, a == 2 ? 1 : 0);
     }
     // the unit sphere, smooth: its normals are its positions
-    for (Eigen::Index f = 0; f < unit_sphere.faces.rows(); ++f) {
-      Eigen::Vector3d p[3];
-      for (int v = 0; v < 3; ++v) p[v] = unit_sphere.vertices.row(unit_sphere.faces(f, v));
-      append_triangle(sphere_vertices, p, p);
+    for (size_t level = 0; level < sphere_vertices.size(); ++level) {
+      const TriangleMesh unit_sphere = sphere_mesh(1, static_cast<int>(level));
+      for (Eigen::Index f = 0; f < unit_sphere.faces.rows(); ++f) {
+        Eigen::Vector3d p[3];
+        for (int v = 0; v < 3; ++v) p[v] = unit_sphere.vertices.row(unit_sphere.faces(f, v));
+        append_triangle(sphere_vertices[level], p, p);
+      }
     }
     check_gl(gl, "renderer set-up");
   }
@@ -359,7 +363,11 @@ struct Renderer::Impl {
     for (const auto& ball : shapes.balls)
       for (const double v : {ball.center.x(), ball.center.y(), ball.center.z(), ball.radius > 0 ? ball.radius : view.point_radius})
         balls.push_back(static_cast<float>(v));
-    draw_batch(sphere_vertices, balls, color, color, 0);
+    // the finest sphere that keeps the balls under about two million triangles (llvmpipe draws that in
+    // about a second): a hundred thousand particles are icosahedra a few pixels across
+    size_t level = sphere_vertices.size() - 1;
+    while (level > 0 && (sphere_vertices[level].size() / 18) * shapes.balls.size() > (size_t{1} << 21)) --level;
+    draw_batch(sphere_vertices[level], balls, color, color, 0);
 
     // bodies, one colour each from a palette
     for (size_t b = 0; b < shapes.bodies.size(); ++b) {

@@ -5,8 +5,11 @@
 #include "process.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <chrono>
 #include <fstream>
 #include <iostream>
 
@@ -16,54 +19,83 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Picture {
+// what a quick report changes to keep its pictures to a second or two each; the full report draws the scenes
+// as they are
+struct QuickChange {
   const char* scene;
-  const char* caption;
+  std::vector<std::string> arguments;
+};
+const QuickChange quick_changes[] = {
+    {"particle-system", {"--set", "count=10000"}},  // 100 000 particles take 16 s to simulate
 };
 
-// the seeds' scenes, one of each kind of shape
-constexpr Picture pictured[] = {
-    {"bouncing-ball", "The seeds' OpenGL example: the ball over the ground line, restitution 0.8 (cvode-bdf with its impacts as events)."},
-    {"pendulum", "The pendulum, its bob's path traced."},
-    {"flow-particle", "A particle carried by the velocity field (x, sin y), its path traced."},
-    {"particles-in-box", "Particles bouncing in a box under gravity."},
-    {"flag-on-pole", "The flag: a mass-spring sheet on a pole in the wind, implicit Euler on CHOLMOD; red in front, blue behind."},
-    {"stack-collapse", "A wall of boxes hit by a ball: contacts and friction by sequential impulses."},
-    {"water-drop", "Height-field water after a drop: the floor lit by the photon-map caustic, the surface refracting and reflecting."},
+struct Drawn {
+  std::string scene;
+  nlohmann::json summary;
 };
 
 }  // namespace
 
-std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, bool quick) {
-  const int frames = quick ? 16 : 60;
-  const std::string size = quick ? "480x270" : "640x360";
-  Table table{{"scene", "model", "method", "frames", "t_end", "draw_ms_per_frame", "status", "renderer"}, {}};
-  std::string body;
-  for (const auto& [scene, caption] : pictured) {
+std::string scene_description(const fs::path& scene_file) {
+  std::ifstream in(scene_file);
+  std::string line, text;
+  while (std::getline(in, line) && line.starts_with('#')) {
+    const auto start = line.find_first_not_of("# ");
+    if (start == std::string::npos) continue;
+    if (!text.empty()) text.push_back(' ');
+    text.append(line, start);
+  }
+  return text;
+}
+
+std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, const StudyContext& ctx) {
+  const int frames = ctx.quick ? 16 : 60;
+  const std::string size = ctx.quick ? "480x270" : "640x360";
+  std::vector<std::string> scenes;
+  for (const auto& entry : fs::directory_iterator(scenes_dir))
+    if (entry.path().extension() == ".toml") scenes.push_back(entry.path().stem().string());
+  std::sort(scenes.begin(), scenes.end());
+  if (scenes.empty()) throw std::runtime_error(fmt::format("{}: no scene files to draw", scenes_dir.string()));
+
+  if (ctx.progress) ctx.progress->begin_study("pictures");
+  const auto start = std::chrono::steady_clock::now();
+  const auto drawn = ctx.sweep<Drawn>(scenes, [&](size_t i) {
+    const std::string& scene = scenes[i];
     const fs::path out = dir / "pictures" / scene;
-    std::cerr << fmt::format("stepwise report: drawing {}\n", scene);
+    std::vector<std::string> args{"/proc/self/exe", "render", (scenes_dir / (scene + ".toml")).string(), "--frames", std::to_string(frames),
+                                  "--size",         size,     "--out",                                   out.string()};
+    for (const auto& change : quick_changes)
+      if (ctx.quick && scene == change.scene) args.insert(args.end(), change.arguments.begin(), change.arguments.end());
     std::string why;
-    const auto status = run_process({"/proc/self/exe", "render", (scenes_dir / (std::string(scene) + ".toml")).string(), "--frames",
-                                     std::to_string(frames), "--size", size, "--out", out.string()},
-                                    &why);
+    const auto status = run_process(args, &why);
     if (!status || *status != 0)
       throw std::runtime_error(fmt::format("stepwise render {} failed ({}): the pictures were not drawn", scene,
                                            status ? fmt::format("exit status {}", *status) : why));
     std::ifstream in(out / "render.json");
-    const auto j = nlohmann::json::parse(in);
+    return Drawn{scene, nlohmann::json::parse(in)};
+  });
+  if (ctx.progress) ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+
+  Table table{{"scene", "model", "method", "frames", "t_end", "draw_ms_per_frame", "status", "renderer"}, {}};
+  std::string body;
+  for (const auto& [scene, j] : drawn) {
     const auto& shown = j["frames"].back();
     const double per_frame = j["draw_seconds"].get<double>() * 1000 / static_cast<double>(j["frames"].size());
-    table.rows.push_back({std::string(scene), j["model"].get<std::string>(), j["method"].get<std::string>(),
-                          static_cast<double>(j["frames"].size()), shown["t"].get<double>(), per_frame,
-                          j["status"].get<std::string>(), j["renderer"].get<std::string>()});
+    table.rows.push_back({scene, j["model"].get<std::string>(), j["method"].get<std::string>(), static_cast<double>(j["frames"].size()),
+                          shown["t"].get<double>(), per_frame, j["status"].get<std::string>(), j["renderer"].get<std::string>()});
+    std::string changed;
+    for (const auto& change : quick_changes)
+      if (ctx.quick && scene == change.scene) changed = fmt::format(" (quick report: `{}`)", fmt::join(change.arguments, " "));
     const std::string still = fmt::format("pictures/{}/{}", scene, shown["file"].get<std::string>());
-    body += fmt::format("### {}\n\n{} The last frame, t = {:.3g} s:\n\n![{}]({})\n\n", scene, caption, shown["t"].get<double>(), scene, still);
-    if (fs::exists(out / "animation.gif"))
+    body += fmt::format("### {}\n\n{}{} Drawn with {}; the last frame, t = {:.3g} s:\n\n![{}]({})\n\n", scene,
+                        scene_description(scenes_dir / (scene + ".toml")), changed, j["method"].get<std::string>(), shown["t"].get<double>(),
+                        scene, still);
+    if (fs::exists(dir / "pictures" / scene / "animation.gif"))
       body += fmt::format("The whole run ([MP4](pictures/{0}/animation.mp4)):\n\n![{0} animation](pictures/{0}/animation.gif)\n\n", scene);
   }
   write_file_atomic(dir / "pictures.csv", to_csv(table));
   std::string md = "## Pictures\n\n";
-  md += fmt::format("Each scene run through its own method and drawn headlessly by `stepwise render` ({} frames at {}, OpenGL on {}). "
+  md += fmt::format("Every scene run through its own method and drawn headlessly by `stepwise render` ({} frames at {}, OpenGL on {}). "
                     "Data: [pictures.csv](pictures.csv).\n\n",
                     frames, size, std::get<std::string>(table.rows.front().back()));
   md += "| scene | method | frames | draw ms per frame |\n|---|---|---|---|\n";

@@ -123,7 +123,7 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
   std::error_code ec;
   try {
     for (const auto& study : studies()) md += run_study(study, ctx, staging, figures);
-    md += pictures_section(staging, scenes_dir, quick);
+    md += pictures_section(staging, scenes_dir, ctx);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     md += fmt::format("---\nStudies run in {:.1f} s of wall time on {} threads.\n", seconds, ctx.threads);
     write_file_atomic(staging / "report.md", md);
