@@ -51,9 +51,9 @@ Aabb bounds(const Shapes& shapes, double depth) {
     box.extend(shapes.container->hi);
   }
   if (shapes.water) {
-    const double side = (shapes.water->points - 1) * shapes.water->spacing;
-    box.extend(Eigen::Vector3d(0, 0, -depth));
-    box.extend(Eigen::Vector3d(side, side, std::max(0.0, shapes.water->z.maxCoeff())));
+    const Pool pool(*shapes.water, depth);
+    box.extend(Eigen::Vector3d(-pool.border, -pool.border, -depth));
+    box.extend(Eigen::Vector3d(pool.side + pool.border, pool.side + pool.border, std::max(pool.rim, shapes.water->z.maxCoeff())));
   }
   return box;
 }
@@ -71,21 +71,28 @@ Camera frame_camera(const Aabb& box, const Shapes& shapes, const Look& look, dou
   const double radius = std::max(0.5 * (box.hi - box.lo).norm(), 1e-3);
   camera.target = look.target.value_or(center);
   // the direction the camera sits in: +z for a planar scene; otherwise in front (a horizontal axis of the
-  // world turned 35 degrees about up) and 25 degrees above
+  // world turned 35 degrees about up) and 25 degrees above, 50 over water (to see into the pool)
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
   if (!shapes.planar) {
     Eigen::Vector3d front = camera.up.cross(Eigen::Vector3d::UnitX());
     if (front.norm() < 0.5) front = camera.up.cross(Eigen::Vector3d::UnitY());
     front = -front.normalized();
     const Eigen::Vector3d side = camera.up.cross(front);
-    const double azimuth = 35 * std::numbers::pi / 180, elevation = 25 * std::numbers::pi / 180;
+    const double azimuth = 35 * std::numbers::pi / 180, elevation = (shapes.water ? 50 : 25) * std::numbers::pi / 180;
     direction = std::cos(elevation) * (std::cos(azimuth) * front + std::sin(azimuth) * side) + std::sin(elevation) * camera.up;
   }
-  // far enough that the bounding sphere fits the narrower of the two fields of view
-  const double half = std::min(camera.fov_deg, 2 * std::atan(aspect * std::tan(camera.fov_deg * std::numbers::pi / 360)) * 180 / std::numbers::pi) *
-                      std::numbers::pi / 360;
-  // a planar scene's box is its bounding circle's; a solid's bounding sphere overstates what is seen
-  camera.eye = look.eye.value_or(camera.target + direction * ((shapes.planar ? 1.05 : 0.8) * radius / std::sin(half)));
+  // far enough that every corner of the box lies inside 95% of each half-field: a corner at (x, y) across
+  // and z towards the camera from the target, seen from distance d, needs d >= z + |x| / tan(half-width)
+  // (and likewise y with the half-height)
+  const double tan_v = std::tan(camera.fov_deg * std::numbers::pi / 360), tan_h = aspect * tan_v, margin = 0.95;
+  const Eigen::Vector3d back = direction.normalized(), right = camera.up.cross(back).normalized(), true_up = back.cross(right);
+  double fit = 1e-3;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d corner((k & 1 ? box.hi : box.lo).x(), (k & 2 ? box.hi : box.lo).y(), (k & 4 ? box.hi : box.lo).z());
+    const Eigen::Vector3d r = corner - camera.target;
+    fit = std::max({fit, r.dot(back) + std::abs(r.dot(right)) / (margin * tan_h), r.dot(back) + std::abs(r.dot(true_up)) / (margin * tan_v)});
+  }
+  camera.eye = look.eye.value_or(camera.target + back * fit);
   const double distance = (camera.eye - camera.target).norm();
   camera.near = std::max(1e-4, (distance - 2 * radius) * 0.5);
   camera.far = distance + 4 * radius;

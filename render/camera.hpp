@@ -30,6 +30,15 @@ struct Camera {
   double near = 0.01, far = 100;
 };
 
+// the pool a water surface is drawn in: floor at z = -depth under the grid's square [0, side]^2, walls up to
+// a rim above the still level, set in a block reaching `border` beyond them, its top (the deck) at the rim:
+// it hides the walls' outsides and the floor beyond the surface
+struct Pool {
+  double side, depth, rim, border;
+  Pool(const Shapes::Water& water, double depth_)
+      : side((water.points - 1) * water.spacing), depth(depth_), rim(0.15 * depth_), border(0.2 * side) {}
+};
+
 // the box around everything drawn: balls, bodies, sheets, rods, the container, the water and its pool
 Aabb bounds(const Shapes& shapes, double pool_depth);
 

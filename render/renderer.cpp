@@ -287,14 +287,15 @@ struct Renderer::Impl {
   void draw_water(const Shapes::Water& water, const View& view, const Eigen::Matrix4f& view_projection) {
     if (!photons || photons->resolution() != view.photon_resolution) photons = std::make_unique<PhotonMap>(context, view.photon_resolution);
     photons->build(water, view.light, view.pool_depth);
+    gl.BindVertexArray(vertex_array);  // the photon pass bound its own
     gl.BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
     gl.Viewport(0, 0, width, height);
     gl.Enable(GL_DEPTH_TEST);
 
-    const int n = water.points;
-    const double side = (n - 1) * water.spacing, depth = view.pool_depth, rim = 0.15 * depth;
+    const Pool tank(water, view.pool_depth);
+    const double side = tank.side, depth = tank.depth, rim = tank.rim;
     // floor and walls, their normals pointing into the pool; the walls nearest the camera face away from it
-    // and are culled
+    // and are culled (the deck, drawn with the solids, hides where they stand)
     std::vector<float> box;
     const auto quad = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
       const Eigen::Vector3d nrm = (b - a).cross(c - a).normalized();
@@ -418,6 +419,32 @@ struct Renderer::Impl {
         draw_batch(ground, one, Eigen::Vector3f(0.78f, 0.78f, 0.76f), Eigen::Vector3f(0.78f, 0.78f, 0.76f), 2);
         gl.Disable(GL_POLYGON_OFFSET_FILL);
       }
+    }
+    // the pool's surround: a block with the pool as its hole, its top (the deck) at the rim's height
+    if (shapes.water) {
+      const Pool pool(*shapes.water, view.pool_depth);
+      const double a = -pool.border, b = pool.side + pool.border, s = pool.side, z = pool.rim, bottom = -pool.depth;
+      std::vector<float> block;
+      const auto quad = [&](const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, const Eigen::Vector3d& p3) {
+        const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0).normalized();
+        const Eigen::Vector3d ns[3] = {n, n, n}, t1[3] = {p0, p1, p2}, t2[3] = {p0, p2, p3};
+        append_triangle(block, t1, ns);
+        append_triangle(block, t2, ns);
+      };
+      for (const auto& [x0, y0, x1, y1] : {std::array{a, a, b, 0.0}, std::array{a, s, b, b}, std::array{a, 0.0, 0.0, s}, std::array{s, 0.0, b, s}})
+        quad({x0, y0, z}, {x1, y0, z}, {x1, y1, z}, {x0, y1, z});
+      uniform(lit, "axis_u", Eigen::Vector3f::UnitX());
+      uniform(lit, "axis_v", Eigen::Vector3f::UnitY());
+      uniform(lit, "tile", static_cast<float>(pool.side / 16));
+      const Eigen::Vector3f stone(0.82f, 0.80f, 0.74f);
+      draw_batch(block, one, stone, stone, 2);  // the deck paved
+      block.clear();
+      const Eigen::Vector3d c[4] = {{a, a, 0}, {b, a, 0}, {b, b, 0}, {a, b, 0}};
+      for (int k = 0; k < 4; ++k) {
+        const Eigen::Vector3d &p = c[k], &q = c[(k + 1) % 4];
+        quad({p.x(), p.y(), bottom}, {q.x(), q.y(), bottom}, {q.x(), q.y(), z}, {p.x(), p.y(), z});
+      }
+      draw_batch(block, one, stone, stone, 0);  // the sides plain
     }
     check_gl(gl, "drawing a frame");
 

@@ -305,6 +305,15 @@ inline double ball_centroid_px(double radius, double distance, double offset_px)
   return 0.5 + (radius / distance) * (radius / distance) * offset_px;
 }
 
+// the box of a frame's drawn pixels against the box its geometry projects to, side by side. A pixel is drawn
+// when its centre is covered, so nothing is drawn more than a pixel beyond the projected side. Inward, a
+// side made by a sharp corner of interior angle a is first drawn where the corner is wide enough to hold
+// a pixel centre wherever it lies: where its inscribed circle reaches radius sqrt(2)/2, at (sqrt(2)/2) /
+// sin(a/2) from its tip; plus the pixel, 1 + 0.707/sin(a/2) = 3 px for corners down to a = 36 degrees
+// (sheets seen at a grazing angle, a cloth's drooping corner)
+inline constexpr double silhouette_px = 1.0;
+inline constexpr double silhouette_tip_px = 3.0;
+
 // the pixels a flat sheet covers against its projected area: at most the pixels its outline crosses, one
 // per pixel of outline length, and the rest exact
 inline double coverage_px(double outline_px) { return outline_px; }

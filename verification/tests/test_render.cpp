@@ -7,10 +7,14 @@
 #include "verification/photon_trace.hpp"
 #include "verification/tolerances.hpp"
 #include "models/model.hpp"
+#include "app/run_command.hpp"
+#include "verification/measure.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -239,6 +243,117 @@ TEST(Frames, FlatSheetCoversItsProjectedArea) {
   const double outline = (c01 - c00).norm() + (c11 - c01).norm() + (c10 - c11).norm() + (c00 - c10).norm();
   ASSERT_GT(area, 1000) << "the sheet fills a good part of the frame";
   EXPECT_LE(std::abs(covered - area), tolerance::coverage_px(outline));
+}
+
+// the pixels where `image` differs from `empty`, as a box [x0, x1) x [y0, y1); empty if none
+struct PixelBox {
+  double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  void extend(double x, double y) {
+    x0 = std::min(x0, x);
+    y0 = std::min(y0, y);
+    x1 = std::max(x1, x);
+    y1 = std::max(y1, y);
+  }
+  bool empty() const { return x0 > x1; }
+};
+
+PixelBox changed_pixels(const render::Image& image, const render::Image& empty) {
+  PixelBox box;
+  for (int r = 0; r < image.height; ++r)
+    for (int c = 0; c < image.width; ++c) {
+      const size_t p = (static_cast<size_t>(r) * image.width + c) * 4;
+      if (!std::equal(&image.rgba[p], &image.rgba[p] + 3, &empty.rgba[p])) {
+        box.extend(c, r);
+        box.extend(c + 1, r + 1);
+      }
+    }
+  return box;
+}
+
+// where the shapes' geometry lands on screen: the drawn vertices of bodies, sheets and the pool's block, the balls'
+// spheres (finely sampled: the drawn icospheres are inscribed in them), the rods' ends widened by their tubes
+PixelBox projected_box(const Shapes& shapes, const render::View& view, int w, int h) {
+  const Eigen::Matrix4d m = view.camera.view_projection(static_cast<double>(w) / h).cast<double>();
+  PixelBox box;
+  const auto add = [&](Eigen::Vector3d p, double widen_m = 0) {
+    // a point under the ground (a resting contact's penetration) is seen where it meets the ground
+    if (shapes.ground && !shapes.planar) {
+      const Eigen::Vector3d n = shapes.ground->normal.normalized();
+      p -= std::min(0.0, (p - shapes.ground->point).dot(n)) * n;
+    }
+    const Eigen::Vector4d clip = m * p.homogeneous();
+    const double x = (clip.x() / clip.w() + 1) / 2 * w, y = (1 - clip.y() / clip.w()) / 2 * h;
+    // a tube's radius in pixels at that distance
+    const double widen = widen_m * m(1, 1) * h / 2 / clip.w();
+    box.extend(x - widen, y - widen);
+    box.extend(x + widen, y + widen);
+  };
+  const TriangleMesh sphere = sphere_mesh(1, 3);
+  for (const auto& ball : shapes.balls)
+    for (Eigen::Index v = 0; v < sphere.vertices.rows(); ++v)
+      add(ball.center + (ball.radius > 0 ? ball.radius : view.point_radius) * sphere.vertices.row(v).transpose());
+  for (const auto& body : shapes.bodies)
+    for (Eigen::Index v = 0; v < body.mesh->vertices.rows(); ++v) add(body.rotation * body.mesh->vertices.row(v).transpose() + body.position);
+  for (const auto& sheet : shapes.surfaces)
+    for (Eigen::Index v = 0; v < sheet.vertices.rows(); ++v) add(sheet.vertices.row(v).transpose());
+  for (const auto& line : shapes.lines)
+    for (const auto& p : line) add(p, 0.35 * view.point_radius);
+  if (shapes.water) {
+    // the surround's corners, and the surface where it rises above the deck
+    const render::Pool pool(*shapes.water, view.pool_depth);
+    for (const double x : {-pool.border, pool.side + pool.border})
+      for (const double y : {-pool.border, pool.side + pool.border})
+        for (const double z : {-pool.depth, pool.rim}) add(Eigen::Vector3d(x, y, z));
+    for (Eigen::Index k = 0; k < shapes.water->z.size(); ++k)
+      if (shapes.water->z[k] > pool.rim)
+        add(Eigen::Vector3d((k % shapes.water->points) * shapes.water->spacing, (k / shapes.water->points) * shapes.water->spacing, shapes.water->z[k]));
+  }
+  return box;
+}
+
+// every scene file, run a little way by its own method and drawn: the pixels that differ from the same view
+// without the scene's objects (only its ground and container) fill the box the objects' geometry projects to
+TEST(Frames, EverySceneIsDrawnWhereItsShapesProject) {
+  const int w = 320, h = 180;
+  render::Renderer renderer(context(), w, h);
+  int scenes = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(STEPWISE_SOURCE_DIR) / "scenes")) {
+    if (entry.path().extension() != ".toml") continue;
+    ++scenes;
+    const std::string name = entry.path().stem().string();
+    RunOptions options;
+    options.scene_file = entry.path().string();
+    PreparedRun p = prepare_run(options);
+    // a moment into the run: a quarter of it, at most 0.2 s (a hundred thousand particles take 40 ms a step)
+    const double t = std::min(0.25 * p.t_end, 0.2);
+    p.control.observe = [](const Eigen::VectorXd& y) { return y; };
+    const Measured m = run_and_measure(*p.model, p.method, p.control, t, t);
+    ASSERT_EQ(m.result.status, Status::ok) << name << ": " << m.result.message;
+    const std::vector<Shapes> frames{*p.model->shapes(p.model->initial_state()), *p.model->shapes(m.result.trajectory.y.back())};
+    const render::View view = render::make_view(frames, p.scene.look, w, h);
+    for (const Shapes& shapes : frames) {
+      Shapes scenery;
+      scenery.ground = shapes.ground;
+      scenery.container = shapes.container;
+      scenery.up = shapes.up;
+      scenery.planar = shapes.planar;
+      const PixelBox drawn = changed_pixels(renderer.draw(shapes, {}, view), renderer.draw(scenery, {}, view));
+      const PixelBox expected = projected_box(shapes, view, w, h);
+      ASSERT_FALSE(drawn.empty()) << name;
+      // each side no more than a pixel beyond the projected one, and reaching it to within a thin tip's
+      // allowance; clipped to the frame (the view holds everything, but a ground line may run off it)
+      const double outward = tolerance::silhouette_px, inward = tolerance::silhouette_tip_px;
+      const PixelBox want{std::max(0.0, expected.x0), std::max(0.0, expected.y0), std::min<double>(w, expected.x1), std::min<double>(h, expected.y1)};
+      const std::string where = fmt::format("{} at t = {}: drawn [{}, {}) x [{}, {}), projected [{:.1f}, {:.1f}] x [{:.1f}, {:.1f}]", name,
+                                            &shapes == &frames.front() ? 0.0 : t, drawn.x0, drawn.x1, drawn.y0, drawn.y1, want.x0,
+                                            want.x1, want.y0, want.y1);
+      EXPECT_TRUE(drawn.x0 >= want.x0 - outward && drawn.x0 <= want.x0 + inward) << where;
+      EXPECT_TRUE(drawn.y0 >= want.y0 - outward && drawn.y0 <= want.y0 + inward) << where;
+      EXPECT_TRUE(drawn.x1 <= want.x1 + outward && drawn.x1 >= want.x1 - inward) << where;
+      EXPECT_TRUE(drawn.y1 <= want.y1 + outward && drawn.y1 >= want.y1 - inward) << where;
+    }
+  }
+  EXPECT_GE(scenes, 20);
 }
 
 TEST(Frames, OsmesaAndEglDrawTheSameBytes) {
