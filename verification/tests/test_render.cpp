@@ -1,6 +1,7 @@
 // Rendering: the photon map against closed forms (still water, flux, a sinusoid's paraxial caustic and its
 // focus) and against an independent CPU photon tracer; frames against the simulation (a ball's centroid,
-// a sheet's covered area); OSMesa and EGL giving the same bytes; the render command's contract.
+// a sheet's covered area, every scene drawn where its geometry projects); OSMesa and EGL giving the same
+// bytes; golden frames on any llvmpipe thread count; the render command's contract.
 #include "render/caustics.hpp"
 #include "render/renderer.hpp"
 #include "render/water_optics.hpp"
@@ -383,9 +384,9 @@ struct Command {
   std::string err;
 };
 
-Command stepwise_render(const std::string& args) {
+Command stepwise_render(const std::string& args, const std::string& environment = "") {
   const fs::path err = fs::temp_directory_path() / "stepwise_render_err.txt";
-  const int raw = std::system((std::string(STEPWISE_BIN) + " render " + args + " 2> " + err.string()).c_str());
+  const int raw = std::system((environment + " " + STEPWISE_BIN + " render " + args + " 2> " + err.string()).c_str());
   std::ifstream in(err);
   return {WEXITSTATUS(raw), std::string(std::istreambuf_iterator<char>(in), {})};
 }
@@ -413,6 +414,30 @@ TEST(RenderCommand, WritesFramesTheirHashesAndAMovie) {
   std::ifstream in2(again / "render.json");
   const auto j2 = nlohmann::json::parse(in2);
   for (size_t k = 0; k < 5; ++k) EXPECT_EQ(j["frames"][k]["hash"], j2["frames"][k]["hash"]) << "frame " << k;
+}
+
+// the golden frames (verification/golden/frames.json) drawn again on 1 and 3 llvmpipe threads: the same bytes
+TEST(RenderCommand, FramesMatchTheirGoldenHashesOnAnyThreadCount) {
+  std::ifstream in(fs::path(STEPWISE_SOURCE_DIR) / "verification/golden/frames.json");
+  const auto golden = nlohmann::json::parse(in);
+  const std::string renderer = context().description();
+  if (renderer != golden["renderer"].get<std::string>())
+    GTEST_SKIP() << "the golden hashes are for " << golden["renderer"] << "; this renderer is " << renderer;
+  ASSERT_GE(golden["scenes"].size(), 5u);
+  for (const auto& [scene, hashes] : golden["scenes"].items())
+    for (const int threads : {1, 3}) {
+      const fs::path out = fs::temp_directory_path() / ("stepwise_golden_" + scene);
+      fs::remove_all(out);
+      const Command c = stepwise_render(fmt::format("{}/scenes/{}.toml --frames {} --size {} --out {}", STEPWISE_SOURCE_DIR, scene,
+                                                    golden["frames"].get<int>(), golden["size"].get<std::string>(), out.string()),
+                                        fmt::format("LP_NUM_THREADS={}", threads));
+      ASSERT_EQ(c.status, 0) << scene << ": " << c.err;
+      std::ifstream drawn(out / "render.json");
+      const auto j = nlohmann::json::parse(drawn);
+      std::vector<std::string> measured;
+      for (const auto& frame : j["frames"]) measured.push_back(frame["hash"]);
+      EXPECT_EQ(measured, hashes.get<std::vector<std::string>>()) << scene << " on " << threads << " llvmpipe threads";
+    }
 }
 
 TEST(RenderCommand, BadInputIsExitTwoNamingTheOption) {
