@@ -1,6 +1,6 @@
 // A 1280 x 720 frame of the water scene (water-drop, 64 x 64, caustics on a 512^2 photon map), split into
-// its phases: simulating one frame's worth of steps (1/30 s), the caustics pass, the whole draw (caustics,
-// shading, read-back), and PNG encoding; against an empty frame (clear and read back) measured in the same
+// its phases: simulating one frame's worth of steps (1/30 s), the caustics pass, the drawing (caustics and
+// shading), the read-back, the whole draw, and PNG encoding; against an empty frame (clear and read back) measured in the same
 // run, the floor any frame pays. The target: the draw without encoding under 50 ms on two cores.
 #include "ratio_reporter.hpp"
 
@@ -62,6 +62,24 @@ void BM_water_frame(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(renderer.draw(s.shapes, {}, s.view));
 }
 
+// the water frame's two halves: the drawing (caustics and shading, waited for), and the read-back alone
+void BM_water_shading(benchmark::State& state) {
+  const auto& s = scene();
+  render::Renderer renderer(context(), width, height);
+  for (auto _ : state) {
+    renderer.render(s.shapes, {}, s.view);
+    context().gl().Finish();
+  }
+}
+
+void BM_read_back(benchmark::State& state) {
+  const auto& s = scene();
+  render::Renderer renderer(context(), width, height);
+  renderer.render(s.shapes, {}, s.view);
+  context().gl().Finish();
+  for (auto _ : state) benchmark::DoNotOptimize(renderer.read());
+}
+
 void BM_empty_frame(benchmark::State& state) {
   const auto& s = scene();
   render::Renderer renderer(context(), width, height);
@@ -79,6 +97,8 @@ void BM_encode_png(benchmark::State& state) {
 BENCHMARK(BM_simulate_frame)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_caustics_pass)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_water_frame)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_water_shading)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_read_back)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_empty_frame)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_encode_png)->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -87,6 +107,8 @@ BENCHMARK(BM_encode_png)->Unit(benchmark::kMillisecond)->UseRealTime();
 int main(int argc, char** argv) {
   const std::vector<std::pair<std::string, std::string>> pairs{{"BM_water_frame/real_time", "BM_empty_frame/real_time"},
                                                                {"BM_caustics_pass/real_time", "BM_water_frame/real_time"},
+                                                               {"BM_water_shading/real_time", "BM_water_frame/real_time"},
+                                                               {"BM_read_back/real_time", "BM_water_frame/real_time"},
                                                                {"BM_encode_png/real_time", "BM_water_frame/real_time"}};
   return stepwise::bench::run_with_ratios(argc, argv, pairs, {});
 }

@@ -340,7 +340,7 @@ struct Renderer::Impl {
     uniform(program, "side", static_cast<float>(side));
   }
 
-  Image draw(const Shapes& shapes, const std::vector<std::vector<Eigen::Vector3d>>& trails, const View& view) {
+  void render(const Shapes& shapes, const std::vector<std::vector<Eigen::Vector3d>>& trails, const View& view) {
     const Eigen::Matrix4f view_projection = view.camera.view_projection(static_cast<double>(width) / height);
     const Eigen::Vector3f bg = view.look.background;
     const float clear[4] = {bg.x(), bg.y(), bg.z(), 1};
@@ -447,8 +447,10 @@ struct Renderer::Impl {
       draw_batch(block, one, stone, stone, 0);  // the sides plain
     }
     check_gl(gl, "drawing a frame");
+  }
 
-    // read back, top row first
+  // the framebuffer, top row first
+  Image read() const {
     Image image{width, height, std::vector<std::uint8_t>(static_cast<size_t>(width) * height * 4)};
     std::vector<std::uint8_t> rows(image.rgba.size());
     gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
@@ -464,8 +466,15 @@ struct Renderer::Impl {
 Renderer::Renderer(const Context& context, int width, int height) : impl_(std::make_unique<Impl>(context, width, height)) {}
 Renderer::~Renderer() = default;
 
+void Renderer::render(const Shapes& shapes, const std::vector<std::vector<Eigen::Vector3d>>& trails, const View& view) {
+  impl_->render(shapes, trails, view);
+}
+
+Image Renderer::read() const { return impl_->read(); }
+
 Image Renderer::draw(const Shapes& shapes, const std::vector<std::vector<Eigen::Vector3d>>& trails, const View& view) {
-  return impl_->draw(shapes, trails, view);
+  impl_->render(shapes, trails, view);
+  return impl_->read();
 }
 
 }  // namespace stepwise::render

@@ -38,6 +38,10 @@ class Renderer {
 
   // trails: for each ball with trail set, in order, the centres it has passed through
   Image draw(const Shapes& shapes, const std::vector<std::vector<Eigen::Vector3d>>& trails, const View& view);
+  // draw's two halves: the GL commands (queued: llvmpipe may still be drawing when this returns), and the
+  // read-back, which waits for them
+  void render(const Shapes& shapes, const std::vector<std::vector<Eigen::Vector3d>>& trails, const View& view);
+  Image read() const;
 
  private:
   struct Impl;
