@@ -60,7 +60,8 @@ void main() { color = vec4(irradiance, 0.0, 0.0, 1.0); }
 
 }  // namespace
 
-PhotonMap::PhotonMap(const Context& context, int resolution) : gl_(context.gl()), resolution_(resolution) {
+PhotonMap::PhotonMap(const Context& context, int resolution) : context_(context), gl_(context.gl()), resolution_(resolution) {
+  context_.make_current();
   const std::string geometry = std::string("#version 450 core\n") + glsl_fresnel + geometry_shader_body;
   program_ = link_program(gl_, vertex_shader, geometry.c_str(), fragment_shader, "photon map");
   gl_.CreateTextures(GL_TEXTURE_2D, 1, &texture_);
@@ -85,6 +86,11 @@ PhotonMap::PhotonMap(const Context& context, int resolution) : gl_(context.gl())
 }
 
 PhotonMap::~PhotonMap() {
+  try {
+    context_.make_current();  // the objects are this context's
+  } catch (const GlError&) {
+    return;
+  }
   gl_.DeleteBuffers(1, &buffer_);
   gl_.DeleteVertexArrays(1, &vertex_array_);
   gl_.DeleteFramebuffers(1, &framebuffer_);
@@ -111,6 +117,7 @@ void PhotonMap::build(const Shapes::Water& water, const Eigen::Vector3d& light, 
     }
   gl_.NamedBufferData(buffer_, static_cast<GLsizeiptr>(vertices.size() * sizeof(float)), vertices.data(), GL_STREAM_DRAW);
 
+  context_.make_current();
   const float zero[4] = {0, 0, 0, 0};
   gl_.ClearNamedFramebufferfv(framebuffer_, GL_COLOR, 0, zero);
   gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
@@ -132,6 +139,7 @@ void PhotonMap::build(const Shapes::Water& water, const Eigen::Vector3d& light, 
 }
 
 std::vector<float> PhotonMap::read() const {
+  context_.make_current();
   std::vector<float> map(static_cast<size_t>(resolution_) * resolution_);
   gl_.GetTextureImage(texture_, 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(map.size() * sizeof(float)), map.data());
   check_gl(gl_, "glGetTextureImage (photon map)");

@@ -36,6 +36,7 @@ class PhotonMap {
   int resolution() const { return resolution_; }
 
  private:
+  const Context& context_;
   const Gl& gl_;
   int resolution_;
   std::vector<float> vertices_;

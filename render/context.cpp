@@ -11,6 +11,7 @@ std::optional<Backend> parse_backend(std::string_view name) {
 }
 
 std::string Context::description() const {
+  make_current();
   const auto text = [&](GLenum what) {
     const GLubyte* s = gl_.GetString(what);
     return s ? std::string(reinterpret_cast<const char*>(s)) : std::string("?");

@@ -1,4 +1,4 @@
-// An offscreen OpenGL 4.5 core context, made current on the calling thread: OSMesa (DESIGN.md's choice) or
+// An offscreen OpenGL 4.5 core context, made current on the calling thread when made and by make_current(): OSMesa (DESIGN.md's choice) or
 // EGL on Mesa's surfaceless platform, which gives the same images and is the path that outlives OSMesa
 // (removed in Mesa 25.1) and reaches a real GPU. Drawing goes to framebuffer objects, never to a window.
 #pragma once
@@ -21,6 +21,9 @@ class Context {
  public:
   virtual ~Context() = default;
   const Gl& gl() const { return gl_; }
+  // makes this the calling thread's current context (another may have been made current since); GlError if
+  // it cannot be
+  virtual void make_current() const = 0;
   // GL_RENDERER and GL_VERSION ("llvmpipe (LLVM 15.0.6, 256 bits), 4.5 (Core Profile) Mesa 22.3.6")
   std::string description() const;
 

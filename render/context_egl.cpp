@@ -31,6 +31,10 @@ class EglContext final : public Context {
     gl_ = load_gl([](const char* name) { return reinterpret_cast<void*>(eglGetProcAddress(name)); });
   }
   ~EglContext() override { release(); }
+  void make_current() const override {
+    if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
+      throw GlError(fmt::format("eglMakeCurrent (surfaceless) failed: 0x{:04x}", eglGetError()));
+  }
   EglContext(const EglContext&) = delete;
   EglContext& operator=(const EglContext&) = delete;
 

@@ -19,20 +19,25 @@ class OsmesaContext final : public Context {
     if (!context_)
       throw GlError("OSMesaCreateContextAttribs (OpenGL 4.5 core) returned NULL: Mesa's llvmpipe is needed "
                     "(apt-get install libosmesa6), or try --backend egl");
-    // drawing goes to framebuffer objects; the context only needs some buffer to be current with
-    if (!OSMesaMakeCurrent(context_, pixel_.data(), GL_UNSIGNED_BYTE, 1, 1)) {
+    try {
+      make_current();
+    } catch (const GlError&) {
       OSMesaDestroyContext(context_);
-      throw GlError("OSMesaMakeCurrent returned GL_FALSE");
+      throw;
     }
     gl_ = load_gl([](const char* name) { return reinterpret_cast<void*>(OSMesaGetProcAddress(name)); });
   }
   ~OsmesaContext() override { OSMesaDestroyContext(context_); }
+  // drawing goes to framebuffer objects; the context only needs some buffer to be current with
+  void make_current() const override {
+    if (!OSMesaMakeCurrent(context_, pixel_.data(), GL_UNSIGNED_BYTE, 1, 1)) throw GlError("OSMesaMakeCurrent returned GL_FALSE");
+  }
   OsmesaContext(const OsmesaContext&) = delete;
   OsmesaContext& operator=(const OsmesaContext&) = delete;
 
  private:
   OSMesaContext context_ = nullptr;
-  std::array<unsigned char, 4> pixel_{};
+  mutable std::array<unsigned char, 4> pixel_{};
 };
 
 }  // namespace

@@ -222,6 +222,7 @@ struct Renderer::Impl {
   std::array<std::vector<float>, 4> sphere_vertices;
 
   Impl(const Context& context_, int w, int h) : context(context_), gl(context_.gl()), width(w), height(h) {
+    context.make_current();
     lit = link_program(gl, lit_vertex, nullptr, lit_fragment, "lit");
     const std::string head = std::string("#version 450 core\n") + glsl_fresnel + pool_common;
     pool = link_program(gl, pool_vertex, nullptr, (head + pool_fragment_body).c_str(), "pool");
@@ -259,6 +260,11 @@ struct Renderer::Impl {
   }
 
   ~Impl() {
+    try {
+      context.make_current();  // the objects are this context's
+    } catch (const GlError&) {
+      return;
+    }
     gl.DeleteBuffers(1, &vertices);
     gl.DeleteBuffers(1, &instances);
     gl.DeleteVertexArrays(1, &vertex_array);
@@ -341,6 +347,7 @@ struct Renderer::Impl {
   }
 
   void render(const Shapes& shapes, const std::vector<std::vector<Eigen::Vector3d>>& trails, const View& view) {
+    context.make_current();
     const Eigen::Matrix4f view_projection = view.camera.view_projection(static_cast<double>(width) / height);
     const Eigen::Vector3f bg = view.look.background;
     const float clear[4] = {bg.x(), bg.y(), bg.z(), 1};
@@ -451,6 +458,7 @@ struct Renderer::Impl {
 
   // the framebuffer, top row first
   Image read() const {
+    context.make_current();
     Image image{width, height, std::vector<std::uint8_t>(static_cast<size_t>(width) * height * 4)};
     std::vector<std::uint8_t> rows(image.rgba.size());
     gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
