@@ -254,6 +254,74 @@ def stability_regions(directory, _, styles):
     finish(fig, directory, "stability_regions")
 
 
+def rigid_body_invariants(directory, _, styles):
+    rows = read(directory, "rigid_body_invariants_series")
+    runs = {}
+    for r in rows:
+        setting = f"dt {r['dt']:g}" if not math.isnan(r["dt"]) else f"rtol {r['rtol']:g}"
+        runs.setdefault((r["method"], setting), []).append(r)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5), sharex=True)
+    seen = {}
+    for (method, setting), points in runs.items():
+        # a method's finer setting dashed
+        line = "-" if seen.setdefault(method, setting) == setting else "--"
+        style = dict(styles(method), marker=None)
+        for ax, key in ((axes[0], "energy_error"), (axes[1], "momentum_error")):
+            ax.semilogy([r["t"] for r in points], [max(r[key], 1e-17) for r in points], linestyle=line, linewidth=1,
+                        label=f"{method}, {setting}", **style)
+    axes[0].set_ylabel("|E / E0 - 1|")
+    axes[1].set_ylabel("|L - L0| / |L0| (world frame)")
+    axes[0].set_title("Energy: bounded for the splitting, drifting for rk4", fontsize=9)
+    axes[1].set_title("Angular momentum: the splitting keeps it to round-off", fontsize=9)
+    for ax in axes:
+        ax.set_xlabel("t (s)")
+        ax.grid(True, alpha=0.3)
+    legend(axes[1], ncol=2, loc="lower right")
+    finish(fig, directory, "rigid_body_invariants")
+
+
+def event_times(directory, _, styles):
+    rows = [r for r in read(directory, "event_times") if r["status"] == "ok"]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5), sharey=True)
+    fixed = [r for r in rows if isinstance(r["dt"], float)]
+    adaptive = [r for r in rows if isinstance(r["rtol"], float)]
+    for ax, points, key, label in ((axes[0], fixed, "dt", "step dt (s)"), (axes[1], adaptive, "rtol", "relative tolerance")):
+        for (method, location), mine in sorted({(r["method"], r["location"]): None for r in points}.items()):
+            mine = sorted((r for r in points if (r["method"], r["location"]) == (method, location)), key=lambda r: r[key])
+            style = styles(method)
+            ax.loglog([r[key] for r in mine], [max(r["max_time_error_s"], 1e-17) for r in mine], linestyle="--" if location == "restep" else "-",
+                      linewidth=1, markersize=4, label=f"{method} ({location})", **style)
+        ax.set_xlabel(label)
+        ax.grid(True, alpha=0.3)
+        legend(ax, ncol=1, loc="lower right")
+    axes[0].set_ylabel("largest impact-time error (s)")
+    axes[0].set_title("Fixed steps: the impact on the step's segment (solid) or re-stepped to the root (dashed)", fontsize=9)
+    axes[1].set_title("Adaptive: CVODE's root finding, GSL re-stepped", fontsize=9)
+    finish(fig, directory, "event_times")
+
+
+def contacts(directory, _, styles):
+    rows = [r for r in read(directory, "contacts") if r["status"] == "ok"]
+    dt = [r["dt"] for r in rows]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
+    axes[0].loglog(dt, [r["tumble_sink"] for r in rows], marker="o", label="tumbling box: final depth below its resting height (m)")
+    axes[0].loglog(dt, [max(r["slope_creep"], 1e-20) for r in rows], marker="s", label="box at rest on a slope: creep (m)")
+    axes[0].loglog(dt, [max(r["slide_error"], 1e-20) for r in rows], marker="^", label="box sliding: speed against Coulomb's, relative")
+    axes[0].set_ylabel("error")
+    axes[0].set_title("Resting and sliding contact against the step (an exact 0 drawn at 1e-20)", fontsize=9)
+    axes[1].semilogx(dt, [r["collapse_energy_kept"] for r in rows], marker="o", color="C3", label="energy kept")
+    axes[1].set_ylabel("collapse: fraction of the energy kept", color="C3")
+    twin = axes[1].twinx()
+    twin.semilogx(dt, [r["collapse_impacts"] for r in rows], marker="s", color="C0", linestyle="--", label="impacts")
+    twin.set_ylabel("collapse: impacts", color="C0")
+    axes[1].set_title("The wall's collapse: chaotic, so it changes with the step", fontsize=9)
+    for ax in axes:
+        ax.set_xlabel("step dt (s)")
+        ax.grid(True, alpha=0.3)
+    legend(axes[0], ncol=1, loc="center left")
+    finish(fig, directory, "contacts")
+
+
 # ---- the page
 
 
@@ -294,7 +362,7 @@ def main():
         DPI = int(sys.argv[sys.argv.index("--dpi") + 1])
     styles = Styles(directory)
     drawers = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
-                                        cloth_implicit_damping, stability_regions)}
+                                        cloth_implicit_damping, stability_regions, rigid_body_invariants, event_times, contacts)}
     for figure in read(directory, "figures"):
         kind = figure["kind"]
         if kind not in drawers:

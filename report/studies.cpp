@@ -171,7 +171,10 @@ StudyOutput event_times(const StudyContext& ctx) {
       control.event_location = EventLocation::restep;
       record(method, method.starts_with("cvode") ? "rootfinding" : "restep", std::nullopt, rtol, control);
     }
-  return {{{"event_times", std::move(table)}}, md + "\n", {}};
+  std::vector<Figure> figures;
+  md += "\n";
+  md += add_figure(figures, "event_times", "", "Largest impact-time error of the bouncing ball against the step or tolerance, per method and root location");
+  return {{{"event_times", std::move(table)}}, md, figures};
 }
 
 
@@ -250,10 +253,15 @@ StudyOutput rigid_body_invariants(const StudyContext& ctx) {
       "| method | dt (s) | rtol | evaluations | CPU (s) | energy, 1st half | energy, 2nd half | L, 1st half | L, 2nd half | quaternion norm error |\n"
       "|---|---|---|---|---|---|---|---|---|---|\n",
       t_end, t_end / period, period);
+  Table series{{"method", "dt", "rtol", "t", "energy_error", "momentum_error"}, {}};
   auto record = [&](const std::string& method, std::optional<double> dt, std::optional<double> rtol) {
     const StepControl control = dt ? StepControl::fixed(*dt) : StepControl::adaptive(*rtol, *rtol * 1e-3);
     const RunResult r = make_integrator(method, control)->integrate(*model, 0, model->initial_state(), t_out);
     const InvariantDrift d = rigid_body_drift(*model, r);
+    for (size_t k = 0; k < r.trajectory.t.size(); ++k) {
+      const InvariantError e = rigid_body_error(*model, r.trajectory.y[k]);
+      series.rows.push_back({method, dt.value_or(NAN), rtol.value_or(NAN), r.trajectory.t[k], e.energy, e.momentum});
+    }
     const double q_error = std::abs(r.y_stop.segment<4>(6).norm() - 1);
     table.rows.push_back({method, dt.value_or(NAN), rtol.value_or(NAN), r.stats.rhs_evals, r.stats.cpu_seconds, d.energy[0], d.energy[1],
                           d.momentum[0], d.momentum[1], q_error, std::string(to_string(r.status))});
@@ -279,7 +287,9 @@ StudyOutput rigid_body_invariants(const StudyContext& ctx) {
   }
   md += "\n" + findings +
         "\nCVODE Adams cannot project (SUNDIALS projects for BDF only): its quaternion norm error (| |q| - 1 |) is the quaternion's drift.\n\n";
-  return {{{"rigid_body_invariants", std::move(table)}}, md, {}};
+  std::vector<Figure> figures;
+  md += add_figure(figures, "rigid_body_invariants", "", "Energy and angular momentum errors of the tumbling body over time, per method and step");
+  return {{{"rigid_body_invariants", std::move(table)}, {"rigid_body_invariants_series", std::move(series)}}, md, figures};
 }
 
 StudyOutput contacts(const StudyContext& ctx) {
@@ -355,7 +365,9 @@ StudyOutput contacts(const StudyContext& ctx) {
       "- The collapse is chaotic: from dt to dt its impacts range over {}-{} and the energy it keeps over {:.3f}-{:.3f}, though "
       "a run repeated is bit-identical. The bounce changes with the step too (a step resolves one approach at a time).\n\n",
       sci(worst_creep), sci(worst_slide), impacts.first, impacts.second, fewest_kept, most_kept);
-  return {{{"contacts", std::move(table)}}, md, {}};
+  std::vector<Figure> figures;
+  md += add_figure(figures, "contacts", "", "Contacts against the step: the resting box's sink and the slopes' errors, and the collapse's energy and impacts");
+  return {{{"contacts", std::move(table)}}, md, figures};
 }
 
 

@@ -16,4 +16,10 @@ struct InvariantDrift {
 
 InvariantDrift rigid_body_drift(const Model& model, const RunResult& run);
 
+// one state's |E/E0 - 1| and |L - L0| / |L0| against the model's initial state
+struct InvariantError {
+  double energy = 0, momentum = 0;
+};
+InvariantError rigid_body_error(const Model& model, const Eigen::VectorXd& y);
+
 }  // namespace stepwise
