@@ -53,13 +53,15 @@ PreparedRun prepare_run(const RunOptions& o) {
   const ModelInfo* info = find_model(s.model);
   if (!info) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
   if (s.mesh && !info->make_with_mesh) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
+  if (s.pins && !info->make_with_pins) throw InputError(fmt::format("{}: model {} takes no pins", s.where("pins"), s.model));
   try {
     p.params = resolve_params(*info, values);
-    p.model = s.mesh ? info->make_with_mesh(p.params, *s.mesh) : info->make(p.params);
+    p.model = s.mesh ? info->make_with_mesh(p.params, *s.mesh) : s.pins ? info->make_with_pins(p.params, *s.pins) : info->make(p.params);
   } catch (const BadParameter& e) {
     const auto origin = set_origin.find(e.key);
     throw InputError(fmt::format("{}: {}", origin != set_origin.end() ? origin->second
                                            : e.key == "mesh"             ? s.where("mesh")
+                                           : e.key == "pins"             ? s.where("pins")
                                                                          : s.where("parameters." + e.key),
                                  e.what()));
   }

@@ -31,26 +31,26 @@ double number(const toml::node& node, const Scene& scene, const std::string& key
   return *value;
 }
 
-// an array of rows of three: finite numbers, or (T integral) non-negative whole numbers, each error naming
-// the row and its line
-template <class T>
-std::vector<std::array<T, 3>> rows_of_three(const toml::node& node, const Scene& scene, const std::string& key) {
+// an array of rows of N: finite numbers, or (T integral) non-negative whole numbers (`what` they are), each
+// error naming the row and its line
+template <class T, size_t N>
+std::vector<std::array<T, N>> rows_of(const toml::node& node, const Scene& scene, const std::string& key, const char* what) {
   const auto* rows = node.as_array();
-  if (!rows) throw InputError(fmt::format("{}:{}: {}: expected an array of [a, b, c] rows", scene.file, line_of(node), key));
-  std::vector<std::array<T, 3>> out;
+  if (!rows) throw InputError(fmt::format("{}:{}: {}: expected an array of rows of {} {}", scene.file, line_of(node), key, N, what));
+  std::vector<std::array<T, N>> out;
   for (size_t r = 0; r < rows->size(); ++r) {
     const toml::node& row_node = *rows->get(r);
     const std::string at = fmt::format("{}[{}]", key, r);
     const auto* row = row_node.as_array();
-    if (!row || row->size() != 3) throw InputError(fmt::format("{}:{}: {}: expected three numbers", scene.file, line_of(row_node), at));
-    std::array<T, 3> values{};
-    for (size_t c = 0; c < 3; ++c) {
+    if (!row || row->size() != N) throw InputError(fmt::format("{}:{}: {}: expected {} {}", scene.file, line_of(row_node), at, N, what));
+    std::array<T, N> values{};
+    for (size_t c = 0; c < N; ++c) {
       const toml::node& cell = *row->get(c);
       if constexpr (std::is_integral_v<T>) {
         const auto* i = cell.as_integer();
-        if (!i) throw InputError(fmt::format("{}:{}: {}: expected whole vertex indices", scene.file, line_of(cell), at));
+        if (!i) throw InputError(fmt::format("{}:{}: {}: expected whole {}", scene.file, line_of(cell), at, what));
         if (i->get() < 0 || i->get() > std::numeric_limits<int>::max())
-          throw InputError(fmt::format("{}:{}: {}: vertex index {} out of range", scene.file, line_of(cell), at, i->get()));
+          throw InputError(fmt::format("{}:{}: {}: {} {} out of range", scene.file, line_of(cell), at, what, i->get()));
         values[c] = static_cast<T>(i->get());
       } else {
         values[c] = number(cell, scene, at);
@@ -118,8 +118,8 @@ TriangleMesh mesh_table(const toml::node& node, Scene& scene) {
     if (k.str() != "vertices" && k.str() != "triangles")
       throw InputError(fmt::format("{}:{}: mesh.{}: unknown key (a mesh has vertices and triangles)", scene.file, line_of(value), k.str()));
   if (!vertices || !triangles) throw InputError(fmt::format("{}:{}: mesh: needs both vertices and triangles", scene.file, line_of(node)));
-  const auto v = rows_of_three<double>(*vertices, scene, "mesh.vertices");
-  const auto f = rows_of_three<int>(*triangles, scene, "mesh.triangles");
+  const auto v = rows_of<double, 3>(*vertices, scene, "mesh.vertices", "coordinates");
+  const auto f = rows_of<int, 3>(*triangles, scene, "mesh.triangles", "vertex indices");
   TriangleMesh mesh;
   mesh.vertices.resize(static_cast<Eigen::Index>(v.size()), 3);
   mesh.faces.resize(static_cast<Eigen::Index>(f.size()), 3);
@@ -135,6 +135,18 @@ TriangleMesh mesh_table(const toml::node& node, Scene& scene) {
     }
   scene.lines["mesh"] = line_of(node);
   return mesh;
+}
+
+// [pins]: nodes = [[row, column], ...]
+std::vector<GridNode> pins_table(const toml::node& node, Scene& scene) {
+  const auto* table = node.as_table();
+  if (!table) throw InputError(fmt::format("{}:{}: pins: expected a table", scene.file, line_of(node)));
+  for (auto&& [k, value] : *table)
+    if (k.str() != "nodes") throw InputError(fmt::format("{}:{}: pins.{}: unknown key (pins has nodes = [[row, column], ...])", scene.file, line_of(value), k.str()));
+  const toml::node* nodes = table->get("nodes");
+  if (!nodes) throw InputError(fmt::format("{}:{}: pins: needs nodes = [[row, column], ...]", scene.file, line_of(node)));
+  scene.lines["pins"] = line_of(*nodes);
+  return rows_of<int, 2>(*nodes, scene, "pins.nodes", "grid indices (row, column)");
 }
 
 }  // namespace
@@ -191,10 +203,12 @@ Scene load_scene(const std::string& file) {
       }
     } else if (key == "mesh") {
       scene.mesh = mesh_table(node, scene);
+    } else if (key == "pins") {
+      scene.pins = pins_table(node, scene);
     } else if (key == "render") {
       scene.look = render_table(node, scene);
     } else {
-      throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run], [mesh], [render])", file, line_of(node), key));
+      throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run], [mesh], [pins], [render])", file, line_of(node), key));
     }
   }
   if (scene.model.empty()) throw InputError(fmt::format("{}: model: missing", file));

@@ -40,6 +40,7 @@ struct Scene {
   std::optional<std::string> method;
   std::optional<std::string> event_location;
   std::optional<TriangleMesh> mesh;       // [mesh], indices in range and vertices finite (checked on loading)
+  std::optional<std::vector<GridNode>> pins;  // [pins] nodes = [[row, column], ...], whole numbers (the model checks the grid)
   render::Look look;                      // [render]
 
   // "file:line: key" where the key was written, "file: key" otherwise

@@ -78,7 +78,7 @@ Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
 
 class Cloth final : public Model {
  public:
-  explicit Cloth(const Params& p)
+  Cloth(const Params& p, std::span<const GridNode> pins)
       : rows_(grid_size(p, "rows")),
         columns_(grid_size(p, "columns")),
         g_(p.at("g")),
@@ -118,6 +118,12 @@ class Cloth final : public Model {
     if ((pin_row < 0) != (pin_column < 0))
       throw BadParameter(pin_row < 0 ? "pin_row" : "pin_column", "parameters 'pin_row' and 'pin_column' go together: give both or neither");
     if (pin_row >= 0) pin(pin_row, pin_column);
+    for (const auto& [r, c] : pins) {
+      if (r < 0 || r >= rows_ || c < 0 || c >= columns_)
+        throw BadParameter("pins", fmt::format("node [{}, {}] is off the {} x {} grid (rows 0..{}, columns 0..{})", r, c, rows_, columns_,
+                                               rows_ - 1, columns_ - 1));
+      pin(r, c);
+    }
     free_index_.assign(nodes, -1);
     for (int k = 0; k < nodes; ++k)
       if (!pinned[k]) {
@@ -368,6 +374,6 @@ class Cloth final : public Model {
 }  // namespace
 
 std::span<const ParamSpec> cloth_params() { return parameter_table(); }
-std::unique_ptr<Model> make_cloth(const Params& params) { return std::make_unique<Cloth>(params); }
+std::unique_ptr<Model> make_cloth(const Params& params, std::span<const GridNode> pins) { return std::make_unique<Cloth>(params, pins); }
 
 }  // namespace stepwise

@@ -13,7 +13,8 @@
 // a third on each corner: a sheet edge-on to the wind feels none, face-on the most.
 //
 // Pins: any of the sets the scenes need (the four corners: the seeds' flag; the left edge: a flag on a
-// pole; the two top corners: a hanging sheet) plus one node by row and column. Pinned nodes are not part
+// pole; the two top corners: a hanging sheet), one node by row and column, and any list of nodes (a
+// scene's [pins] table: nodes = [[row, column], ...]; with pin_corners = 0, those alone). Pinned nodes are not part
 // of the state: a spring to one is a spring from a fixed anchor.
 //
 // Obstacles: a sphere and the ground plane y = ground_y. After each step (OdeSystem::project) a node
@@ -36,6 +37,7 @@
 namespace stepwise {
 
 std::span<const ParamSpec> cloth_params();
-std::unique_ptr<Model> make_cloth(const Params& params);
+// pins: grid nodes pinned besides those the parameters pin
+std::unique_ptr<Model> make_cloth(const Params& params, std::span<const GridNode> pins = {});
 
 }  // namespace stepwise

@@ -58,7 +58,8 @@ const std::array model_table{
     ModelInfo{"hanging-chain", "N masses on Voigt springs hanging from a pin, gravity along -y; its static equilibrium is exact",
               hanging_chain_params(), [](const Params& p) { return make_hanging_chain(p); }},
     ModelInfo{"cloth", "a mass-spring cloth: structural, shear and bend Voigt springs, pins, gravity, wind through the normals, a "
-              "picked node, a sphere and the ground", cloth_params(), [](const Params& p) { return make_cloth(p); }},
+              "picked node, a sphere and the ground", cloth_params(), [](const Params& p) { return make_cloth(p); }, nullptr,
+              [](const Params& p, std::span<const GridNode> pins) { return make_cloth(p, pins); }},
     ModelInfo{"dropped-body", "a box (or the scene's convex [mesh]) dropped with a spin on the ground: contacts, restitution, friction",
               dropped_body_params(), [](const Params& p) { return make_dropped_body(p, nullptr); },
               [](const Params& p, const TriangleMesh& mesh) { return make_dropped_body(p, &mesh); }},

@@ -6,6 +6,7 @@
 #include "shapes.hpp"
 #include "solvers/ode_system.hpp"
 
+#include <array>
 #include <functional>
 #include <map>
 #include <memory>
@@ -57,6 +58,9 @@ class Model : public OdeSystem {
 };
 
 
+// a node of a grid model: row, column
+using GridNode = std::array<int, 2>;
+
 struct ModelInfo {
   std::string_view name;
   std::string_view description;
@@ -65,6 +69,9 @@ struct ModelInfo {
   // for a model that takes a triangle mesh from the scene (its [mesh] table); make uses a default one.
   // Throws BadParameter with key "mesh" for a mesh the model cannot use
   std::function<std::unique_ptr<Model>(const Params&, const TriangleMesh&)> make_with_mesh = nullptr;
+  // for a model on a grid that pins the nodes a scene lists (its [pins] table), besides those its parameters
+  // pin. Throws BadParameter with key "pins" for a node off the grid
+  std::function<std::unique_ptr<Model>(const Params&, std::span<const GridNode>)> make_with_pins = nullptr;
 };
 
 std::span<const ModelInfo> models();

@@ -106,6 +106,10 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
   const fs::path nan_value = scene("nan.toml", "model = \"pendulum\"\n[parameters]\ng = nan\n[run]\ndt = 0.01\n");
   // meshes: an index out of range, a non-finite vertex, an open mesh, and a mesh given to a model without one
   const std::string verts = "vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]\n";
+  // pins: a node off the grid, a row that is not [row, column], and pins for a model without a grid
+  const fs::path off_grid = scene("offgrid.toml", "model = \"cloth\"\n[run]\nmethod = \"implicit-euler\"\ndt = 0.01\n[pins]\nnodes = [[0, 0],\n [0, 40]]\n");
+  const fs::path bad_pin = scene("badpin.toml", "model = \"cloth\"\n[pins]\nnodes = [[0, 0],\n [7]]\n");
+  const fs::path no_pins_model = scene("pendpins.toml", "model = \"pendulum\"\n[run]\ndt = 0.01\n[pins]\nnodes = [[0, 0]]\n");
   const fs::path bad_index = scene("index.toml", "model = \"particle-mesh\"\n[mesh]\n" + verts + "triangles = [[0, 2, 1],\n [0, 1, 3],\n [0, 3, 9],\n [1, 2, 3]]\n");
   const fs::path bad_vertex = scene("vertex.toml", "model = \"particle-mesh\"\n[mesh]\nvertices = [[0, 0, 0],\n [1, nan, 0], [0, 1, 0], [0, 0, 1]]\ntriangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]\n");
   const fs::path open_mesh = scene("open.toml", "model = \"particle-mesh\"\n\n[mesh]\n" + verts + "triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2]]\n");
@@ -142,6 +146,9 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run '{}' --out '{}'", bad_vertex.string(), out.string()), "vertex.toml:4: mesh.vertices[1]: not a finite number"},
       {fmt::format("run '{}' --out '{}'", open_mesh.string(), out.string()), "open.toml:3: mesh: a closed mesh needs at least 4 triangles"},
       {fmt::format("run '{}' --out '{}'", no_mesh_model.string(), out.string()), "pendmesh.toml:4: mesh: model pendulum takes no mesh"},
+      {fmt::format("run '{}' --out '{}'", off_grid.string(), out.string()), "offgrid.toml:6: pins: node [0, 40] is off the 32 x 32 grid"},
+      {fmt::format("run '{}' --out '{}'", bad_pin.string(), out.string()), "badpin.toml:4: pins.nodes[1]: expected 2 grid indices"},
+      {fmt::format("run '{}' --out '{}'", no_pins_model.string(), out.string()), "pendpins.toml:5: pins: model pendulum takes no pins"},
       {fmt::format("run scenes/particle-mesh.toml --set plane_nx=0 --set plane_ny=0 --set plane_nz=0 --out '{}'", out.string()), "--set plane_nx: parameters plane_nx, plane_ny, plane_nz: the ground plane's normal is zero"},
       {fmt::format("run scenes/particle-system.toml --set count=1e12 --out '{}'", out.string()), "--set count"},
       {fmt::format("run scenes/particle-system.toml --set count=-5 --out '{}'", out.string()), "--set count"},

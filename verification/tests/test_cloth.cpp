@@ -232,6 +232,32 @@ TEST(Cloth, ExplicitMethodsFailWhereTheStiffestModePredictsAndImplicitEulerDoesN
   }
 }
 
+// pins from a list: exactly the listed nodes leave the state and stay where they started while the rest fall
+TEST(Cloth, PinsFromAListHoldExactlyTheListedNodes) {
+  const Params params = resolve_params(*find_model("cloth"), {{"rows", 4}, {"columns", 5}, {"pin_corners", 0}, {"wind_coefficient", 0}});
+  const std::vector<GridNode> pins{{0, 2}, {3, 4}, {0, 2}};  // one listed twice: pinned once
+  const auto model = find_model("cloth")->make_with_pins(params, pins);
+  EXPECT_EQ(model->size(), 6 * (4 * 5 - 2));
+  const RunResult r = make_integrator("implicit-euler", StepControl::fixed(0.01))->integrate(*model, 0, model->initial_state(), std::vector<double>{0.5});
+  ASSERT_EQ(r.status, Status::ok) << r.message;
+  const TriangleMesh start = model->shapes(model->initial_state())->surfaces.front();
+  const TriangleMesh end = model->shapes(r.y_stop)->surfaces.front();
+  for (Eigen::Index k = 0; k < start.vertices.rows(); ++k) {
+    const bool pinned = k == 0 * 5 + 2 || k == 3 * 5 + 4;
+    if (pinned) EXPECT_EQ(end.vertices.row(k), start.vertices.row(k)) << "pinned node " << k;
+    else EXPECT_LT(end.vertices(k, 1), start.vertices(k, 1)) << "free node " << k << " has not fallen";
+  }
+  for (const GridNode off : {GridNode{4, 0}, GridNode{0, 5}, GridNode{-1, 0}}) {
+    const std::vector<GridNode> bad{off};
+    try {
+      find_model("cloth")->make_with_pins(params, bad);
+      ADD_FAILURE() << "node [" << off[0] << ", " << off[1] << "] is off the grid";
+    } catch (const BadParameter& e) {
+      EXPECT_EQ(e.key, "pins");
+    }
+  }
+}
+
 TEST(Cloth, ASheetDroppedOnASphereStaysOutsideItAndAboveTheGround) {
   const double radius = 0.5, ground = -0.5;
   const auto model = make_model("cloth", {{"rows", 10}, {"columns", 10}, {"width", 2}, {"height", 2}, {"horizontal", 1}, {"elevation", 0.7},
