@@ -144,6 +144,15 @@ void append_triangle(std::vector<float>& out, const Eigen::Vector3d* p, const Ei
   }
 }
 
+// a flat quadrilateral a b c d (counter-clockwise seen from its front), its normal (b - a) x (c - a)
+void append_quad(std::vector<float>& out, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                 const Eigen::Vector3d& d) {
+  const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+  const Eigen::Vector3d ns[3] = {n, n, n}, t1[3] = {a, b, c}, t2[3] = {a, c, d};
+  append_triangle(out, t1, ns);
+  append_triangle(out, t2, ns);
+}
+
 // a body's faces in world coordinates, flat shaded
 void append_body(std::vector<float>& out, const Shapes::Body& body) {
   const TriangleMesh& mesh = *body.mesh;
@@ -304,10 +313,7 @@ struct Renderer::Impl {
     // and are culled (the deck, drawn with the solids, hides where they stand)
     std::vector<float> box;
     const auto quad = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
-      const Eigen::Vector3d nrm = (b - a).cross(c - a).normalized();
-      const Eigen::Vector3d n3[3] = {nrm, nrm, nrm}, t1[3] = {a, b, c}, t2[3] = {a, c, d};
-      append_triangle(box, t1, n3);
-      append_triangle(box, t2, n3);
+      append_quad(box, a, b, c, d);
     };
     const Eigen::Vector3d p000(0, 0, -depth), p100(side, 0, -depth), p110(side, side, -depth), p010(0, side, -depth);
     const Eigen::Vector3d up(0, 0, depth + rim);
@@ -433,10 +439,7 @@ struct Renderer::Impl {
       const double a = -pool.border, b = pool.side + pool.border, s = pool.side, z = pool.rim, bottom = -pool.depth;
       std::vector<float> block;
       const auto quad = [&](const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, const Eigen::Vector3d& p3) {
-        const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0).normalized();
-        const Eigen::Vector3d ns[3] = {n, n, n}, t1[3] = {p0, p1, p2}, t2[3] = {p0, p2, p3};
-        append_triangle(block, t1, ns);
-        append_triangle(block, t2, ns);
+        append_quad(block, p0, p1, p2, p3);
       };
       for (const auto& [x0, y0, x1, y1] : {std::array{a, a, b, 0.0}, std::array{a, s, b, b}, std::array{a, 0.0, 0.0, s}, std::array{s, 0.0, b, s}})
         quad({x0, y0, z}, {x1, y0, z}, {x1, y1, z}, {x0, y1, z});
