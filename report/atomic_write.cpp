@@ -5,18 +5,32 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <stdexcept>
+#include <string>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace stepwise {
+
+unsigned default_mode(bool directory) {
+  static const unsigned umask = [] {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+      if (line.starts_with("Umask:")) return static_cast<unsigned>(std::stoul(line.substr(6), nullptr, 8));
+    return 022u;
+  }();
+  return (directory ? 0777u : 0666u) & ~umask;
+}
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
   std::string tmp = (path.parent_path() / fmt::format(".{}.XXXXXX", path.filename().string())).string();
   const int fd = mkstemp(tmp.data());
   if (fd < 0) throw std::runtime_error(fmt::format("{}: cannot create a temporary file: {}", path.string(), std::strerror(errno)));
+  bool ok = ::fchmod(fd, static_cast<mode_t>(default_mode(false))) == 0;
   const char* p = content.data();
   size_t left = content.size();
-  bool ok = true;
   while (left > 0 && ok) {
     const ssize_t n = ::write(fd, p, left);
     if (n < 0 && errno == EINTR) continue;

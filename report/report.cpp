@@ -109,6 +109,8 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
     std::string pattern = (parent / fmt::format(".{}.tmp-XXXXXX", target.filename().string())).string();
     if (!mkdtemp(pattern.data())) throw std::runtime_error(fmt::format("{}: cannot create a staging directory", parent.string()));
     staging = pattern;
+    // mkdtemp's 0700 widened to what a directory made the usual way gets
+    fs::permissions(staging, static_cast<fs::perms>(default_mode(true)));
   } catch (const std::runtime_error& e) {
     std::cerr << "stepwise report: --out: " << e.what() << '\n';
     return 2;

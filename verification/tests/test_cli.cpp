@@ -63,6 +63,19 @@ class Cli : public ::testing::Test {
   fs::path dir_;
 };
 
+// outputs are written through temporary files (mkstemp: 0600) and keep the permissions the umask gives a file
+// written the usual way: 0644 under umask 022, 0600 under 077
+TEST_F(Cli, OutputsGetTheUmasksPermissionsNotTheTemporaryFiles) {
+  for (const auto& [umask, mode] : {std::pair{"022", fs::perms(0644)}, std::pair{"077", fs::perms(0600)}}) {
+    const fs::path out = dir_ / fmt::format("umask{}", umask);
+    const std::string cmd = fmt::format("cd '{}' && umask {} && '{}' run scenes/pendulum.toml --t-end 0.1 --out '{}' >/dev/null 2>&1",
+                                        STEPWISE_SOURCE_DIR, umask, STEPWISE_BIN, out.string());
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    for (const char* file : {"summary.json", "trajectory.csv"})
+      EXPECT_EQ(fs::status(out / file).permissions() & fs::perms::all, mode) << file << " under umask " << umask;
+  }
+}
+
 TEST_F(Cli, MethodsJsonListsEveryMethodOfTheTable) {
   const Output o = run("methods --json");
   ASSERT_EQ(o.status, 0) << o.err;
