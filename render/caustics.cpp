@@ -86,11 +86,7 @@ PhotonMap::PhotonMap(const Context& context, int resolution) : context_(context)
 }
 
 PhotonMap::~PhotonMap() {
-  try {
-    context_.make_current();  // the objects are this context's
-  } catch (const GlError&) {
-    return;
-  }
+  if (!context_.try_make_current()) return;  // the objects are this context's
   gl_.DeleteBuffers(1, &buffer_);
   gl_.DeleteVertexArrays(1, &vertex_array_);
   gl_.DeleteFramebuffers(1, &framebuffer_);

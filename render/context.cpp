@@ -10,6 +10,15 @@ std::optional<Backend> parse_backend(std::string_view name) {
   return std::nullopt;
 }
 
+bool Context::try_make_current() const noexcept {
+  try {
+    make_current();
+    return true;
+  } catch (const GlError&) {
+    return false;
+  }
+}
+
 std::string Context::description() const {
   make_current();
   const auto text = [&](GLenum what) {

@@ -24,6 +24,8 @@ class Context {
   // makes this the calling thread's current context (another may have been made current since); GlError if
   // it cannot be
   virtual void make_current() const = 0;
+  // make_current for a destructor: false (and nothing thrown) if it cannot be
+  bool try_make_current() const noexcept;
   // GL_RENDERER and GL_VERSION ("llvmpipe (LLVM 15.0.6, 256 bits), 4.5 (Core Profile) Mesa 22.3.6")
   std::string description() const;
 

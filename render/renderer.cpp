@@ -269,11 +269,7 @@ struct Renderer::Impl {
   }
 
   ~Impl() {
-    try {
-      context.make_current();  // the objects are this context's
-    } catch (const GlError&) {
-      return;
-    }
+    if (!context.try_make_current()) return;  // the objects are this context's
     gl.DeleteBuffers(1, &vertices);
     gl.DeleteBuffers(1, &instances);
     gl.DeleteVertexArrays(1, &vertex_array);
@@ -312,16 +308,13 @@ struct Renderer::Impl {
     // floor and walls, their normals pointing into the pool; the walls nearest the camera face away from it
     // and are culled (the deck, drawn with the solids, hides where they stand)
     std::vector<float> box;
-    const auto quad = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
-      append_quad(box, a, b, c, d);
-    };
     const Eigen::Vector3d p000(0, 0, -depth), p100(side, 0, -depth), p110(side, side, -depth), p010(0, side, -depth);
     const Eigen::Vector3d up(0, 0, depth + rim);
-    quad(p000, p100, p110, p010);
-    quad(p000, p000 + up, p100 + up, p100);
-    quad(p100, p100 + up, p110 + up, p110);
-    quad(p110, p110 + up, p010 + up, p010);
-    quad(p010, p010 + up, p000 + up, p000);
+    append_quad(box, p000, p100, p110, p010);
+    append_quad(box, p000, p000 + up, p100 + up, p100);
+    append_quad(box, p100, p100 + up, p110 + up, p110);
+    append_quad(box, p110, p110 + up, p010 + up, p010);
+    append_quad(box, p010, p010 + up, p000 + up, p000);
     gl.Enable(GL_CULL_FACE);
     gl.CullFace(GL_BACK);
     gl.UseProgram(pool);
@@ -439,7 +432,7 @@ struct Renderer::Impl {
       const double a = -pool.border, b = pool.side + pool.border, s = pool.side, z = pool.rim, bottom = -pool.depth;
       std::vector<float> block;
       const auto quad = [&](const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, const Eigen::Vector3d& p3) {
-        append_quad(block, p0, p1, p2, p3);
+        append_quad(block, p0, p1, p2, p3);  // (braced corners need the parameter types)
       };
       for (const auto& [x0, y0, x1, y1] : {std::array{a, a, b, 0.0}, std::array{a, s, b, b}, std::array{a, 0.0, 0.0, s}, std::array{s, 0.0, b, s}})
         quad({x0, y0, z}, {x1, y0, z}, {x1, y1, z}, {x0, y1, z});

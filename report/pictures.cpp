@@ -29,6 +29,13 @@ const QuickChange quick_changes[] = {
     {"particle-system", {"--set", "count=10000"}},  // 100 000 particles take 16 s to simulate
 };
 
+// the quick report's change to a scene's render, if any
+const QuickChange* quick_change(const std::string& scene, bool quick) {
+  for (const auto& change : quick_changes)
+    if (quick && scene == change.scene) return &change;
+  return nullptr;
+}
+
 struct Drawn {
   std::string scene;
   nlohmann::json summary;
@@ -64,8 +71,7 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
     const fs::path out = dir / "pictures" / scene;
     std::vector<std::string> args{"/proc/self/exe", "render", (scenes_dir / (scene + ".toml")).string(), "--frames", std::to_string(frames),
                                   "--size",         size,     "--out",                                   out.string()};
-    for (const auto& change : quick_changes)
-      if (ctx.quick && scene == change.scene) args.insert(args.end(), change.arguments.begin(), change.arguments.end());
+    if (const QuickChange* change = quick_change(scene, ctx.quick)) args.insert(args.end(), change->arguments.begin(), change->arguments.end());
     std::string why;
     const auto status = run_process(args, &why);
     if (!status || *status != 0)
@@ -83,9 +89,8 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
     const double per_frame = j["draw_seconds"].get<double>() * 1000 / static_cast<double>(j["frames"].size());
     table.rows.push_back({scene, j["model"].get<std::string>(), j["method"].get<std::string>(), static_cast<double>(j["frames"].size()),
                           shown["t"].get<double>(), per_frame, j["status"].get<std::string>(), j["renderer"].get<std::string>()});
-    std::string changed;
-    for (const auto& change : quick_changes)
-      if (ctx.quick && scene == change.scene) changed = fmt::format(" (quick report: `{}`)", fmt::join(change.arguments, " "));
+    const QuickChange* change = quick_change(scene, ctx.quick);
+    const std::string changed = change ? fmt::format(" (quick report: `{}`)", fmt::join(change->arguments, " ")) : "";
     const std::string still = fmt::format("pictures/{}/{}", scene, shown["file"].get<std::string>());
     body += fmt::format("### {}\n\n{}{} Drawn with {}; the last frame, t = {:.3g} s:\n\n![{}]({})\n\n", scene,
                         scene_description(scenes_dir / (scene + ".toml")), changed, j["method"].get<std::string>(), shown["t"].get<double>(),
