@@ -1,9 +1,15 @@
 #include "wave_step.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
+#include <thread>
 #include <vector>
+
+#include <omp.h>
+#include <unistd.h>
 
 namespace stepwise {
 
@@ -39,71 +45,119 @@ std::optional<double> wave_method_stable_dt(std::string_view method, const WaveG
 
 namespace {
 
-// cells [first, last) of one row; every pointer at the row's start, rows `n` apart. Built for AVX2 and
-// for plain x86-64, the one chosen at load time: the same IEEE operations in either (no fused
-// multiply-adds: -ffp-contract=off), so the same bits; AVX2's four-wide loads and adds lift the in-core
-// limit that held the SSE2 loop below the memory bound (bench_wave)
-__attribute__((target_clones("avx2", "default"))) void wave_row(const WaveCoefficients& k, int n, int first, int last, const double* __restrict z_prev,
-                     const double* __restrict z, double* __restrict z_next) {
-  for (int j = first; j < last; ++j) z_next[j] = wave_cell(k, z[j], z_prev[j], neighbour_sum(z, j, n));
+// how far ahead of the sweep the streaming row kernel asks for the two streams it reads from memory
+// (z^{k-1} in its own row, z^k a row below): 1024 cells, 8 KB. The hardware prefetcher alone left the loop
+// at 0.5-0.7 of the triad on grids past L2, computing and waiting in turn; 4-16 KB ahead measured alike
+constexpr std::ptrdiff_t prefetch_cells = 1024;
+
+// a prefetch hint `cells` past p: an address only, never dereferenced (nor formed as a pointer past the
+// array), so one past a grid's end is harmless
+inline void prefetch(const double* p, std::ptrdiff_t cells, bool write) {
+  const auto address = reinterpret_cast<std::uintptr_t>(p) + static_cast<std::uintptr_t>(cells) * sizeof(double);
+  if (write) __builtin_prefetch(reinterpret_cast<const void*>(address), 1);
+  else __builtin_prefetch(reinterpret_cast<const void*>(address), 0);
+}
+
+// cells [first, last) of one row in place (z_prev becomes z^{k+1}); both pointers at the row's start, rows
+// `n` apart. Streaming: in chunks of eight cache lines per stream, each chunk asking for the lines
+// prefetch_cells ahead. Compiled into each instruction set's kernel below: the same IEEE operations in
+// every one (no fused multiply-adds: -ffp-contract=off), so the same bits
+template <bool streaming>
+[[gnu::always_inline]] inline void row_body(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev,
+                                            const double* __restrict z) {
+  constexpr int chunk = 64, line = 8;
+  for (int j0 = first; j0 < last; j0 += chunk) {
+    if constexpr (streaming)
+      for (int q = 0; q < chunk; q += line) {
+        prefetch(z_prev + j0 + q, prefetch_cells, true);
+        prefetch(z + j0 + q + n, prefetch_cells, false);
+      }
+    const int j1 = std::min(j0 + chunk, last);
+    for (int j = j0; j < j1; ++j) z_prev[j] = wave_cell(k, z[j], z_prev[j], neighbour_sum(z, j, n));
+  }
+}
+
+using RowKernel = void (*)(const WaveCoefficients&, int, int, int, double* __restrict, const double* __restrict);
+
+// the kernels, each compiled for one instruction set; the widest vectors lift the in-core limit (six
+// loads, five adds and three multiplies a cell) that holds cache-resident grids below the triad, but
+// streaming from memory AVX2 measured 1.3-1.4 of the triad where AVX-512 gave 0.9-1.1 (bench_wave)
+[[gnu::target("avx512f,prefer-vector-width=512")]] void row_avx512(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev,
+                                                                    const double* __restrict z) {
+  row_body<false>(k, n, first, last, z_prev, z);
+}
+[[gnu::target("avx2")]] void row_avx2(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev, const double* __restrict z) {
+  row_body<false>(k, n, first, last, z_prev, z);
+}
+[[gnu::target("avx2")]] void row_avx2_streaming(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev,
+                                                 const double* __restrict z) {
+  row_body<true>(k, n, first, last, z_prev, z);
+}
+void row_plain(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev, const double* __restrict z) {
+  row_body<false>(k, n, first, last, z_prev, z);
+}
+void row_plain_streaming(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev, const double* __restrict z) {
+  row_body<true>(k, n, first, last, z_prev, z);
+}
+
+// this machine's kernels for grids held in cache and grids streamed from memory
+struct RowKernels {
+  RowKernel cached, streaming;
+};
+const RowKernels& row_kernels() {
+  static const RowKernels kernels = [] {
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx512f")) return RowKernels{row_avx512, row_avx2_streaming};
+    if (__builtin_cpu_supports("avx2")) return RowKernels{row_avx2, row_avx2_streaming};
+    return RowKernels{row_plain, row_plain_streaming};
+  }();
+  return kernels;
+}
+
+// the streaming kernel where a step's two grids pass the core's L2 (1 MB where the C library cannot say)
+RowKernel row_kernel_for(int n) {
+  const long l2 = sysconf(_SC_LEVEL2_CACHE_SIZE);
+  const double grids = 2.0 * sizeof(double) * n * static_cast<double>(n);
+  return grids > static_cast<double>(l2 > 0 ? l2 : 1 << 20) ? row_kernels().streaming : row_kernels().cached;
 }
 
 }  // namespace
 
-void wave_step(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next, int threads) {
+void wave_step(const WaveCoefficients& k, int n, double* z_prev, const double* z, int threads) {
+  const RowKernel row_kernel = row_kernel_for(n);
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
   for (int i = 1; i < n - 1; ++i) {
     const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(i) * n;
-    wave_row(k, n, 1, n - 1, z_prev + row, z + row, z_next + row);
+    row_kernel(k, n, 1, n - 1, z_prev + row, z + row);
   }
 }
 
-void wave_steps_blocked(const WaveCoefficients& k, int n, int steps, const double* z_prev, const double* z,
-                        double* z_prev_out, double* z_out, int threads) {
-  // interior cells per tile side: with a halo of 8 the three (128 + 16)^2 buffers take 0.5 MB, half an L2
-  constexpr int tile = 128;
-  const int per_side = (n - 2 + tile - 1) / tile;
-  const int tiles = per_side * per_side;
-#pragma omp parallel num_threads(threads)
+void wave_steps_blocked(const WaveCoefficients& k, int n, int steps, double* z_prev, double* z, int threads) {
+  // level s (z^{k+s}, s = 1..steps) is written over level s - 2: into z_prev when s is odd, into z when even
+  const RowKernel row_kernel = row_kernels().cached;
+  const int asked = std::clamp(threads, 1, std::max(steps, 1));
+  // each worker's progress: every interior row up to `through` holds its last level; alone on a cache line
+  struct alignas(64) Progress {
+    std::atomic<int> through{0};
+  };
+  std::vector<Progress> progress(static_cast<size_t>(asked));
+#pragma omp parallel num_threads(asked) if (asked > 1)
   {
-    std::vector<double> buffers[3];
-#pragma omp for schedule(static)
-    for (int t = 0; t < tiles; ++t) {
-      // the tile's interior rows [r0, r1) and columns [c0, c1), and the halo region [R0, R1) x [C0, C1)
-      const int r0 = 1 + (t / per_side) * tile, r1 = std::min(r0 + tile, n - 1);
-      const int c0 = 1 + (t % per_side) * tile, c1 = std::min(c0 + tile, n - 1);
-      const int R0 = std::max(0, r0 - steps), R1 = std::min(n, r1 + steps);
-      const int C0 = std::max(0, c0 - steps), C1 = std::min(n, c1 + steps);
-      const int w = C1 - C0;
-      const size_t cells = static_cast<size_t>(R1 - R0) * w;
-      for (auto& b : buffers) b.resize(cells);
-      // level k-1, level k, and the next; the grid's own boundary (held fixed) enters all three
-      double* a = buffers[0].data();
-      double* b = buffers[1].data();
-      double* c = buffers[2].data();
-      for (int i = R0; i < R1; ++i) {
-        const size_t from = static_cast<size_t>(i) * n + C0, to = static_cast<size_t>(i - R0) * w;
-        std::copy_n(z_prev + from, w, a + to);
-        std::copy_n(z + from, w, b + to);
-        std::copy_n(z + from, w, c + to);
+    const int workers = omp_get_num_threads(), w = omp_get_thread_num();
+    const int first = w * steps / workers, count = (w + 1) * steps / workers - first;  // levels first+1 .. first+count
+    for (int i = 1; count > 0 && i < n - 1 + count - 1; ++i) {
+      // this worker's first level at row i needs the previous worker's last level at rows i-1, i, i+1
+      if (w > 0 && i < n - 1)
+        while (progress[w - 1].through.load(std::memory_order_acquire) < std::min(i + 1, n - 2)) std::this_thread::yield();
+      for (int q = 0; q < count; ++q) {
+        const int row = i - q, level = first + q + 1;
+        if (row < 1 || row > n - 2) continue;
+        double* into = level % 2 ? z_prev : z;
+        const double* from = level % 2 ? z : z_prev;
+        const std::ptrdiff_t offset = static_cast<std::ptrdiff_t>(row) * n;
+        row_kernel(k, n, 1, n - 1, into + offset, from + offset);
       }
-      for (int s = 1; s <= steps; ++s) {
-        // the region still valid after s steps: a cell narrower on every side cut from the grid, none
-        // on the grid's own boundary, which never moves
-        const int i0 = R0 == 0 ? 1 : R0 + s, i1 = R1 == n ? n - 1 : R1 - s;
-        const int j0 = C0 == 0 ? 1 : C0 + s, j1 = C1 == n ? n - 1 : C1 - s;
-        for (int i = i0; i < i1; ++i) {
-          const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(i - R0) * w;
-          wave_row(k, w, j0 - C0, j1 - C0, a + row, b + row, c + row);
-        }
-        std::swap(a, b);  // (a, b, c) <- (b, c, a)
-        std::swap(b, c);
-      }
-      for (int i = r0; i < r1; ++i) {
-        const size_t to = static_cast<size_t>(i) * n + c0, from = static_cast<size_t>(i - R0) * w + (c0 - C0);
-        std::copy_n(a + from, c1 - c0, z_prev_out + to);
-        std::copy_n(b + from, c1 - c0, z_out + to);
-      }
+      if (i - count + 1 >= 1) progress[w].through.store(std::min(i - count + 1, n - 2), std::memory_order_release);
     }
   }
 }

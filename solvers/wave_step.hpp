@@ -54,17 +54,21 @@ inline double wave_cell(const WaveCoefficients& k, double z, double z_prev, doub
   return k.self * z + k.previous * z_prev + k.neighbours * neighbours;
 }
 
-// z_next = z^{k+1} on the interior of an n x n row-major grid from z = z^k and z_prev = z^{k-1} (each n^2
-// values), its rows shared among `threads` OpenMP threads (the same bits for any count); z_next's boundary
-// is left as it is. Three streams per cell: memory-bound on large grids
-void wave_step(const WaveCoefficients& k, int n, const double* z_prev, const double* z, double* z_next, int threads = 1);
+// one step in place: z_prev holds z^{k-1} on entry and z^{k+1} on exit (the interior; its boundary is left
+// as it is), z = z^k; the rows shared among `threads` OpenMP threads (the same bits for any count). A cell
+// needs z^{k-1} only where z^{k+1} goes, so two grids serve the three levels: the step reads two streams
+// and writes one back into a line it has just read, where a separate z^{k+1} would first be read for its
+// write (a third stream). Memory-bound on grids past the caches (bench_wave)
+void wave_step(const WaveCoefficients& k, int n, double* z_prev, const double* z, int threads = 1);
 
-// `steps` steps at once by temporal blocking: each tile of the grid is copied with a halo `steps` cells
-// wide into buffers that stay in cache, stepped `steps` times there (the valid region shrinking by a cell
-// per step), and its centre written back; (z_prev_out, z_out) = (z^{k+steps-1}, z^{k+steps}) on the interior,
-// bitwise what `steps` calls of wave_step give (outputs' boundary left as it is; outputs must not alias
-// inputs); tiles shared among `threads`
-void wave_steps_blocked(const WaveCoefficients& k, int n, int steps, const double* z_prev, const double* z,
-                        double* z_prev_out, double* z_out, int threads = 1);
+// `steps` steps in one pass over the grid by temporal blocking: a wavefront sweeps the rows, taking row
+// i to level 1, row i-1 to level 2, ..., row i-steps+1 to level `steps`, so the steps+2 rows it works on
+// stay in cache (4096 x 4096: 10 rows of each grid, 640 KB) and each grid is read and written once per
+// pass instead of once per step. In place as wave_step, level s written over level s-2: the same as
+// calling wave_step(k, n, z_prev, z) and wave_step(k, n, z, z_prev) in turn `steps` times, bit for bit, so
+// after an even count (z_prev, z) = (z^{k+steps-1}, z^{k+steps}). With threads, the steps are shared out
+// in time: worker w takes its run of levels over every row, a few rows behind worker w-1, whose progress
+// it waits on (a pipeline, no redundant cells and no halo copies)
+void wave_steps_blocked(const WaveCoefficients& k, int n, int steps, double* z_prev, double* z, int threads = 1);
 
 }  // namespace stepwise

@@ -109,11 +109,9 @@ double scheme_energy(const WaveGridView& grid, double dt, const Eigen::VectorXd&
 
 void run_wave_scheme(const WaveGridView& grid, double dt, long steps, Eigen::VectorXd& z_prev, Eigen::VectorXd& z) {
   const WaveCoefficients k = wave_coefficients(grid, dt);
-  Eigen::VectorXd z_next = Eigen::VectorXd::Zero(z.size());
   for (long s = 0; s < steps; ++s) {
-    wave_step(k, grid.points, z_prev.data(), z.data(), z_next.data());
+    wave_step(k, grid.points, z_prev.data(), z.data());
     z_prev.swap(z);
-    z.swap(z_next);
   }
 }
 
