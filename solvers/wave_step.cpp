@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include <immintrin.h>
 #include <omp.h>
 #include <unistd.h>
 
@@ -79,12 +80,36 @@ template <bool streaming>
 
 using RowKernel = void (*)(const WaveCoefficients&, int, int, int, double* __restrict, const double* __restrict);
 
-// the kernels, each compiled for one instruction set; the widest vectors lift the in-core limit (six
-// loads, five adds and three multiplies a cell) that holds cache-resident grids below the triad, but
-// streaming from memory AVX2 measured 1.3-1.4 of the triad where AVX-512 gave 0.9-1.1 (bench_wave)
-[[gnu::target("avx512f,prefer-vector-width=512")]] void row_avx512(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev,
-                                                                    const double* __restrict z) {
-  row_body<false>(k, n, first, last, z_prev, z);
+// the kernels, each for one instruction set, all of the same IEEE operations in the same order. Inside the
+// caches the limit is in the core, not the memory: six loads (two of them z[j +- 1], split across cache
+// lines) and eight flops a cell against the triad's two loads and two flops. The AVX-512 kernel loads z's
+// row once, 64-byte aligned, and shifts its neighbours out of the registers (vpermt2pd), which took 256^2
+// from 0.63-0.76 of the triad (the compiler's AVX-512 loop) to 1.3; streaming from memory the AVX2 loop
+// with prefetching measured 1.8 of the triad at 4096^2 where AVX-512 gave 1.35, so it keeps that role
+[[gnu::target("avx512f")]] void row_avx512(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev, const double* __restrict z) {
+  int j = first;
+  const auto cell = [&](int c) { z_prev[c] = wave_cell(k, z[c], z_prev[c], neighbour_sum(z, c, n)); };
+  for (; j < last && reinterpret_cast<std::uintptr_t>(z + j) % 64 != 0; ++j) cell(j);
+  if (j + 8 <= last) {
+    const __m512d self = _mm512_set1_pd(k.self), previous = _mm512_set1_pd(k.previous), neighbours = _mm512_set1_pd(k.neighbours);
+    // z[j-8 .. j-1] and z[j .. j+7]; the loads reach 8 cells either side of [first, last), inside the rows
+    // above and below, which every caller's interior row has
+    // of two registers (a, b) as one of 16 cells, cells 7-14 (a row shifted right) and 1-8 (shifted left)
+    const __m512i shift_right = _mm512_set_epi64(14, 13, 12, 11, 10, 9, 8, 7), shift_left = _mm512_set_epi64(8, 7, 6, 5, 4, 3, 2, 1);
+    __m512d before = _mm512_loadu_pd(z + j - 8), here = _mm512_load_pd(z + j);
+    for (; j + 8 <= last; j += 8) {
+      const __m512d after = _mm512_load_pd(z + j + 8);
+      const __m512d left = _mm512_permutex2var_pd(before, shift_right, here), right = _mm512_permutex2var_pd(here, shift_left, after);
+      // neighbour_sum's order, then wave_cell's
+      const __m512d sum = _mm512_add_pd(_mm512_add_pd(_mm512_loadu_pd(z + j - n), _mm512_loadu_pd(z + j + n)), _mm512_add_pd(left, right));
+      const __m512d next = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(self, here), _mm512_mul_pd(previous, _mm512_loadu_pd(z_prev + j))),
+                                         _mm512_mul_pd(neighbours, sum));
+      _mm512_storeu_pd(z_prev + j, next);
+      before = here;
+      here = after;
+    }
+  }
+  for (; j < last; ++j) cell(j);
 }
 [[gnu::target("avx2")]] void row_avx2(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev, const double* __restrict z) {
   row_body<false>(k, n, first, last, z_prev, z);
