@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -52,33 +53,7 @@ void BaraffWitkinSystem::assemble_rhs(const Eigen::VectorXd& y, double h) {
 namespace {
 
 constexpr int max_direct_run = 64;
-
-// CG's preconditioner: the kept CHOLMOD factor of an earlier matrix (Eigen's preconditioner interface; the
-// factor is managed by the stepper, so compute does nothing)
-class KeptFactor {
- public:
-  KeptFactor() = default;
-  template <class Matrix>
-  KeptFactor& analyzePattern(const Matrix&) { return *this; }
-  template <class Matrix>
-  KeptFactor& factorize(const Matrix&) { return *this; }
-  template <class Matrix>
-  KeptFactor& compute(const Matrix&) { return *this; }
-  Eigen::ComputationInfo info() const { return Eigen::Success; }
-  template <class Rhs>
-  Eigen::VectorXd solve(const Rhs& r) const {
-    rhs_ = r;
-    // a failed solve (CHOLMOD out of memory) poisons the iteration, which then fails to converge and the
-    // stepper refactorises, where the failure is reported by name
-    if (!factor_->solve(rhs_, out_).empty()) out_.setConstant(rhs_.rows(), 1, std::numeric_limits<double>::quiet_NaN());
-    return out_.col(0);
-  }
-  void use(const SparseCholesky* factor) { factor_ = factor; }
-
- private:
-  const SparseCholesky* factor_ = nullptr;
-  mutable Eigen::MatrixXd rhs_, out_;
-};
+constexpr int probe_iterations = 3;  // the kept factor's first CG iterations, whose rate predicts the rest
 
 class MassSpringImplicit final : public FixedStepper {
  public:
@@ -161,14 +136,34 @@ class MassSpringImplicit final : public FixedStepper {
     }
     // conjugate gradients preconditioned by the kept factor of an earlier matrix, from the last step's dv
     // (a cloth's velocity changes smoothly, so it starts closer than zero does), for at most as many
-    // iterations as a refactorisation costs: past that the factor has stopped paying
+    // iterations as a refactorisation costs: past that the factor has stopped paying. A fresh factor's first
+    // reuse (the trial of whether it pays at all) starts with a probe of a few iterations: preconditioned
+    // CG converges about geometrically here, so the rate it shows predicts the iterations the tolerance
+    // needs, and a factor that would not pay is given up after the probe instead of after a
+    // refactorisation's worth of iterations (on the gusting flag a one-step-old factor needs 19-42 where
+    // 17 cost a refactorisation: each failed trial cost twice a step). Later reuses, whose factor has
+    // paid, run straight on (a restart after the probe costs a solve)
     const double limit = solve_seconds_ > 0 ? 1 + factor_seconds_ / solve_seconds_ : 2;
-    cg_.setMaxIterations(std::clamp(static_cast<int>(limit) - 1, 1, options_.cg_max_iterations));
+    const int budget = std::clamp(static_cast<int>(limit) - 1, 1, options_.cg_max_iterations);
+    const Eigen::VectorXd guess = rhs ? Eigen::VectorXd::Zero(b.size()) : guess_;
+    const double b_norm = b.norm();
+    const double start_error = b_norm > 0 ? (b - bw_.matrix() * guess).norm() / b_norm : 0;
     cg_.preconditioner().use(&factor_);
     cg_.compute(bw_.matrix());
     const double start = thread_cpu_seconds();
-    dv_ = cg_.solveWithGuess(b, rhs ? Eigen::VectorXd::Zero(b.size()) : guess_);
-    const long solves = cg_.iterations() + 1;  // Eigen counts the iterations after the first
+    const int first_run = reuses_ == 0 ? std::min(probe_iterations, budget) : budget;
+    cg_.setMaxIterations(first_run);
+    dv_ = cg_.solveWithGuess(b, guess);
+    long solves = cg_.iterations() + 1;  // Eigen counts the iterations after the first
+    if (cg_.info() != Eigen::Success && budget > first_run) {
+      const double rate = std::pow(cg_.error() / start_error, 1.0 / std::max<Eigen::Index>(cg_.iterations(), 1));
+      const double needed = static_cast<double>(cg_.iterations()) + std::log(options_.cg_residual / cg_.error()) / std::log(rate);
+      if (rate < 1 && needed <= budget) {
+        cg_.setMaxIterations(budget - cg_.iterations());
+        dv_ = cg_.solveWithGuess(b, Eigen::VectorXd(dv_));
+        solves += cg_.iterations() + 1;
+      }
+    }
     solve_seconds_ = (thread_cpu_seconds() - start) / static_cast<double>(solves);
     system_.stats().linear_solves += solves;
     ++reuses_;
@@ -196,7 +191,7 @@ class MassSpringImplicit final : public FixedStepper {
   int direct_left_ = 0;   // solves still to refactorise directly
   int direct_run_ = 1;    // how many the next failed trial of a kept factor refactorises directly
   double factor_seconds_ = 0, solve_seconds_ = 0;  // thread CPU time of the last factorisation, and of one CG iteration
-  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, KeptFactor> cg_;
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, FactorPreconditioner> cg_;
   Eigen::VectorXd dv_, residual_, rhs_, guess_;
   Eigen::MatrixXd b_, x_;
 };

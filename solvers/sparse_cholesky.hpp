@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -45,6 +46,32 @@ class SparseCholesky {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+// a factor of an earlier matrix as the preconditioner of Eigen's iterative solvers (their preconditioner
+// interface; the factor is kept by its owner, so analysing and computing do nothing here)
+class FactorPreconditioner {
+ public:
+  FactorPreconditioner() = default;
+  template <class Matrix>
+  FactorPreconditioner& analyzePattern(const Matrix&) { return *this; }
+  template <class Matrix>
+  FactorPreconditioner& factorize(const Matrix&) { return *this; }
+  template <class Matrix>
+  FactorPreconditioner& compute(const Matrix&) { return *this; }
+  Eigen::ComputationInfo info() const { return Eigen::Success; }
+  // a failed solve (CHOLMOD out of memory) gives NaN, which poisons the iteration: it fails to converge
+  template <class Rhs>
+  Eigen::VectorXd solve(const Rhs& r) const {
+    rhs_ = r;
+    if (!factor_->solve(rhs_, out_).empty()) out_.setConstant(rhs_.rows(), 1, std::numeric_limits<double>::quiet_NaN());
+    return out_.col(0);
+  }
+  void use(const SparseCholesky* factor) { factor_ = factor; }
+
+ private:
+  const SparseCholesky* factor_ = nullptr;
+  mutable Eigen::MatrixXd rhs_, out_;
 };
 
 }  // namespace stepwise
