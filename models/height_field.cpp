@@ -27,6 +27,14 @@ Eigen::VectorXd wave_mode(int points, int m, int n) {
   return s;
 }
 
+void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z) {
+  for (int i = 1; i < points - 1; ++i)
+    for (int j = 1; j < points - 1; ++j) {
+      const double r = std::hypot(i * spacing - x, j * spacing - y);
+      if (r < radius) z[i * points + j] += height * (1 + std::cos(std::numbers::pi * r / radius)) / 2;
+    }
+}
+
 std::pair<double, double> mode_amplitude(double w2, double mu, double a0, double t) {
   const double decay = a0 * std::exp(-mu * t / 2);
   const double discriminant = mu * mu / 4 - w2;
@@ -216,14 +224,7 @@ class HeightField final : public Model {
   }
 
  private:
-  // z += h (1 + cos(pi r / R)) / 2 inside radius R of the drop's centre
-  void add_drop(const Drop& d, Eigen::VectorXd& y) const {
-    for (int i = 1; i < n_ - 1; ++i)
-      for (int j = 1; j < n_ - 1; ++j) {
-        const double r = std::hypot(i * grid_.spacing - d.x, j * grid_.spacing - d.y);
-        if (r < radius_) y[i * n_ + j] += height_ * (1 + std::cos(std::numbers::pi * r / radius_)) / 2;
-      }
-  }
+  void add_drop(const Drop& d, Eigen::VectorXd& y) const { add_raised_cosine(n_, grid_.spacing, d.x, d.y, radius_, height_, y.data()); }
 
   Scene scene_;
   int n_;                       // grid points per side

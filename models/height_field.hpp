@@ -46,6 +46,10 @@ double laplacian_eigenvalue(int intervals, double spacing, int m, int n);
 // the mode s_mn on size^2 points, row-major (zero on the boundary)
 Eigen::VectorXd wave_mode(int points, int m, int n);
 
+// z += h (1 + cos(pi r / R)) / 2 within radius R of (x, y) on the interior of a points^2 grid of spacing d
+// (the water-drop's shape, shared with the shallow water model)
+void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z);
+
 // amplitude and rate (a, a') at time t of a'' + mu a' + w2 a = 0 from a(0) = a0, a'(0) = 0
 std::pair<double, double> mode_amplitude(double w2, double mu, double a0, double t);
 

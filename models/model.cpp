@@ -12,6 +12,7 @@
 #include "projectile.hpp"
 #include "rigid_body.hpp"
 #include "rigid_contact.hpp"
+#include "shallow_water.hpp"
 
 #include <fmt/format.h>
 
@@ -52,6 +53,8 @@ const std::array model_table{
               standing_wave_params(), [](const Params& p) { return make_standing_wave(p); }},
     ModelInfo{"pool", "height-field water with drops falling at seeded random places and times (events)",
               pool_params(), [](const Params& p) { return make_pool(p); }},
+    ModelInfo{"shallow-water", "non-linear shallow water equations on the height field's grid (C grid), a drop at rest; tends to "
+              "the wave equation with c^2 = g H as the drop's height goes to 0", shallow_water_params(), [](const Params& p) { return make_shallow_water(p); }},
     ModelInfo{"rigid-body", "one rigid body: Euler's equations, unit quaternion, gravity, drag, a force at a point",
               rigid_body_params(), [](const Params& p) { return make_rigid_body(p); },
               [](const Params& p, const TriangleMesh& mesh) { return make_rigid_body(p, mesh); }},

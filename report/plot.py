@@ -156,6 +156,18 @@ def adequacy(directory, _, styles):
            "Where the small-angle pendulum is enough", grid="both")
 
 
+def wave_adequacy(directory, _, styles):
+    rows = read(directory, "wave_adequacy")
+    fig, ax = plt.subplots(figsize=(7, 5))
+    ratio = [r["amplitude_over_depth"] for r in rows]
+    ax.loglog(ratio, [r["relative_departure"] for r in rows], marker="o", label="|eta - z| / |z|")
+    ax.loglog(ratio, [r["relative_max_departure"] for r in rows], marker="s", label="max |eta - z| / max |z|")
+    for level in (0.01, 0.1):
+        ax.axhline(level, color="grey", linewidth=0.6, linestyle=":")
+    single(fig, ax, directory, "wave_adequacy", "drop depth over water depth A / H", "departure of the wave equation",
+           "Where the linear wave equation is enough (shallow water as the truth)", grid="both")
+
+
 def bouncing_ball_curve(directory, _, styles):
     rows = read(directory, "bouncing_ball_curve")
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
@@ -361,7 +373,7 @@ def main():
     if "--dpi" in sys.argv:
         DPI = int(sys.argv[sys.argv.index("--dpi") + 1])
     styles = Styles(directory)
-    drawers = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
+    drawers = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, wave_adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
                                         cloth_implicit_damping, stability_regions, rigid_body_invariants, event_times, contacts)}
     for figure in read(directory, "figures"):
         kind = figure["kind"]

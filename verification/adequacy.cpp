@@ -1,6 +1,8 @@
 #include "adequacy.hpp"
 
+#include "models/model.hpp"
 #include "models/pendulum.hpp"
+#include "solvers/integrator.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -22,6 +24,29 @@ double small_angle_max_amplitude(double phase_tolerance, double n_periods) {
     (small_angle_phase_error(mid, n_periods) <= phase_tolerance ? lo : hi) = mid;
   }
   return lo;
+}
+
+LinearWaveDeparture linear_wave_departure(double amplitude_over_depth, double t_end) {
+  constexpr int size = 33;
+  constexpr double spacing = 0.02, depth = 0.1, g = 9.81, dt = 2e-3;
+  const double middle = (size - 1) * spacing / 2;
+  const Params drop{{"size", size}, {"spacing", spacing}, {"mu", 0.5}, {"drop_x", middle}, {"drop_y", middle},
+                    {"drop_radius", 0.1}, {"drop_height", amplitude_over_depth * depth}};
+  Params wave = drop, shallow = drop;
+  wave["c"] = std::sqrt(g * depth);
+  shallow["depth"] = depth;
+  shallow["g"] = g;
+  const std::vector<double> t_out{t_end};
+  const auto run = [&](const char* name, const Params& p) {
+    const auto model = make_model(name, p);
+    return make_integrator("rk4", StepControl::fixed(dt))->integrate(*model, 0, model->initial_state(), t_out).y_stop.head(size * size).eval();
+  };
+  LinearWaveDeparture d;
+  d.wave = run("water-drop", wave);
+  d.shallow = run("shallow-water", shallow);
+  d.relative = (d.shallow - d.wave).norm() / d.wave.norm();
+  d.relative_max = (d.shallow - d.wave).cwiseAbs().maxCoeff() / d.wave.cwiseAbs().maxCoeff();
+  return d;
 }
 
 }  // namespace stepwise

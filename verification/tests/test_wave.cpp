@@ -5,6 +5,7 @@
 #include "models/height_field.hpp"
 #include "solvers/fd_jacobian.hpp"
 #include "solvers/wave_step.hpp"
+#include "verification/adequacy.hpp"
 #include "verification/measure.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/stability.hpp"
@@ -247,6 +248,19 @@ TEST_P(WaveKernels, InPlaceBlockedAndThreadedStepsAreBitwiseTheSeedsFormula) {
     EXPECT_EQ(std::memcmp(b.data(), plain.data(), bytes), 0) << "in place, " << threads << " threads";
     EXPECT_EQ(std::memcmp(a.data(), plain_prev.data(), bytes), 0) << "in place, " << threads << " threads";
   }
+}
+
+TEST(Wave, ShallowWaterTendsToTheWaveEquationAtFirstOrderInTheAmplitude) {
+  // the shallow water equations linearised are the wave equation with c^2 = g H on the same stencil, so
+  // their difference for a drop of height A is A times a first-order term in A / H: it falls tenfold with
+  // A, to the order's own correction (tolerance); were the linear parts different it would not fall at all
+  std::vector<double> departures;
+  for (const double ratio : {1e-4, 1e-3, 1e-2}) {
+    departures.push_back(linear_wave_departure(ratio).relative);
+    std::cout << "A/H = " << ratio << ": |eta - z| / |z| = " << departures.back() << '\n';
+  }
+  for (size_t k = 0; k + 1 < departures.size(); ++k)
+    EXPECT_NEAR(departures[k + 1] / departures[k] / 10, 1.0, tolerance::shallow_water_first_order) << k;
 }
 
 TEST(Wave, SparseJacobianMatchesCentralDifferences) {
