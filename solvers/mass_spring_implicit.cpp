@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 namespace stepwise {
@@ -146,12 +145,12 @@ class MassSpringImplicit final : public FixedStepper {
     const double limit = solve_seconds_ > 0 ? 1 + factor_seconds_ / solve_seconds_ : 2;
     const int budget = std::clamp(static_cast<int>(limit) - 1, 1, options_.cg_max_iterations);
     const Eigen::VectorXd guess = rhs ? Eigen::VectorXd::Zero(b.size()) : guess_;
-    const double b_norm = b.norm();
-    const double start_error = b_norm > 0 ? (b - bw_.matrix() * guess).norm() / b_norm : 0;
     cg_.preconditioner().use(&factor_);
     cg_.compute(bw_.matrix());
     const double start = thread_cpu_seconds();
     const int first_run = reuses_ == 0 ? std::min(probe_iterations, budget) : budget;
+    // the probe's starting residual, relative as Eigen's error() is (a product with A, only when probing)
+    const double start_error = first_run < budget ? (b - bw_.matrix() * guess).norm() / b.norm() : 0;
     cg_.setMaxIterations(first_run);
     dv_ = cg_.solveWithGuess(b, guess);
     long solves = cg_.iterations() + 1;  // Eigen counts the iterations after the first

@@ -84,18 +84,18 @@ using RowKernel = void (*)(const WaveCoefficients&, int, int, int, double* __res
 // caches the limit is in the core, not the memory: six loads (two of them z[j +- 1], split across cache
 // lines) and eight flops a cell against the triad's two loads and two flops. The AVX-512 kernel loads z's
 // row once, 64-byte aligned, and shifts its neighbours out of the registers (vpermt2pd), which took 256^2
-// from 0.63-0.76 of the triad (the compiler's AVX-512 loop) to 1.3; streaming from memory the AVX2 loop
-// with prefetching measured 1.8 of the triad at 4096^2 where AVX-512 gave 1.35, so it keeps that role
+// from 0.63-0.76 of the triad (the compiler's AVX-512 loop) to 0.95-1.06; streaming from memory the AVX2
+// loop with prefetching measured 1.8 of the triad at 4096^2 where AVX-512 gave 1.35, so it keeps that role
 [[gnu::target("avx512f")]] void row_avx512(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev, const double* __restrict z) {
   int j = first;
   const auto cell = [&](int c) { z_prev[c] = wave_cell(k, z[c], z_prev[c], neighbour_sum(z, c, n)); };
   for (; j < last && reinterpret_cast<std::uintptr_t>(z + j) % 64 != 0; ++j) cell(j);
   if (j + 8 <= last) {
     const __m512d self = _mm512_set1_pd(k.self), previous = _mm512_set1_pd(k.previous), neighbours = _mm512_set1_pd(k.neighbours);
+    // of two registers (a, b) taken as 16 cells, cells 7-14 (the row shifted right) and 1-8 (shifted left)
+    const __m512i shift_right = _mm512_set_epi64(14, 13, 12, 11, 10, 9, 8, 7), shift_left = _mm512_set_epi64(8, 7, 6, 5, 4, 3, 2, 1);
     // z[j-8 .. j-1] and z[j .. j+7]; the loads reach 8 cells either side of [first, last), inside the rows
     // above and below, which every caller's interior row has
-    // of two registers (a, b) as one of 16 cells, cells 7-14 (a row shifted right) and 1-8 (shifted left)
-    const __m512i shift_right = _mm512_set_epi64(14, 13, 12, 11, 10, 9, 8, 7), shift_left = _mm512_set_epi64(8, 7, 6, 5, 4, 3, 2, 1);
     __m512d before = _mm512_loadu_pd(z + j - 8), here = _mm512_load_pd(z + j);
     for (; j + 8 <= last; j += 8) {
       const __m512d after = _mm512_load_pd(z + j + 8);
@@ -141,9 +141,12 @@ const RowKernels& row_kernels() {
 
 // the streaming kernel where a step's two grids pass the core's L2 (1 MB where the C library cannot say)
 RowKernel row_kernel_for(int n) {
-  const long l2 = sysconf(_SC_LEVEL2_CACHE_SIZE);
+  static const double l2 = [] {
+    const long bytes = sysconf(_SC_LEVEL2_CACHE_SIZE);
+    return static_cast<double>(bytes > 0 ? bytes : 1 << 20);
+  }();
   const double grids = 2.0 * sizeof(double) * n * static_cast<double>(n);
-  return grids > static_cast<double>(l2 > 0 ? l2 : 1 << 20) ? row_kernels().streaming : row_kernels().cached;
+  return grids > l2 ? row_kernels().streaming : row_kernels().cached;
 }
 
 }  // namespace
