@@ -12,15 +12,24 @@
 // its rows in cache, so it passes the streaming rate again; it is bitwise the plain loop (test_wave).
 #include "models/height_field.hpp"
 #include "ratio_reporter.hpp"
+#include "render/gpu_wave.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/measure.hpp"
 #include "verification/wave_modes.hpp"
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdio>
+#include <string>
+
 namespace {
 
 constexpr double bytes_per_cell = 24;
+
+// --gpu-backend=osmesa|egl (read before Google Benchmark sees the arguments)
+stepwise::render::Backend gpu_backend_choice = stepwise::render::Backend::osmesa;
+stepwise::render::Backend gpu_backend() { return gpu_backend_choice; }
 constexpr int steps = 8;  // steps per iteration, the blocked kernel's steps per pass
 
 struct Grids {
@@ -61,6 +70,23 @@ void BM_wave_blocked(benchmark::State& state) {
   count_cells(state, n);
 }
 
+// the same steps as fragment passes on the GL's device (llvmpipe here, its threads LP_NUM_THREADS, by
+// default one per core; a GPU through EGL with --gpu-backend=egl), in float32, finished before the clock
+// stops
+void BM_gpu_wave(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  static const std::unique_ptr<stepwise::render::Context> context = stepwise::render::make_context(gpu_backend());
+  Grids g(n);
+  stepwise::render::GpuWave gpu(*context, n, stepwise::to_float(g.k));
+  gpu.upload(g.z_prev.cast<float>(), g.z.cast<float>());
+  for (auto _ : state) {
+    gpu.step(steps);
+    gpu.finish();
+  }
+  count_cells(state, n);
+  state.SetLabel(context->description());
+}
+
 // a[i] = b[i] + s c[i] over three arrays of range(0)^2, eight times an iteration
 void BM_triad(benchmark::State& state) {
   const auto length = state.range(0) * state.range(0);
@@ -83,6 +109,8 @@ void grids(benchmark::internal::Benchmark* b) {
 }
 BENCHMARK(BM_wave_step)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_wave_blocked)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_wave_step)->Args({2048, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_gpu_wave)->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_triad)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // the standing wave (65^2, mu = 0.5, 2 s) by `run`'s path: wave-fd at dt = limit/2, and CVODE at the
@@ -116,6 +144,18 @@ BENCHMARK_CAPTURE(BM_standing_wave, cvode_bdf, std::string("cvode-bdf"))->Unit(b
 }  // namespace
 
 int main(int argc, char** argv) {
+  for (int a = 1; a < argc; ++a)
+    if (const std::string arg = argv[a]; arg.starts_with("--gpu-backend=")) {
+      const auto backend = stepwise::render::parse_backend(arg.substr(14));
+      if (!backend) {
+        std::fprintf(stderr, "bench_wave: --gpu-backend must be osmesa or egl, got '%s'\n", arg.substr(14).c_str());
+        return 2;
+      }
+      gpu_backend_choice = *backend;
+      std::copy(argv + a + 1, argv + argc, argv + a);
+      --argc;
+      --a;
+    }
   using stepwise::bench::RateBound;
   std::vector<RateBound> bounds;
   std::vector<std::pair<std::string, std::string>> pairs{{"BM_standing_wave/cvode_adams", "BM_standing_wave/wave_fd"},
@@ -128,5 +168,7 @@ int main(int argc, char** argv) {
     pairs.push_back({fmt::format("BM_wave_step/{}/1/real_time", n), fmt::format("BM_wave_step/{}/2/real_time", n)});
     pairs.push_back({fmt::format("BM_wave_step/{}/1/real_time", n), fmt::format("BM_wave_blocked/{}/1/real_time", n)});
   }
+  for (const char* n : {"256", "1024", "2048"})
+    pairs.push_back({fmt::format("BM_gpu_wave/{}/real_time", n), fmt::format("BM_wave_step/{}/1/real_time", n)});
   return stepwise::bench::run_with_ratios(argc, argv, pairs, bounds);
 }

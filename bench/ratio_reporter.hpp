@@ -1,5 +1,6 @@
-// Google Benchmark main that prints, after the usual table, the ratio of each benchmark's CPU time to its
-// peer's measured in the same run: "ratio A / B = x", and the fraction of a bound a rate reaches: "A reaches
+// Google Benchmark main that prints, after the usual table, the ratio of each benchmark's time to its
+// peer's measured in the same run (the time it is timed by: wall-clock where it uses real time, as its
+// threads' or a GPU's work is not the calling thread's CPU time, else CPU time): "ratio A / B = x", and the fraction of a bound a rate reaches: "A reaches
 // x of the bound from B". With --benchmark_repetitions the medians are compared.
 #pragma once
 
@@ -30,7 +31,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
       const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
       if ((run.run_type == Run::RT_Iteration && !median_.contains(name)) || median) {
         if (median) median_[name] = true;
-        cpu_[name] = run.GetAdjustedCPUTime();
+        time_[name] = run.run_name.time_type == "real_time" ? run.GetAdjustedRealTime() : run.GetAdjustedCPUTime();
         for (const auto& [key, counter] : run.counters) counters_[name][key] = counter.value;
       }
     }
@@ -39,7 +40,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
   void Finalize() override {
     ConsoleReporter::Finalize();
     for (const auto& [a, b] : pairs_)
-      if (cpu_.contains(a) && cpu_.contains(b)) std::printf("ratio %s / %s = %.3f\n", a.c_str(), b.c_str(), cpu_[a] / cpu_[b]);
+      if (time_.contains(a) && time_.contains(b)) std::printf("ratio %s / %s = %.3f\n", a.c_str(), b.c_str(), time_[a] / time_[b]);
     for (const auto& b : bounds_) {
       if (!counters_[b.name].contains(b.counter) || !counters_[b.bound_name].contains(b.bound_counter)) continue;
       const double rate = counters_[b.name][b.counter], bound = counters_[b.bound_name][b.bound_counter] / b.cost;
@@ -51,7 +52,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
  private:
   std::vector<std::pair<std::string, std::string>> pairs_;
   std::vector<RateBound> bounds_;
-  std::map<std::string, double> cpu_;
+  std::map<std::string, double> time_;
   std::map<std::string, std::map<std::string, double>> counters_;
   std::map<std::string, bool> median_;  // names whose median has been seen
 };

@@ -12,6 +12,7 @@ namespace stepwise::render {
 #define STEPWISE_GL_FUNCTIONS(X)                                                                        \
   X(PFNGLGETSTRINGPROC, GetString)                                                                      \
   X(PFNGLGETERRORPROC, GetError)                                                                        \
+  X(PFNGLGETINTEGERVPROC, GetIntegerv)                                                                  \
   X(PFNGLENABLEPROC, Enable)                                                                            \
   X(PFNGLDISABLEPROC, Disable)                                                                          \
   X(PFNGLVIEWPORTPROC, Viewport)                                                                        \
@@ -60,6 +61,7 @@ namespace stepwise::render {
   X(PFNGLTEXTUREPARAMETERIPROC, TextureParameteri)                                                      \
   X(PFNGLBINDTEXTUREUNITPROC, BindTextureUnit)                                                          \
   X(PFNGLGETTEXTUREIMAGEPROC, GetTextureImage)                                                          \
+  X(PFNGLTEXTURESUBIMAGE2DPROC, TextureSubImage2D)                                                      \
   X(PFNGLCREATERENDERBUFFERSPROC, CreateRenderbuffers)                                                  \
   X(PFNGLDELETERENDERBUFFERSPROC, DeleteRenderbuffers)                                                  \
   X(PFNGLNAMEDRENDERBUFFERSTORAGEPROC, NamedRenderbufferStorage)                                        \

@@ -25,12 +25,20 @@
 
 namespace stepwise {
 
-// the bracket's three factors, each divided by (mu dt + 2)
-struct WaveCoefficients {
-  double self = 0;        // (4 - 8 c^2 dt^2/d^2) / (mu dt + 2)
-  double previous = 0;    // (mu dt - 2) / (mu dt + 2)
-  double neighbours = 0;  // 2 c^2 dt^2/d^2 / (mu dt + 2)
+// the bracket's three factors, each divided by (mu dt + 2); in double, or rounded to float for the
+// float32 schemes (the GPU's and its CPU reference)
+template <class T>
+struct BasicWaveCoefficients {
+  T self = 0;        // (4 - 8 c^2 dt^2/d^2) / (mu dt + 2)
+  T previous = 0;    // (mu dt - 2) / (mu dt + 2)
+  T neighbours = 0;  // 2 c^2 dt^2/d^2 / (mu dt + 2)
 };
+using WaveCoefficients = BasicWaveCoefficients<double>;
+
+// each factor rounded to float
+inline BasicWaveCoefficients<float> to_float(const BasicWaveCoefficients<double>& k) {
+  return {static_cast<float>(k.self), static_cast<float>(k.previous), static_cast<float>(k.neighbours)};
+}
 
 WaveCoefficients wave_coefficients(const WaveGridView& grid, double dt);
 
@@ -47,10 +55,15 @@ double symplectic_euler_wave_dt(const WaveGridView& grid);
 std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid);
 
 // the four neighbours of cell j of a row-major grid with rows `n` apart, summed in one fixed order
-inline double neighbour_sum(const double* u, std::ptrdiff_t j, std::ptrdiff_t n) { return (u[j - n] + u[j + n]) + (u[j - 1] + u[j + 1]); }
+template <class T>
+inline T neighbour_sum(const T* u, std::ptrdiff_t j, std::ptrdiff_t n) {
+  return (u[j - n] + u[j + n]) + (u[j - 1] + u[j + 1]);
+}
 
-// one cell of the update: the one formula every loop shares (the kernels below, the wave-fd stepper)
-inline double wave_cell(const WaveCoefficients& k, double z, double z_prev, double neighbours) {
+// one cell of the update: the one formula every loop shares (the kernels below, the wave-fd stepper, the
+// float32 reference of the GPU's shader, whose GLSL spells the same operations in the same order)
+template <class T>
+inline T wave_cell(const BasicWaveCoefficients<T>& k, T z, T z_prev, T neighbours) {
   return k.self * z + k.previous * z_prev + k.neighbours * neighbours;
 }
 

@@ -3,6 +3,7 @@
 
 #include "models/contact.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace stepwise::tolerance {
@@ -169,6 +170,20 @@ inline constexpr double wave_energy_modal = 1e-9;
 // pair at A/H = 1e-3 and 1e-2 may differ from tenfold by 9 k 1e-3: 5% allows k up to 5. Measured: see
 // the test's output (k = 0.9)
 inline constexpr double shallow_water_first_order = 0.05;
+
+// the seeds' wave scheme in float32 (GPU shader against the CPU loop, or either against the exact modes):
+// a step rounds 7 times per cell (3 adds of the neighbour sum, 3 products, 2 adds, less the one exact
+// copy), each by at most u = 2^-24 of S M, S = |self| + |previous| + 4 |neighbours| and M = max |z|: a
+// new error of at most delta = 7 u S M per cell, sqrt(cells) delta in the 2-norm. The scheme carries an
+// error in a mode of angle theta (roots e^{+-i theta}, undamped) as sin((k+1) theta) / sin theta <=
+// min(k + 1, 1 / sin theta), so after k steps the 2-norm error is at most
+// k min(k + 1, 1 / sin theta_min) sqrt(cells) delta (damping only shrinks it): a bound, not an estimate
+inline constexpr double float32_wave_roundings = 7;
+inline double float32_wave_bound(long steps, double sin_theta_min, double coefficient_sum, double max_abs_z, double cells) {
+  const double u = 0x1p-24;
+  const double growth = std::min(static_cast<double>(steps) + 1, 1 / sin_theta_min);
+  return static_cast<double>(steps) * growth * std::sqrt(cells) * float32_wave_roundings * u * coefficient_sum * max_abs_z;
+}
 
 // CVODE's method of lines on a mode of frequency w over t: a tolerance-proportional code's global error is
 // rtol times the solution's size times a factor that grows with the Lipschitz constant over the interval

@@ -115,4 +115,14 @@ void run_wave_scheme(const WaveGridView& grid, double dt, long steps, Eigen::Vec
   }
 }
 
+void run_wave_scheme_float32(const WaveGridView& grid, double dt, long steps, Eigen::VectorXf& z_prev, Eigen::VectorXf& z) {
+  const BasicWaveCoefficients<float> k = to_float(wave_coefficients(grid, dt));
+  const int n = grid.points;
+  for (long s = 0; s < steps; ++s) {
+    for (int i = 1; i < n - 1; ++i)
+      for (int j = i * n + 1; j < (i + 1) * n - 1; ++j) z_prev[j] = wave_cell(k, z[j], z_prev[j], neighbour_sum(z.data(), j, n));
+    z_prev.swap(z);
+  }
+}
+
 }  // namespace stepwise

@@ -47,4 +47,8 @@ double scheme_energy(const WaveGridView& grid, double dt, const Eigen::VectorXd&
 // z^{k+steps} (and z^{k+steps-1} in z_prev) by the plain kernel wave_step, from (z_prev, z) = (z^{k-1}, z^k)
 void run_wave_scheme(const WaveGridView& grid, double dt, long steps, Eigen::VectorXd& z_prev, Eigen::VectorXd& z);
 
+// the same in float32, cell by cell with wave_cell on the coefficients rounded to float: the CPU reference
+// the GPU's shader (render/gpu_wave.hpp) must match
+void run_wave_scheme_float32(const WaveGridView& grid, double dt, long steps, Eigen::VectorXf& z_prev, Eigen::VectorXf& z);
+
 }  // namespace stepwise
