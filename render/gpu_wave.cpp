@@ -1,7 +1,10 @@
 #include "gpu_wave.hpp"
 
+#include "solvers/wave_fd.hpp"
+
 #include <fmt/format.h>
 
+#include <cstdlib>
 #include <vector>
 
 namespace stepwise::render {
@@ -61,12 +64,17 @@ GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients
       throw GlError(fmt::format("this context cannot render to float textures: glCheckNamedFramebufferStatus (RGBA32F {}^2) = 0x{:04x}", points, status));
   }
   program_ = link_program(gl_, full_screen, nullptr, wave_pass, "wave pass");
+  gl_.CreateVertexArrays(1, &vertex_array_);
+  set_coefficients(k);
+  check_gl(gl_, "the wave pass's textures and program");
+}
+
+void GpuWave::set_coefficients(const BasicWaveCoefficients<float>& k) {
+  context_.make_current();
   gl_.UseProgram(program_);
   gl_.Uniform1f(gl_.GetUniformLocation(program_, "k_self"), k.self);
   gl_.Uniform1f(gl_.GetUniformLocation(program_, "k_previous"), k.previous);
   gl_.Uniform1f(gl_.GetUniformLocation(program_, "k_neighbours"), k.neighbours);
-  gl_.CreateVertexArrays(1, &vertex_array_);
-  check_gl(gl_, "the wave pass's textures and program");
 }
 
 GpuWave::~GpuWave() {
@@ -124,6 +132,51 @@ void GpuWave::download(Eigen::VectorXf& z_prev, Eigen::VectorXf& z) const {
     z[c] = texels[4 * c];
     z_prev[c] = texels[4 * c + 1];
   }
+}
+
+namespace {
+
+// gpu-wave: the levels live on the GL device between steps; each step is one pass, and the new level is
+// read back for the state the run samples (z^{k+1}, and the velocity from it on the CPU)
+class GpuWaveStepper final : public ThreeLevelWaveStepper {
+ public:
+  using ThreeLevelWaveStepper::ThreeLevelWaveStepper;
+
+ private:
+  static Backend backend() {
+    const char* name = std::getenv("STEPWISE_GPU_BACKEND");
+    if (!name || !*name) return Backend::osmesa;
+    if (const auto b = parse_backend(name)) return *b;
+    throw GlError(fmt::format("STEPWISE_GPU_BACKEND must be osmesa or egl, got '{}'", name));
+  }
+  bool advance(const WaveCoefficients& k, const double* z_prev, const double* z, double* z_next, bool fresh, std::string& failure) override {
+    const int n = grid().points;
+    const Eigen::Index cells = static_cast<Eigen::Index>(n) * n;
+    try {
+      if (!context_) context_ = make_context(backend());
+      if (!gpu_) gpu_ = std::make_unique<GpuWave>(*context_, n, to_float(k));
+      if (fresh) {
+        gpu_->set_coefficients(to_float(k));
+        gpu_->upload(Eigen::Map<const Eigen::VectorXd>(z_prev, cells).cast<float>(), Eigen::Map<const Eigen::VectorXd>(z, cells).cast<float>());
+      }
+      gpu_->step(1);
+      gpu_->download(level_prev_, level_);
+    } catch (const GlError& e) {
+      failure = fmt::format("gpu-wave: {}", e.what());
+      return false;
+    }
+    Eigen::Map<Eigen::VectorXd>(z_next, cells) = level_.cast<double>();
+    return true;
+  }
+  std::unique_ptr<Context> context_;
+  std::unique_ptr<GpuWave> gpu_;
+  Eigen::VectorXf level_prev_, level_;
+};
+
+}  // namespace
+
+void register_gpu_methods() {
+  register_stepper("gpu-wave", [](const CountedSystem& system) { return std::make_unique<GpuWaveStepper>(system); });
 }
 
 }  // namespace stepwise::render

@@ -28,6 +28,8 @@ class GpuWave {
 
   // both levels, each points^2 row-major (the CPU grids' layout)
   void upload(const Eigen::VectorXf& z_prev, const Eigen::VectorXf& z);
+  // the coefficients of another step size
+  void set_coefficients(const BasicWaveCoefficients<float>& k);
   // `count` passes; GL errors thrown as GlError
   void step(long count);
   // glFinish: the passes issued are done (for timing)
@@ -43,5 +45,10 @@ class GpuWave {
   GLuint program_ = 0, vertex_array_ = 0;
   int current_ = 0;  // the texture holding the state
 };
+
+// registers the GPU shader methods (gpu-wave: GpuWave stepping a wave scene, wave_fd.hpp's start and
+// velocities around it) with the solvers' method table. Each run makes its own context, OSMesa unless
+// STEPWISE_GPU_BACKEND=egl
+void register_gpu_methods();
 
 }  // namespace stepwise::render

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cmath>
+#include <map>
 
 namespace stepwise {
 
@@ -49,6 +50,8 @@ constexpr std::array method_table{
     MethodInfo{"gsl-msbdf", "variable order BDF, Newton iteration", "1-5", "GSL odeiv2", 1, 5, true, true, false, true},
     MethodInfo{"wave-fd", "explicit three-level finite differences for the damped wave equation (the seeds' scheme), fixed step",
                "2", "hand-written", 2, 2, true, false, false, false, false, true},
+    MethodInfo{"gpu-wave", "the seeds' three-level scheme as a fragment-shader pass on float32 textures (OpenGL: llvmpipe, or a GPU "
+               "through EGL), fixed step", "2", "OpenGL shader", 2, 2, true, false, false, false, false, true},
     MethodInfo{"rigid-splitting", "the free rigid body split into exact rotations about its principal axes, Strang-composed (symplectic, fixed step)",
                "2", "hand-written", 2, 2, true, false, false, false, false, false, true},
     MethodInfo{"sequential-impulses", "rigid bodies in contact: kick, contact impulses by projected Gauss-Seidel (restitution, Coulomb "
@@ -89,6 +92,17 @@ std::string method_requirement(const MethodInfo& method, const OdeSystem& system
   return {};
 }
 
+namespace {
+
+std::map<std::string, FixedStepperFactory, std::less<>>& registered_steppers() {
+  static std::map<std::string, FixedStepperFactory, std::less<>> steppers;
+  return steppers;
+}
+
+}  // namespace
+
+void register_stepper(std::string_view method, FixedStepperFactory factory) { registered_steppers()[std::string(method)] = std::move(factory); }
+
 std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control) {
   const MethodInfo* info = find_method(method);
   if (!info) throw BadMethod(fmt::format("unknown method '{}' (see `stepwise methods`)", method));
@@ -110,6 +124,9 @@ std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepC
   if (method == "wave-fd") return std::make_unique<FixedStepIntegrator>(name, control, make_wave_fd);
   if (method == "rigid-splitting") return std::make_unique<FixedStepIntegrator>(name, control, make_rigid_splitting);
   if (method == "sequential-impulses") return std::make_unique<FixedStepIntegrator>(name, control, make_contact_stepping);
+  if (const auto it = registered_steppers().find(method); it != registered_steppers().end())
+    return std::make_unique<FixedStepIntegrator>(name, control, it->second);
+  if (info->source == "OpenGL shader") throw BadMethod(fmt::format("{} runs on a GL device, and this program was built without one", method));
   if (info->source == "SUNDIALS CVODE") return make_cvode_integrator(method, control);
   return make_gsl_integrator(method, control);
 }
