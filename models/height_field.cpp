@@ -1,6 +1,7 @@
 #include "height_field.hpp"
 
 #include "particle_common.hpp"
+#include "solvers/wave_step.hpp"
 
 #include <fmt/format.h>
 
@@ -167,7 +168,7 @@ class HeightField final : public Model {
     a.setZero();
     for (int i = 1; i < n_ - 1; ++i)
       for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j)
-        a[j] = c2 * ((z[j - n_] + z[j + n_]) + (z[j - 1] + z[j + 1]) - 4 * z[j]) - grid_.mu * v[j];
+        a[j] = wave_acceleration(c2, grid_.mu, neighbour_sum(z, j, n_), z[j], v[j]);
   }
 
   // dz'/dv = I; dv'/dz = c^2 Lap (boundary neighbours included) and dv'/dv = -mu I on the interior rows

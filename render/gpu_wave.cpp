@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <vector>
 
@@ -19,22 +20,35 @@ void main() {
 }
 )";
 
-// texel (x, y) is cell i * points + j with x = j, y = i: rows (i) apart along y, as z[j -+ n] on the CPU
-const char* const wave_pass = R"(#version 450
+// what every grid pass shares: the state, its output, whether a texel is on the grid's boundary, and the
+// sum of a texel's four neighbours in neighbour_sum's order. Texel (x, y) is cell i * points + j with
+// x = j, y = i: rows (i) apart along y, as z[j -+ n] on the CPU
+const char* const grid_pass = R"(#version 450
 layout(binding = 0) uniform sampler2D state;
-uniform float k_self, k_previous, k_neighbours;
 layout(location = 0) out vec4 next;
-void main() {
-  ivec2 p = ivec2(gl_FragCoord.xy);
+bool on_boundary(ivec2 p) {
   ivec2 size = textureSize(state, 0);
-  vec4 here = texelFetch(state, p, 0);
-  if (p.x == 0 || p.y == 0 || p.x == size.x - 1 || p.y == size.y - 1) {
-    next = vec4(here.r, here.r, 0.0, 0.0);
-    return;
-  }
+  return p.x == 0 || p.y == 0 || p.x == size.x - 1 || p.y == size.y - 1;
+}
+float neighbour_sum(ivec2 p) {
   precise float down_up = texelFetch(state, p - ivec2(0, 1), 0).r + texelFetch(state, p + ivec2(0, 1), 0).r;
   precise float left_right = texelFetch(state, p - ivec2(1, 0), 0).r + texelFetch(state, p + ivec2(1, 0), 0).r;
   precise float sum = down_up + left_right;
+  return sum;
+}
+)";
+
+// the three-level pass: R = z^k, G = z^{k-1} in, (z^{k+1}, z^k) out; the boundary holds
+const char* const wave_pass = R"(
+uniform float k_self, k_previous, k_neighbours;
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  vec4 here = texelFetch(state, p, 0);
+  if (on_boundary(p)) {
+    next = vec4(here.r, here.r, 0.0, 0.0);
+    return;
+  }
+  precise float sum = neighbour_sum(p);
   precise float a = k_self * here.r;
   precise float b = k_previous * here.g;
   precise float c = k_neighbours * sum;
@@ -43,9 +57,33 @@ void main() {
 }
 )";
 
+// the second seed's pass: v1 = v + dt a, a = c2 ((down + up) + (left + right) - 4 z) - mu v, z1 = z + dt v1
+const char* const symplectic_pass = R"(
+uniform float c2, mu, dt;
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  vec4 here = texelFetch(state, p, 0);
+  if (on_boundary(p)) {
+    next = here;
+    return;
+  }
+  precise float sum = neighbour_sum(p);
+  precise float four_z = 4.0 * here.r;
+  precise float curvature = sum - four_z;
+  precise float spring = c2 * curvature;
+  precise float drag = mu * here.g;
+  precise float a = spring - drag;
+  precise float kick = dt * a;
+  precise float v1 = here.g + kick;
+  precise float drift = dt * v1;
+  precise float z1 = here.r + drift;
+  next = vec4(z1, v1, 0.0, 0.0);
+}
+)";
+
 }  // namespace
 
-GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k)
+GpuGrid::GpuGrid(const Context& context, int points, const char* pass, const std::string& name)
     : context_(context), gl_(context.gl()), points_(points) {
   context_.make_current();
   GLint max_size = 0;
@@ -63,21 +101,12 @@ GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients
     if (const GLenum status = gl_.CheckNamedFramebufferStatus(framebuffers_[t], GL_FRAMEBUFFER); status != GL_FRAMEBUFFER_COMPLETE)
       throw GlError(fmt::format("this context cannot render to float textures: glCheckNamedFramebufferStatus (RGBA32F {}^2) = 0x{:04x}", points, status));
   }
-  program_ = link_program(gl_, full_screen, nullptr, wave_pass, "wave pass");
+  program_ = link_program(gl_, full_screen, nullptr, (std::string(grid_pass) + pass).c_str(), name);
   gl_.CreateVertexArrays(1, &vertex_array_);
-  set_coefficients(k);
-  check_gl(gl_, "the wave pass's textures and program");
+  check_gl(gl_, fmt::format("the {}'s textures and program", name));
 }
 
-void GpuWave::set_coefficients(const BasicWaveCoefficients<float>& k) {
-  context_.make_current();
-  gl_.UseProgram(program_);
-  gl_.Uniform1f(gl_.GetUniformLocation(program_, "k_self"), k.self);
-  gl_.Uniform1f(gl_.GetUniformLocation(program_, "k_previous"), k.previous);
-  gl_.Uniform1f(gl_.GetUniformLocation(program_, "k_neighbours"), k.neighbours);
-}
-
-GpuWave::~GpuWave() {
+GpuGrid::~GpuGrid() {
   if (!context_.try_make_current()) return;
   gl_.DeleteVertexArrays(1, &vertex_array_);
   gl_.DeleteProgram(program_);
@@ -85,18 +114,24 @@ GpuWave::~GpuWave() {
   gl_.DeleteTextures(2, textures_);
 }
 
-void GpuWave::upload(const Eigen::VectorXf& z_prev, const Eigen::VectorXf& z) {
+void GpuGrid::uniform(const char* name, float value) const {
   context_.make_current();
-  std::vector<float> texels(4 * static_cast<size_t>(z.size()));
-  for (Eigen::Index c = 0; c < z.size(); ++c) {
-    texels[4 * c] = z[c];
-    texels[4 * c + 1] = z_prev[c];
-  }
-  gl_.TextureSubImage2D(textures_[current_], 0, 0, 0, points_, points_, GL_RGBA, GL_FLOAT, texels.data());
-  check_gl(gl_, "glTextureSubImage2D (the wave's state)");
+  gl_.UseProgram(program_);
+  gl_.Uniform1f(gl_.GetUniformLocation(program_, name), value);
 }
 
-void GpuWave::step(long count) {
+void GpuGrid::upload_channels(const Eigen::VectorXf& red, const Eigen::VectorXf& green) {
+  context_.make_current();
+  std::vector<float> texels(4 * static_cast<size_t>(red.size()));
+  for (Eigen::Index c = 0; c < red.size(); ++c) {
+    texels[4 * c] = red[c];
+    texels[4 * c + 1] = green[c];
+  }
+  gl_.TextureSubImage2D(textures_[current_], 0, 0, 0, points_, points_, GL_RGBA, GL_FLOAT, texels.data());
+  check_gl(gl_, "glTextureSubImage2D (a grid's state)");
+}
+
+void GpuGrid::step(long count) {
   context_.make_current();
   gl_.Disable(GL_BLEND);
   gl_.Disable(GL_DEPTH_TEST);
@@ -112,29 +147,56 @@ void GpuWave::step(long count) {
   }
   gl_.BindTextureUnit(0, 0);
   gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
-  check_gl(gl_, "the wave pass (glDrawArrays)");
+  check_gl(gl_, "a grid pass (glDrawArrays)");
 }
 
-void GpuWave::finish() const {
+void GpuGrid::finish() const {
   context_.make_current();
   gl_.Finish();
 }
 
-void GpuWave::download(Eigen::VectorXf& z_prev, Eigen::VectorXf& z) const {
+void GpuGrid::download_channels(Eigen::VectorXf& red, Eigen::VectorXf& green) const {
   context_.make_current();
   const Eigen::Index cells = static_cast<Eigen::Index>(points_) * points_;
   std::vector<float> texels(4 * static_cast<size_t>(cells));
   gl_.GetTextureImage(textures_[current_], 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(texels.size() * sizeof(float)), texels.data());
-  check_gl(gl_, "glGetTextureImage (the wave's state)");
-  z.resize(cells);
-  z_prev.resize(cells);
+  check_gl(gl_, "glGetTextureImage (a grid's state)");
+  red.resize(cells);
+  green.resize(cells);
   for (Eigen::Index c = 0; c < cells; ++c) {
-    z[c] = texels[4 * c];
-    z_prev[c] = texels[4 * c + 1];
+    red[c] = texels[4 * c];
+    green[c] = texels[4 * c + 1];
   }
 }
 
+GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k) : GpuGrid(context, points, wave_pass, "wave pass") {
+  set_coefficients(k);
+}
+
+void GpuWave::set_coefficients(const BasicWaveCoefficients<float>& k) {
+  uniform("k_self", k.self);
+  uniform("k_previous", k.previous);
+  uniform("k_neighbours", k.neighbours);
+}
+
+GpuSymplecticWave::GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt)
+    : GpuGrid(context, points, symplectic_pass, "symplectic wave pass") {
+  uniform("c2", c2);
+  uniform("mu", mu);
+  set_step(dt);
+}
+
+void GpuSymplecticWave::set_step(float dt) { uniform("dt", dt); }
+
 namespace {
+
+// OSMesa, unless STEPWISE_GPU_BACKEND says egl
+Backend gpu_backend() {
+  const char* name = std::getenv("STEPWISE_GPU_BACKEND");
+  if (!name || !*name) return Backend::osmesa;
+  if (const auto b = parse_backend(name)) return *b;
+  throw GlError(fmt::format("STEPWISE_GPU_BACKEND must be osmesa or egl, got '{}'", name));
+}
 
 // gpu-wave: the levels live on the GL device between steps; each step is one pass, and the new level is
 // read back for the state the run samples (z^{k+1}, and the velocity from it on the CPU)
@@ -143,17 +205,11 @@ class GpuWaveStepper final : public ThreeLevelWaveStepper {
   using ThreeLevelWaveStepper::ThreeLevelWaveStepper;
 
  private:
-  static Backend backend() {
-    const char* name = std::getenv("STEPWISE_GPU_BACKEND");
-    if (!name || !*name) return Backend::osmesa;
-    if (const auto b = parse_backend(name)) return *b;
-    throw GlError(fmt::format("STEPWISE_GPU_BACKEND must be osmesa or egl, got '{}'", name));
-  }
   bool advance(const WaveCoefficients& k, const double* z_prev, const double* z, double* z_next, bool fresh, std::string& failure) override {
     const int n = grid().points;
     const Eigen::Index cells = static_cast<Eigen::Index>(n) * n;
     try {
-      if (!context_) context_ = make_context(backend());
+      if (!context_) context_ = make_context(gpu_backend());
       if (!gpu_) gpu_ = std::make_unique<GpuWave>(*context_, n, to_float(k));
       if (fresh) {
         gpu_->set_coefficients(to_float(k));
@@ -173,10 +229,56 @@ class GpuWaveStepper final : public ThreeLevelWaveStepper {
   Eigen::VectorXf level_prev_, level_;
 };
 
+// gpu-symplectic-euler: (z, v) live on the device between steps that continue one another; each step is
+// one pass, read back for the run's state
+class GpuSymplecticStepper final : public FixedStepper {
+ public:
+  explicit GpuSymplecticStepper(const CountedSystem& s)
+      : system_(s), grid_(*s.wave_grid()), cells_(static_cast<Eigen::Index>(grid_.points) * grid_.points) {}
+  bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
+    ++system_.stats().rhs_evals;
+    const bool continuing = gpu_ && h == h_ && std::abs(t - t_last_) <= 1e-9 * h && y.data() == last_;
+    try {
+      if (!context_) context_ = make_context(gpu_backend());
+      if (!gpu_) {
+        const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
+        gpu_ = std::make_unique<GpuSymplecticWave>(*context_, grid_.points, static_cast<float>(c2), static_cast<float>(grid_.mu), static_cast<float>(h));
+      }
+      if (!continuing) {
+        gpu_->set_step(static_cast<float>(h));
+        gpu_->upload(y.head(cells_).cast<float>(), y.tail(cells_).cast<float>());
+      }
+      gpu_->step(1);
+      gpu_->download(z_, v_);
+    } catch (const GlError& e) {
+      failure = fmt::format("gpu-symplectic-euler: {}", e.what());
+      return false;
+    }
+    y_next.head(cells_) = z_.cast<double>();
+    y_next.tail(cells_) = v_.cast<double>();
+    h_ = h;
+    t_last_ = t + h;
+    last_ = y_next.data();
+    return true;
+  }
+  void reset() override { last_ = nullptr; }
+
+ private:
+  const CountedSystem& system_;
+  WaveGridView grid_;
+  Eigen::Index cells_;
+  std::unique_ptr<Context> context_;
+  std::unique_ptr<GpuSymplecticWave> gpu_;
+  Eigen::VectorXf z_, v_;
+  double h_ = 0, t_last_ = 0;
+  const double* last_ = nullptr;  // the buffer the last step wrote
+};
+
 }  // namespace
 
 void register_gpu_methods() {
   register_stepper("gpu-wave", [](const CountedSystem& system) { return std::make_unique<GpuWaveStepper>(system); });
+  register_stepper("gpu-symplectic-euler", [](const CountedSystem& system) { return std::make_unique<GpuSymplecticStepper>(system); });
 }
 
 }  // namespace stepwise::render

@@ -15,27 +15,32 @@
 
 #include <Eigen/Dense>
 
+#include <string>
+
 namespace stepwise::render {
 
-class GpuWave {
+// a grid's state in the red and green channels of two RGBA32F textures of its size, stepped by a full-screen
+// fragment pass from one into the other, ping-pong; texel (x, y) is cell y * points + x. `pass`: the
+// subclass's GLSL main and uniforms, after the shared part (gpu_wave.cpp's grid_pass)
+class GpuGrid {
  public:
-  // a points^2 grid on `context` (made current); GlError naming the limit where points passes
-  // GL_MAX_TEXTURE_SIZE, or where the context cannot render to RGBA32F
-  GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k);
-  ~GpuWave();
-  GpuWave(const GpuWave&) = delete;
-  GpuWave& operator=(const GpuWave&) = delete;
-
-  // both levels, each points^2 row-major (the CPU grids' layout)
-  void upload(const Eigen::VectorXf& z_prev, const Eigen::VectorXf& z);
-  // the coefficients of another step size
-  void set_coefficients(const BasicWaveCoefficients<float>& k);
+  // GlError naming the limit where points passes GL_MAX_TEXTURE_SIZE, or where the context cannot render to
+  // RGBA32F
+  GpuGrid(const Context& context, int points, const char* pass, const std::string& name);
+  virtual ~GpuGrid();
+  GpuGrid(const GpuGrid&) = delete;
+  GpuGrid& operator=(const GpuGrid&) = delete;
   // `count` passes; GL errors thrown as GlError
   void step(long count);
   // glFinish: the passes issued are done (for timing)
   void finish() const;
-  void download(Eigen::VectorXf& z_prev, Eigen::VectorXf& z) const;
   GLuint texture() const { return textures_[current_]; }
+
+ protected:
+  // the two channels, points^2 each, row-major (the CPU grids' layout)
+  void upload_channels(const Eigen::VectorXf& red, const Eigen::VectorXf& green);
+  void download_channels(Eigen::VectorXf& red, Eigen::VectorXf& green) const;
+  void uniform(const char* name, float value) const;
 
  private:
   const Context& context_;
@@ -46,8 +51,28 @@ class GpuWave {
   int current_ = 0;  // the texture holding the state
 };
 
-// registers the GPU shader methods (gpu-wave: GpuWave stepping a wave scene, wave_fd.hpp's start and
-// velocities around it) with the solvers' method table. Each run makes its own context, OSMesa unless
+// the seeds' three-level scheme: R = z^k, G = z^{k-1}
+class GpuWave final : public GpuGrid {
+ public:
+  GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k);
+  // the coefficients of another step size
+  void set_coefficients(const BasicWaveCoefficients<float>& k);
+  void upload(const Eigen::VectorXf& z_prev, const Eigen::VectorXf& z) { upload_channels(z, z_prev); }
+  void download(Eigen::VectorXf& z_prev, Eigen::VectorXf& z) const { download_channels(z, z_prev); }
+};
+
+// the second seed's scheme, symplectic Euler with the damping explicit: v += (c^2 Lap z - mu v) dt, then
+// z += v dt (models/height_field.hpp's wave_acceleration, in float32, `precise`); R = z, G = v
+class GpuSymplecticWave final : public GpuGrid {
+ public:
+  GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt);  // c2 = c^2 / d^2
+  void set_step(float dt);
+  void upload(const Eigen::VectorXf& z, const Eigen::VectorXf& v) { upload_channels(z, v); }
+  void download(Eigen::VectorXf& z, Eigen::VectorXf& v) const { download_channels(z, v); }
+};
+
+// registers the GPU shader methods with the solvers' method table: gpu-wave (GpuWave stepping a wave scene,
+// wave_fd.hpp's start and velocities around it) and gpu-symplectic-euler (GpuSymplecticWave). Each run makes its own context, OSMesa unless
 // STEPWISE_GPU_BACKEND=egl
 void register_gpu_methods();
 

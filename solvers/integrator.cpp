@@ -52,6 +52,8 @@ constexpr std::array method_table{
                "2", "hand-written", 2, 2, true, false, false, false, false, true},
     MethodInfo{"gpu-wave", "the seeds' three-level scheme as a fragment-shader pass on float32 textures (OpenGL: llvmpipe, or a GPU "
                "through EGL), fixed step", "2", "OpenGL shader", 2, 2, true, false, false, false, false, true},
+    MethodInfo{"gpu-symplectic-euler", "the second seed's scheme, symplectic Euler with the damping explicit, as a fragment-shader pass on "
+               "float32 textures (OpenGL), fixed step", "1", "OpenGL shader", 1, 1, true, false, false, false, false, true},
     MethodInfo{"rigid-splitting", "the free rigid body split into exact rotations about its principal axes, Strang-composed (symplectic, fixed step)",
                "2", "hand-written", 2, 2, true, false, false, false, false, false, true},
     MethodInfo{"sequential-impulses", "rigid bodies in contact: kick, contact impulses by projected Gauss-Seidel (restitution, Coulomb "

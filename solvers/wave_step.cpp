@@ -39,8 +39,8 @@ double symplectic_euler_wave_dt(const WaveGridView& grid) {
 }
 
 std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid) {
-  if (method == "wave-fd") return wave_stable_dt(grid);
-  if (method == "symplectic-euler") return symplectic_euler_wave_dt(grid);
+  if (method == "wave-fd" || method == "gpu-wave") return wave_stable_dt(grid);
+  if (method == "symplectic-euler" || method == "gpu-symplectic-euler") return symplectic_euler_wave_dt(grid);
   return std::nullopt;
 }
 

@@ -51,7 +51,8 @@ double wave_stable_dt(const WaveGridView& grid);
 // dt <= (-mu + sqrt(mu^2 + 4 w_max^2)) / w_max^2, shorter the more damping
 double symplectic_euler_wave_dt(const WaveGridView& grid);
 
-// the limit above for a method that has one derived here (wave-fd, symplectic-euler), else none
+// the limit above for a method that has one derived here (wave-fd and gpu-wave, symplectic-euler and
+// gpu-symplectic-euler), else none
 std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid);
 
 // the four neighbours of cell j of a row-major grid with rows `n` apart, summed in one fixed order

@@ -185,6 +185,18 @@ inline double float32_wave_bound(long steps, double sin_theta_min, double coeffi
   return static_cast<double>(steps) * growth * std::sqrt(cells) * float32_wave_roundings * u * coefficient_sum * max_abs_z;
 }
 
+// the second seed's symplectic Euler in float32 (GPU pass against the CPU loop): eliminating v, its z obeys
+// the three-level recurrence above (undamped), fed each step by the rounding of z1 = z + h v1 (2
+// roundings of at most u (Z + h V)) and h times that of v1 = v + h c2 (sum - 4 z) (6 of at most
+// u (V + 8 h c2 Z)), Z = max |z|, V = max |v|: delta = u (2 (Z + h V) + 6 h (V + 8 h c2 Z)) per cell,
+// carried as there
+inline double float32_symplectic_wave_bound(long steps, double sin_theta_min, double h, double c2, double max_abs_z, double max_abs_v, double cells) {
+  const double u = 0x1p-24;
+  const double growth = std::min(static_cast<double>(steps) + 1, 1 / sin_theta_min);
+  const double delta = u * (2 * (max_abs_z + h * max_abs_v) + 6 * h * (max_abs_v + 8 * h * c2 * max_abs_z));
+  return static_cast<double>(steps) * growth * std::sqrt(cells) * delta;
+}
+
 // CVODE's method of lines on a mode of frequency w over t: a tolerance-proportional code's global error is
 // rtol times the solution's size times a factor that grows with the Lipschitz constant over the interval
 // (CVODE's guide: "a factor of 10 or so" per unit; here w t ~ 24): at most 1e3 rtol |y|. Measured at

@@ -125,4 +125,15 @@ void run_wave_scheme_float32(const WaveGridView& grid, double dt, long steps, Ei
   }
 }
 
+void run_symplectic_wave_float32(const WaveGridView& grid, double dt, long steps, Eigen::VectorXf& z, Eigen::VectorXf& v) {
+  const int n = grid.points;
+  const float c2 = static_cast<float>(grid.c * grid.c / (grid.spacing * grid.spacing)), mu = static_cast<float>(grid.mu), h = static_cast<float>(dt);
+  for (long s = 0; s < steps; ++s) {
+    for (int i = 1; i < n - 1; ++i)
+      for (int j = i * n + 1; j < (i + 1) * n - 1; ++j) v[j] = v[j] + h * wave_acceleration(c2, mu, neighbour_sum(z.data(), j, n), z[j], v[j]);
+    for (int i = 1; i < n - 1; ++i)
+      for (int j = i * n + 1; j < (i + 1) * n - 1; ++j) z[j] = z[j] + h * v[j];
+  }
+}
+
 }  // namespace stepwise

@@ -51,4 +51,9 @@ void run_wave_scheme(const WaveGridView& grid, double dt, long steps, Eigen::Vec
 // the GPU's shader (render/gpu_wave.hpp) must match
 void run_wave_scheme_float32(const WaveGridView& grid, double dt, long steps, Eigen::VectorXf& z_prev, Eigen::VectorXf& z);
 
+// the second seed's scheme in float32, symplectic Euler on (z, v) with the damping explicit:
+// v += dt (c^2 Lap z - mu v) (models/height_field.hpp's wave_acceleration), then z += dt v; the CPU
+// reference of the GPU's symplectic pass
+void run_symplectic_wave_float32(const WaveGridView& grid, double dt, long steps, Eigen::VectorXf& z, Eigen::VectorXf& v);
+
 }  // namespace stepwise

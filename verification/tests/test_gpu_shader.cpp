@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 
@@ -89,6 +90,33 @@ TEST(GpuShader, ShaderStateMatchesTheExactlyEvolvedDstModes) {
   const double bound = shader.bound(steps, 1);
   std::cout << steps << " passes: |shader - exact modes| = " << error << " (relative " << error / exact.norm() << "), bound " << bound << '\n';
   EXPECT_LE(error, bound);
+}
+
+TEST(GpuShader, SymplecticPassMatchesTheFloat32CpuLoopStepForStep) {
+  // the second seed's scheme: z and v random (v on the scale of the fastest mode's rate), undamped, at 0.9
+  // of its limit; the bound's Z and V are the largest |z| and |v| the reference run reaches
+  const WaveGridView grid{64, 0.02, 1.0, 0.0};
+  const double dt = 0.9 * symplectic_euler_wave_dt(grid), c2 = grid.c * grid.c / (grid.spacing * grid.spacing);
+  const Eigen::VectorXf z0 = random_wave_field(grid.points, 1.0, 7).cast<float>();
+  const Eigen::VectorXf v0 = random_wave_field(grid.points, 2 / dt, 8).cast<float>();
+  render::GpuSymplecticWave gpu(context(), grid.points, static_cast<float>(c2), 0.0f, static_cast<float>(dt));
+  gpu.upload(z0, v0);
+  Eigen::VectorXf z = z0, v = v0, gpu_z, gpu_v;
+  double max_z = z0.cwiseAbs().maxCoeff(), max_v = v0.cwiseAbs().maxCoeff();
+  long done = 0;
+  for (const long steps : {1L, 10L, 100L, 1000L}) {
+    gpu.step(steps - done);
+    for (; done < steps; ++done) {
+      run_symplectic_wave_float32(grid, dt, 1, z, v);
+      max_z = std::max(max_z, static_cast<double>(z.cwiseAbs().maxCoeff()));
+      max_v = std::max(max_v, static_cast<double>(v.cwiseAbs().maxCoeff()));
+    }
+    gpu.download(gpu_z, gpu_v);
+    const double bound = tolerance::float32_symplectic_wave_bound(steps, sin_theta_min(grid, dt), dt, c2, max_z, max_v, static_cast<double>(z0.size()));
+    const double difference = (gpu_z - z).cast<double>().norm();
+    std::cout << steps << " steps: |shader z - cpu float32 z| = " << difference << ", bound " << bound << " (|z| = " << z.norm() << ")\n";
+    EXPECT_LE(difference, bound) << steps << " steps";
+  }
 }
 
 TEST(GpuShader, GpuWaveMethodFollowsWaveFdToFloat32RoundOff) {
