@@ -4,8 +4,8 @@
 #include "scene.hpp"
 
 #include "models/model.hpp"
-#include "render/gpu_wave.hpp"
 #include "report/report.hpp"
+#include "solvers/gpu/gpu_wave.hpp"
 #include "solvers/integrator.hpp"
 
 #include <CLI/CLI.hpp>
@@ -52,7 +52,7 @@ int list_scenes() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  stepwise::render::register_gpu_methods();
+  stepwise::gpu::register_gpu_methods();
   CLI::App app{"stepwise: the numerics behind physically based animation"};
   app.require_subcommand(1);
 

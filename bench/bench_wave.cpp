@@ -12,7 +12,7 @@
 // its rows in cache, so it passes the streaming rate again; it is bitwise the plain loop (test_wave).
 #include "models/height_field.hpp"
 #include "ratio_reporter.hpp"
-#include "render/gpu_wave.hpp"
+#include "solvers/gpu/gpu_wave.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/measure.hpp"
 #include "verification/wave_modes.hpp"
@@ -77,7 +77,7 @@ void BM_gpu_wave(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   static const std::unique_ptr<stepwise::render::Context> context = stepwise::render::make_context(gpu_backend());
   Grids g(n);
-  stepwise::render::GpuWave gpu(*context, n, stepwise::to_float(g.k));
+  stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k));
   gpu.upload(g.z_prev.cast<float>(), g.z.cast<float>());
   for (auto _ : state) {
     gpu.step(steps);

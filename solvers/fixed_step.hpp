@@ -32,9 +32,9 @@ class FixedStepper {
 
 using FixedStepperFactory = std::function<std::unique_ptr<FixedStepper>(const CountedSystem& system)>;
 
-// a fixed-step method of the table whose stepper another library makes (the GPU shader methods, whose GL
-// code is render/'s), registered by that library before any run (render::register_gpu_methods);
-// make_integrator finds it by name
+// a fixed-step method of the table whose stepper another library makes (the GPU shader methods of
+// solvers/gpu/, which need render/'s GL context), registered by that library before any run
+// (gpu::register_gpu_methods); make_integrator finds it by name
 void register_stepper(std::string_view method, FixedStepperFactory factory);
 
 // steps of exactly dt, the last one before each output time shortened to land on it

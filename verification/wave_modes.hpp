@@ -48,7 +48,7 @@ double scheme_energy(const WaveGridView& grid, double dt, const Eigen::VectorXd&
 void run_wave_scheme(const WaveGridView& grid, double dt, long steps, Eigen::VectorXd& z_prev, Eigen::VectorXd& z);
 
 // the same in float32, cell by cell with wave_cell on the coefficients rounded to float: the CPU reference
-// the GPU's shader (render/gpu_wave.hpp) must match
+// the GPU's shader (solvers/gpu/gpu_wave.hpp) must match
 void run_wave_scheme_float32(const WaveGridView& grid, double dt, long steps, Eigen::VectorXf& z_prev, Eigen::VectorXf& z);
 
 // the second seed's scheme in float32, symplectic Euler on (z, v) with the damping explicit:

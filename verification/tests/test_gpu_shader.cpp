@@ -2,7 +2,7 @@
 // fragment pass against the float32 CPU loop step for step, against float64 to show what precision costs,
 // and against the exactly evolved DST modes.
 #include "models/height_field.hpp"
-#include "render/gpu_wave.hpp"
+#include "solvers/gpu/gpu_wave.hpp"
 #include "solvers/integrator.hpp"
 #include "verification/tolerances.hpp"
 #include "verification/wave_modes.hpp"
@@ -51,7 +51,7 @@ struct Shader {
   double dt;
   BasicWaveCoefficients<float> k;
   Eigen::VectorXf z0, z1;
-  render::GpuWave gpu;
+  gpu::GpuWave gpu;
 };
 
 TEST(GpuShader, WavePassMatchesTheFloat32CpuLoopStepForStep) {
@@ -99,7 +99,7 @@ TEST(GpuShader, SymplecticPassMatchesTheFloat32CpuLoopStepForStep) {
   const double dt = 0.9 * symplectic_euler_wave_dt(grid), c2 = grid.c * grid.c / (grid.spacing * grid.spacing);
   const Eigen::VectorXf z0 = random_wave_field(grid.points, 1.0, 7).cast<float>();
   const Eigen::VectorXf v0 = random_wave_field(grid.points, 2 / dt, 8).cast<float>();
-  render::GpuSymplecticWave gpu(context(), grid.points, static_cast<float>(c2), 0.0f, static_cast<float>(dt));
+  gpu::GpuSymplecticWave gpu(context(), grid.points, static_cast<float>(c2), 0.0f, static_cast<float>(dt));
   gpu.upload(z0, v0);
   Eigen::VectorXf z = z0, v = v0, gpu_z, gpu_v;
   double max_z = z0.cwiseAbs().maxCoeff(), max_v = v0.cwiseAbs().maxCoeff();
@@ -123,7 +123,7 @@ TEST(GpuShader, GpuWaveMethodFollowsWaveFdToFloat32RoundOff) {
   // the method as `run` takes it (wave_fd.hpp's start in double, then passes on the device, each level
   // read back): against wave-fd on the standing wave, 400 steps at 0.9 of the limit; the state enters the
   // texture rounded to float (one more rounding, once) and the coefficients too (one more per step)
-  render::register_gpu_methods();
+  gpu::register_gpu_methods();
   const auto model = make_model("standing-wave", {{"size", 33}, {"spacing", 1.0 / 32}, {"mode_m", 2}, {"mode_n", 3}, {"amplitude", 1.0}, {"mu", 0.0}});
   const WaveGridView grid = *model->wave_grid();
   const double dt = 0.9 * wave_stable_dt(grid);

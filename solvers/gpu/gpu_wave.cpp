@@ -8,7 +8,14 @@
 #include <cstdlib>
 #include <vector>
 
-namespace stepwise::render {
+namespace stepwise::gpu {
+
+using render::Backend;
+using render::GlError;
+using render::check_gl;
+using render::link_program;
+using render::make_context;
+using render::parse_backend;
 
 namespace {
 
@@ -281,4 +288,4 @@ void register_gpu_methods() {
   register_stepper("gpu-symplectic-euler", [](const CountedSystem& system) { return std::make_unique<GpuSymplecticStepper>(system); });
 }
 
-}  // namespace stepwise::render
+}  // namespace stepwise::gpu

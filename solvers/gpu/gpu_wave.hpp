@@ -1,4 +1,5 @@
-// The seeds' wave scheme on the GPU (issue 9): the height field's two time levels in one RGBA32F texture
+// The seeds' wave schemes on the GPU (issue 9), as solvers: they step model state, so they live here and
+// not in render/, which only lends them its GL context. the height field's two time levels in one RGBA32F texture
 // of the grid's size (R = z^k, G = z^{k-1}), stepped by a full-screen fragment pass that reads texture A
 // and writes texture B, then the two swap (ping-pong). A pass computes
 //
@@ -10,14 +11,17 @@
 // from directly (its R channel is the surface), so nothing goes back to the CPU between steps.
 #pragma once
 
-#include "context.hpp"
+#include "render/context.hpp"
 #include "solvers/wave_step.hpp"
 
 #include <Eigen/Dense>
 
 #include <string>
 
-namespace stepwise::render {
+namespace stepwise::gpu {
+
+using render::Context;
+using render::Gl;
 
 // a grid's state in the red and green channels of two RGBA32F textures of its size, stepped by a full-screen
 // fragment pass from one into the other, ping-pong; texel (x, y) is cell y * points + x. `pass`: the
@@ -76,4 +80,4 @@ class GpuSymplecticWave final : public GpuGrid {
 // STEPWISE_GPU_BACKEND=egl
 void register_gpu_methods();
 
-}  // namespace stepwise::render
+}  // namespace stepwise::gpu
