@@ -3,6 +3,7 @@
 #include "report/atomic_write.hpp"
 #include "report/csv.hpp"
 #include "scene.hpp"
+#include "solvers/gpu/gpu_wave.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/measure.hpp"
 #include "verification/stability.hpp"
@@ -100,6 +101,10 @@ PreparedRun prepare_run(const RunOptions& o) {
                                  p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
   if (!method_applies(*method, *p.model))
     throw InputError(fmt::format("{}: {} (model {})", o.method ? "--method" : s.where("run.method"), method_requirement(*method, *p.model), s.model));
+  // a GPU method's grid must be a texture its device renders to (asked of the device)
+  if (method->source == "OpenGL shader")
+    if (const std::string problem = gpu::grid_problem(p.model->wave_grid()->points); !problem.empty())
+      throw InputError(fmt::format("{}: {}: {}", o.method ? "--method" : s.where("run.method"), p.method, problem));
 
   const std::string location = o.event_location.value_or(s.event_location.value_or("linear"));
   if (location == "restep") p.control.event_location = EventLocation::restep;

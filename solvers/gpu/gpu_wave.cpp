@@ -90,13 +90,28 @@ void main() {
 
 }  // namespace
 
+std::string texture_problem(const Context& context, int points) {
+  context.make_current();
+  const Gl& gl = context.gl();
+  GLint max_size = 0;
+  gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+  if (points > max_size) return fmt::format("a {} x {} grid passes this GL's largest texture, GL_MAX_TEXTURE_SIZE = {}", points, points, max_size);
+  GLuint texture = 0, framebuffer = 0;
+  gl.CreateTextures(GL_TEXTURE_2D, 1, &texture);
+  gl.TextureStorage2D(texture, 1, GL_RGBA32F, 1, 1);
+  gl.CreateFramebuffers(1, &framebuffer);
+  gl.NamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, texture, 0);
+  const GLenum status = gl.CheckNamedFramebufferStatus(framebuffer, GL_FRAMEBUFFER);
+  gl.DeleteFramebuffers(1, &framebuffer);
+  gl.DeleteTextures(1, &texture);
+  if (status != GL_FRAMEBUFFER_COMPLETE)
+    return fmt::format("this GL cannot render to float textures (RGBA32F): glCheckNamedFramebufferStatus = 0x{:04x}", status);
+  return {};
+}
+
 GpuGrid::GpuGrid(const Context& context, int points, const char* pass, const std::string& name)
     : context_(context), gl_(context.gl()), points_(points) {
-  context_.make_current();
-  GLint max_size = 0;
-  gl_.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
-  if (points > max_size)
-    throw GlError(fmt::format("a {} x {} grid passes this GL's largest texture, GL_MAX_TEXTURE_SIZE = {}", points, points, max_size));
+  if (const std::string problem = texture_problem(context, points); !problem.empty()) throw GlError(problem);
   gl_.CreateTextures(GL_TEXTURE_2D, 2, textures_);
   gl_.CreateFramebuffers(2, framebuffers_);
   for (int t = 0; t < 2; ++t) {
@@ -282,6 +297,14 @@ class GpuSymplecticStepper final : public FixedStepper {
 };
 
 }  // namespace
+
+std::string grid_problem(int points) {
+  try {
+    return texture_problem(*make_context(gpu_backend()), points);
+  } catch (const GlError& e) {
+    return e.what();
+  }
+}
 
 void register_gpu_methods() {
   register_stepper("gpu-wave", [](const CountedSystem& system) { return std::make_unique<GpuWaveStepper>(system); });

@@ -75,6 +75,13 @@ class GpuSymplecticWave final : public GpuGrid {
   void download(Eigen::VectorXf& z, Eigen::VectorXf& v) const { download_channels(z, v); }
 };
 
+// "" or why a points^2 grid cannot be stepped on `context`: past its GL_MAX_TEXTURE_SIZE, or RGBA32F not
+// a render target there; the limit named
+std::string texture_problem(const Context& context, int points);
+// the same asked of a context of the GPU methods' backend (OSMesa, or STEPWISE_GPU_BACKEND=egl), made for
+// the question; a context that cannot be made is the answer
+std::string grid_problem(int points);
+
 // registers the GPU shader methods with the solvers' method table: gpu-wave (GpuWave stepping a wave scene,
 // wave_fd.hpp's start and velocities around it) and gpu-symplectic-euler (GpuSymplecticWave). Each run makes its own context, OSMesa unless
 // STEPWISE_GPU_BACKEND=egl

@@ -142,5 +142,13 @@ TEST(GpuShader, GpuWaveMethodFollowsWaveFdToFloat32RoundOff) {
   EXPECT_LE(difference, bound);
 }
 
+TEST(GpuShader, AGridPastTheLargestTextureIsRefusedNamingTheLimit) {
+  // the check the run makes before a GPU method starts (exit 2): no texture is made for it
+  EXPECT_EQ(gpu::grid_problem(64), "");
+  const std::string problem = gpu::grid_problem(1 << 20);
+  std::cout << problem << '\n';
+  EXPECT_NE(problem.find("GL_MAX_TEXTURE_SIZE = "), std::string::npos) << problem;
+}
+
 }  // namespace
 }  // namespace stepwise
