@@ -24,6 +24,8 @@
 #include <functional>
 #include <numbers>
 
+#include <unistd.h>
+
 namespace stepwise {
 namespace {
 
@@ -384,11 +386,19 @@ struct Command {
   std::string err;
 };
 
+// stderr goes to a file of this process's own: CTest runs the render tests as parallel processes, and one
+// shared name let one test read another's (empty) stderr
 Command stepwise_render(const std::string& args, const std::string& environment = "") {
-  const fs::path err = fs::temp_directory_path() / "stepwise_render_err.txt";
+  static int calls = 0;
+  const fs::path err = fs::temp_directory_path() / fmt::format("stepwise_render_err_{}_{}.txt", getpid(), ++calls);
   const int raw = std::system((environment + " " + STEPWISE_BIN + " render " + args + " 2> " + err.string()).c_str());
-  std::ifstream in(err);
-  return {WEXITSTATUS(raw), std::string(std::istreambuf_iterator<char>(in), {})};
+  std::string text;
+  {
+    std::ifstream in(err);
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  fs::remove(err);
+  return {WEXITSTATUS(raw), text};
 }
 
 TEST(RenderCommand, WritesFramesTheirHashesAndAMovie) {
