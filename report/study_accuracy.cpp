@@ -114,7 +114,9 @@ StudyOutput convergence(const StudyContext& ctx) {
                  "control, so their slope is only reported (nan: every error at round-off). `gpu-wave` computes in float32 "
                  "(the seeds' scheme as a fragment shader): its coefficients, rounded to float, misplace each mode's angle "
                  "theta by about u / theta^2 relatively, u = 6e-8, which grows fourfold per halving of dt, so its error stops "
-                 "falling near 1e-3 on the standing wave and then rises: its slope measures float32, not the scheme.\n\n" +
+                 "falling near 1e-3 on the standing wave and then rises: its slope measures float32, not the scheme. "
+                 "`gpu-symplectic-euler`, also float32, keeps its order: carrying v instead of z^{k-1} adds a small "
+                 "increment to z each step instead of taking the difference of two nearly equal levels.\n\n" +
                  std::string(dense_note);
 
   // one point per (scene, method): its whole sweep of halvings, which the fit needs together
