@@ -19,17 +19,9 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
-#include <cstdio>
-#include <string>
-
 namespace {
 
 constexpr double bytes_per_cell = 24;
-
-// --gpu-backend=osmesa|egl (read before Google Benchmark sees the arguments)
-stepwise::render::Backend gpu_backend_choice = stepwise::render::Backend::osmesa;
-stepwise::render::Backend gpu_backend() { return gpu_backend_choice; }
 constexpr int steps = 8;  // steps per iteration, the blocked kernel's steps per pass
 
 struct Grids {
@@ -71,11 +63,11 @@ void BM_wave_blocked(benchmark::State& state) {
 }
 
 // the same steps as fragment passes on the GL's device (llvmpipe here, its threads LP_NUM_THREADS, by
-// default one per core; a GPU through EGL with --gpu-backend=egl), in float32, finished before the clock
-// stops
+// default one per core; a GPU through EGL with STEPWISE_GPU_BACKEND=egl, as the methods), in float32,
+// finished before the clock stops
 void BM_gpu_wave(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  static const std::unique_ptr<stepwise::render::Context> context = stepwise::render::make_context(gpu_backend());
+  static const std::unique_ptr<stepwise::render::Context> context = stepwise::render::make_context(stepwise::gpu::backend());
   Grids g(n);
   stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k));
   gpu.upload(g.z_prev.cast<float>(), g.z.cast<float>());
@@ -144,18 +136,6 @@ BENCHMARK_CAPTURE(BM_standing_wave, cvode_bdf, std::string("cvode-bdf"))->Unit(b
 }  // namespace
 
 int main(int argc, char** argv) {
-  for (int a = 1; a < argc; ++a)
-    if (const std::string arg = argv[a]; arg.starts_with("--gpu-backend=")) {
-      const auto backend = stepwise::render::parse_backend(arg.substr(14));
-      if (!backend) {
-        std::fprintf(stderr, "bench_wave: --gpu-backend must be osmesa or egl, got '%s'\n", arg.substr(14).c_str());
-        return 2;
-      }
-      gpu_backend_choice = *backend;
-      std::copy(argv + a + 1, argv + argc, argv + a);
-      --argc;
-      --a;
-    }
   using stepwise::bench::RateBound;
   std::vector<RateBound> bounds;
   std::vector<std::pair<std::string, std::string>> pairs{{"BM_standing_wave/cvode_adams", "BM_standing_wave/wave_fd"},

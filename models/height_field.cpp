@@ -28,6 +28,15 @@ Eigen::VectorXd wave_mode(int points, int m, int n) {
   return s;
 }
 
+void check_water_grid(const Params& p, int points, double spacing, bool drop) {
+  if (points < 3) throw BadParameter("size", fmt::format("parameter 'size' must be at least 3 grid points per side, got {}", points));
+  const double side = (points - 1) * spacing;
+  if (drop)
+    for (const char* key : {"drop_x", "drop_y"})
+      if (!(p.at(key) > 0 && p.at(key) < side))
+        throw BadParameter(key, fmt::format("parameter '{}' = {} m puts the drop outside the grid (0, {} m)", key, p.at(key), side));
+}
+
 void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z) {
   for (int i = 1; i < points - 1; ++i)
     for (int j = 1; j < points - 1; ++j) {
@@ -80,14 +89,9 @@ class HeightField final : public Model {
         n_(particle_count(p, "size", p.at("size") * bytes_per_point, "grid points per side")),
         cells_(static_cast<Eigen::Index>(n_) * n_),
         grid_{n_, p.at("spacing"), p.at("c"), p.at("mu")} {
-    if (n_ < 3) throw BadParameter("size", fmt::format("parameter 'size' must be at least 3 grid points per side, got {}", n_));
+    check_water_grid(p, n_, grid_.spacing, scene == Scene::drop);
     const double side = (n_ - 1) * grid_.spacing;
-    if (scene == Scene::drop) {
-      drops_.push_back({0, p.at("drop_x"), p.at("drop_y")});
-      for (const char* key : {"drop_x", "drop_y"})
-        if (!(p.at(key) > 0 && p.at(key) < side))
-          throw BadParameter(key, fmt::format("parameter '{}' = {} m puts the drop outside the grid (0, {} m)", key, p.at(key), side));
-    }
+    if (scene == Scene::drop) drops_.push_back({0, p.at("drop_x"), p.at("drop_y")});
     if (scene != Scene::standing) {
       radius_ = p.at("drop_radius");
       height_ = p.at("drop_height");

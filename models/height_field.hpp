@@ -46,6 +46,10 @@ double laplacian_eigenvalue(int intervals, double spacing, int m, int n);
 // the mode s_mn on size^2 points, row-major (zero on the boundary)
 Eigen::VectorXd wave_mode(int points, int m, int n);
 
+// the checks every water model makes of its grid: at least 3 points per side and, with `drop`, the
+// scene's drop (drop_x, drop_y) strictly inside; BadParameter naming the key
+void check_water_grid(const Params& p, int points, double spacing, bool drop);
+
 // z += h (1 + cos(pi r / R)) / 2 within radius R of (x, y) on the interior of a points^2 grid of spacing d
 // (the water-drop's shape, shared with the shallow water model)
 void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z);

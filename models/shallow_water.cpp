@@ -27,11 +27,7 @@ class ShallowWater final : public Model {
         y_(p.at("drop_y")),
         radius_(p.at("drop_radius")),
         height_(p.at("drop_height")) {
-    if (n_ < 3) throw BadParameter("size", fmt::format("parameter 'size' must be at least 3 grid points per side, got {}", n_));
-    const double side = (n_ - 1) * d_;
-    for (const char* key : {"drop_x", "drop_y"})
-      if (!(p.at(key) > 0 && p.at(key) < side))
-        throw BadParameter(key, fmt::format("parameter '{}' = {} m puts the drop outside the grid (0, {} m)", key, p.at(key), side));
+    check_water_grid(p, n_, d_, true);
     if (!(height_ > -depth_))
       throw BadParameter("drop_height", fmt::format("parameter 'drop_height' = {} m would empty the pool (depth {} m)", height_, depth_));
   }

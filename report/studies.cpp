@@ -95,10 +95,12 @@ StudyOutput wave_adequacy(const StudyContext& context) {
   for (const double r : ratios) labels.push_back(fmt::format("A/H = {:g}", r));
   const auto departures = context.sweep<LinearWaveDeparture>(labels, [&](size_t k) { return linear_wave_departure(-ratios[k]); });
   Table table{{"amplitude_over_depth", "relative_departure", "relative_max_departure", "departure_per_amplitude"}, {}};
-  std::string md = "The height field's wave equation is the shallow water equations linearised (c^2 = g H). Both are "
-                   "run from the same dent of depth A in water of depth H = 0.1 m (33 x 33 points, d = 0.02 m, a raised "
-                   "cosine of radius 0.1 m, mu = 0.5 /s) by rk4 at dt = 2 ms to t = 0.3 s, as the ring has crossed most of "
-                   "the pool; the table gives the difference of the surfaces relative to the wave equation's. It grows "
+  const LinearWaveSetup setup;
+  std::string md = fmt::format("The height field's wave equation is the shallow water equations linearised (c^2 = g H). Both are "
+                               "run from the same dent of depth A in water of depth H = {} m ({} x {} points, d = {} m, a raised "
+                               "cosine of radius {} m, mu = {} /s) by rk4 at dt = {} s to t = {} s, as the ring has crossed most of "
+                               "the pool; ", setup.depth, setup.size, setup.size, setup.spacing, setup.radius, setup.mu, setup.dt, setup.t_end);
+  md += "the table gives the difference of the surfaces relative to the wave equation's. It grows "
                    "in proportion to A / H (the ratio in the last column holds), so the wave equation is within 1% of "
                    "shallow water below A / H = " + fmt::format("{:.3f}", 0.01 * ratios[0] / departures[0].relative) +
                    " and within 10% below " + fmt::format("{:.2f}", 0.1 * ratios[0] / departures[0].relative) +

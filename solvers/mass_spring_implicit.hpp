@@ -15,8 +15,8 @@
 //    many iterations as a refactorisation costs (both timed as they run: the ratio is 1.4 per flop at
 //    32 x 32 and 8 at 64 x 64, so no flop count predicts it); past that the factor is refreshed and the
 //    solve done with it. A fresh factor's first reuse is probed for 3 iterations, whose convergence rate
-//    predicts whether the limit will do; a factor that would not pay is given up there. The timing decides only when to refactor: every answer meets the same residual,
-//    but two runs may differ below it. Where the matrix changes slowly (a hanging sheet) one factor serves many steps at a
+//    predicts whether the limit will do; a factor that would not pay is given up there. The timing
+//    decides only when to refactor: every answer meets the same residual, but two runs may differ below it. Where the matrix changes slowly (a hanging sheet) one factor serves many steps at a
 //    few triangular solves each; where it does not (a flag flapping in a gusting wind: M is small against
 //    h^2 K, so a spring turning by h |dv| / l changes the matrix by O(M) in its soft directions) the
 //    stepper finds the kept factor never pays and refactorises, trying again after runs that double.

@@ -14,10 +14,13 @@ bool ThreeLevelWaveStepper::step(double t, double h, const Eigen::VectorXd& y, E
   const double* v = z + cells_;
   double* z1 = y_next.data();
   double* v1 = z1 + cells_;
+  // f(cell) for every cell on the grid's boundary
+  const auto on_boundary = [this](auto&& f) {
+    for (int b = 0; b < n_; ++b)
+      for (const Eigen::Index cell : {Eigen::Index(b), Eigen::Index(n_ - 1) * n_ + b, Eigen::Index(b) * n_, Eigen::Index(b) * n_ + n_ - 1}) f(cell);
+  };
   // the boundary holds still (y_next may hold anything: only the interior is written below)
-  for (int b = 0; b < n_; ++b)
-    for (const Eigen::Index cell : {Eigen::Index(b), Eigen::Index(n_ - 1) * n_ + b, Eigen::Index(b) * n_, Eigen::Index(b) * n_ + n_ - 1})
-      z1[cell] = v1[cell] = 0;
+  on_boundary([&](Eigen::Index cell) { z1[cell] = v1[cell] = 0; });
   // a step the loop shortened by rounding alone to land on an output time (1e-9 dt, its snap) continues
   const bool continuing = history_ && std::abs(h - h_) <= 1e-9 * h_ && std::abs(t - t_last_) <= 1e-9 * h_ && y.data() == last_;
   if (continuing) {
@@ -43,9 +46,7 @@ bool ThreeLevelWaveStepper::step(double t, double h, const Eigen::VectorXd& y, E
     for (int i = 1; i < n_ - 1; ++i)
       for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j) v1[j] = (v1[j] + (h / 2) * laplacian(z1, j)) / (1 + grid_.mu * h / 2);
     // the boundary of z^{k-1}, as of z: held still
-    for (int b = 0; b < n_; ++b)
-      for (const Eigen::Index cell : {Eigen::Index(b), Eigen::Index(n_ - 1) * n_ + b, Eigen::Index(b) * n_, Eigen::Index(b) * n_ + n_ - 1})
-        z_prev_[cell] = z[cell];
+    on_boundary([&](Eigen::Index cell) { z_prev_[cell] = z[cell]; });
     h_ = h;
     k_ = wave_coefficients(grid_, h);
     fresh_ = true;

@@ -26,20 +26,19 @@ double small_angle_max_amplitude(double phase_tolerance, double n_periods) {
   return lo;
 }
 
-LinearWaveDeparture linear_wave_departure(double amplitude_over_depth, double t_end) {
-  constexpr int size = 33;
-  constexpr double spacing = 0.02, depth = 0.1, g = 9.81, dt = 2e-3;
-  const double middle = (size - 1) * spacing / 2;
-  const Params drop{{"size", size}, {"spacing", spacing}, {"mu", 0.5}, {"drop_x", middle}, {"drop_y", middle},
-                    {"drop_radius", 0.1}, {"drop_height", amplitude_over_depth * depth}};
+LinearWaveDeparture linear_wave_departure(double amplitude_over_depth, const LinearWaveSetup& setup) {
+  const double middle = (setup.size - 1) * setup.spacing / 2;
+  const Params drop{{"size", setup.size}, {"spacing", setup.spacing}, {"mu", setup.mu}, {"drop_x", middle}, {"drop_y", middle},
+                    {"drop_radius", setup.radius}, {"drop_height", amplitude_over_depth * setup.depth}};
   Params wave = drop, shallow = drop;
-  wave["c"] = std::sqrt(g * depth);
-  shallow["depth"] = depth;
-  shallow["g"] = g;
-  const std::vector<double> t_out{t_end};
+  wave["c"] = std::sqrt(setup.g * setup.depth);
+  shallow["depth"] = setup.depth;
+  shallow["g"] = setup.g;
+  const std::vector<double> t_out{setup.t_end};
+  const Eigen::Index cells = static_cast<Eigen::Index>(setup.size) * setup.size;
   const auto run = [&](const char* name, const Params& p) {
     const auto model = make_model(name, p);
-    return make_integrator("rk4", StepControl::fixed(dt))->integrate(*model, 0, model->initial_state(), t_out).y_stop.head(size * size).eval();
+    return make_integrator("rk4", StepControl::fixed(setup.dt))->integrate(*model, 0, model->initial_state(), t_out).y_stop.head(cells).eval();
   };
   LinearWaveDeparture d;
   d.wave = run("water-drop", wave);

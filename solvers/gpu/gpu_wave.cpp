@@ -210,15 +210,14 @@ GpuSymplecticWave::GpuSymplecticWave(const Context& context, int points, float c
 
 void GpuSymplecticWave::set_step(float dt) { uniform("dt", dt); }
 
-namespace {
-
-// OSMesa, unless STEPWISE_GPU_BACKEND says egl
-Backend gpu_backend() {
+Backend backend() {
   const char* name = std::getenv("STEPWISE_GPU_BACKEND");
   if (!name || !*name) return Backend::osmesa;
   if (const auto b = parse_backend(name)) return *b;
   throw GlError(fmt::format("STEPWISE_GPU_BACKEND must be osmesa or egl, got '{}'", name));
 }
+
+namespace {
 
 // gpu-wave: the levels live on the GL device between steps; each step is one pass, and the new level is
 // read back for the state the run samples (z^{k+1}, and the velocity from it on the CPU)
@@ -231,7 +230,7 @@ class GpuWaveStepper final : public ThreeLevelWaveStepper {
     const int n = grid().points;
     const Eigen::Index cells = static_cast<Eigen::Index>(n) * n;
     try {
-      if (!context_) context_ = make_context(gpu_backend());
+      if (!context_) context_ = make_context(backend());
       if (!gpu_) gpu_ = std::make_unique<GpuWave>(*context_, n, to_float(k));
       if (fresh) {
         gpu_->set_coefficients(to_float(k));
@@ -261,7 +260,7 @@ class GpuSymplecticStepper final : public FixedStepper {
     ++system_.stats().rhs_evals;
     const bool continuing = gpu_ && h == h_ && std::abs(t - t_last_) <= 1e-9 * h && y.data() == last_;
     try {
-      if (!context_) context_ = make_context(gpu_backend());
+      if (!context_) context_ = make_context(backend());
       if (!gpu_) {
         const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
         gpu_ = std::make_unique<GpuSymplecticWave>(*context_, grid_.points, static_cast<float>(c2), static_cast<float>(grid_.mu), static_cast<float>(h));
@@ -300,7 +299,7 @@ class GpuSymplecticStepper final : public FixedStepper {
 
 std::string grid_problem(int points) {
   try {
-    return texture_problem(*make_context(gpu_backend()), points);
+    return texture_problem(*make_context(backend()), points);
   } catch (const GlError& e) {
     return e.what();
   }

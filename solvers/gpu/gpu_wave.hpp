@@ -1,14 +1,15 @@
 // The seeds' wave schemes on the GPU (issue 9), as solvers: they step model state, so they live here and
-// not in render/, which only lends them its GL context. the height field's two time levels in one RGBA32F texture
-// of the grid's size (R = z^k, G = z^{k-1}), stepped by a full-screen fragment pass that reads texture A
-// and writes texture B, then the two swap (ping-pong). A pass computes
+// not in render/, which only lends them its GL context. The three-level scheme keeps the height field's
+// two time levels in one RGBA32F texture of the grid's size (R = z^k, G = z^{k-1}), stepped by a
+// full-screen fragment pass that reads texture A and writes texture B, then the two swap (ping-pong). A
+// pass computes
 //
 //   z^{k+1} = self z^k + previous z^{k-1} + neighbours ((z_down + z_up) + (z_left + z_right))
 //
 // in float32, the operations of solvers/wave_step.hpp's wave_cell in the same order and marked `precise`
 // (no fused multiply-adds, no reassociation), so a conforming GPU gives the bits of the float32 CPU loop
-// (verification/wave_modes.hpp); the boundary holds its values, as on the CPU. The texture can be drawn
-// from directly (its R channel is the surface), so nothing goes back to the CPU between steps.
+// (verification/wave_modes.hpp); the boundary holds its values, as on the CPU. Between steps that follow
+// one another the state stays on the device; the methods read each new level back for the run's samples.
 #pragma once
 
 #include "render/context.hpp"
@@ -38,7 +39,6 @@ class GpuGrid {
   void step(long count);
   // glFinish: the passes issued are done (for timing)
   void finish() const;
-  GLuint texture() const { return textures_[current_]; }
 
  protected:
   // the two channels, points^2 each, row-major (the CPU grids' layout)
@@ -50,8 +50,8 @@ class GpuGrid {
   const Context& context_;
   const Gl& gl_;
   int points_;
-  GLuint textures_[2] = {0, 0}, framebuffers_[2] = {0, 0};
-  GLuint program_ = 0, vertex_array_ = 0;
+  unsigned textures_[2] = {0, 0}, framebuffers_[2] = {0, 0};
+  unsigned program_ = 0, vertex_array_ = 0;
   int current_ = 0;  // the texture holding the state
 };
 
@@ -75,6 +75,10 @@ class GpuSymplecticWave final : public GpuGrid {
   void download(Eigen::VectorXf& z, Eigen::VectorXf& v) const { download_channels(z, v); }
 };
 
+// the backend the GPU methods make their contexts with: OSMesa, unless STEPWISE_GPU_BACKEND=egl; GlError
+// for another value
+render::Backend backend();
+
 // "" or why a points^2 grid cannot be stepped on `context`: past its GL_MAX_TEXTURE_SIZE, or RGBA32F not
 // a render target there; the limit named
 std::string texture_problem(const Context& context, int points);
@@ -83,8 +87,8 @@ std::string texture_problem(const Context& context, int points);
 std::string grid_problem(int points);
 
 // registers the GPU shader methods with the solvers' method table: gpu-wave (GpuWave stepping a wave scene,
-// wave_fd.hpp's start and velocities around it) and gpu-symplectic-euler (GpuSymplecticWave). Each run makes its own context, OSMesa unless
-// STEPWISE_GPU_BACKEND=egl
+// wave_fd.hpp's start and velocities around it) and gpu-symplectic-euler (GpuSymplecticWave). Each run
+// makes its own context, OSMesa unless STEPWISE_GPU_BACKEND=egl
 void register_gpu_methods();
 
 }  // namespace stepwise::gpu
