@@ -1,7 +1,6 @@
 #include "height_field.hpp"
 
 #include "particle_common.hpp"
-#include "solvers/wave_step.hpp"
 
 #include <fmt/format.h>
 

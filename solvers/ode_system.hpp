@@ -7,6 +7,7 @@
 #include <Eigen/SparseCore>
 
 #include <array>
+#include <cstddef>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -31,6 +32,14 @@ struct WaveGridView {
   double c = 0;         // wave speed (m/s)
   double mu = 0;        // damping (1/s)
 };
+
+// the four neighbours of cell j of such a row-major grid with rows `n` apart, summed in one fixed order: the
+// order every wave stencil keeps (the model's acceleration, the schemes' kernels, their float32 references),
+// so that they agree to the bit where they compute the same thing
+template <class T>
+inline T neighbour_sum(const T* u, std::ptrdiff_t j, std::ptrdiff_t n) {
+  return (u[j - n] + u[j + n]) + (u[j - 1] + u[j + 1]);
+}
 
 // y = (x, v, q, w) of one rigid body, 13 entries: position (3, m), velocity (3, m/s), orientation as a
 // unit quaternion (w, x, y, z; body to world) and the angular velocity in the body's principal frame (3,

@@ -55,12 +55,6 @@ double symplectic_euler_wave_dt(const WaveGridView& grid);
 // gpu-symplectic-euler), else none
 std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid);
 
-// the four neighbours of cell j of a row-major grid with rows `n` apart, summed in one fixed order
-template <class T>
-inline T neighbour_sum(const T* u, std::ptrdiff_t j, std::ptrdiff_t n) {
-  return (u[j - n] + u[j + n]) + (u[j - 1] + u[j + 1]);
-}
-
 // one cell of the update: the one formula every loop shares (the kernels below, the wave-fd stepper, the
 // float32 reference of the GPU's shader, whose GLSL spells the same operations in the same order)
 template <class T>
