@@ -5,7 +5,7 @@
 
 #include "models/model.hpp"
 #include "report/report.hpp"
-#include "solvers/gpu/gpu_wave.hpp"
+#include "solvers/gpu/gpu_grid.hpp"
 #include "solvers/integrator.hpp"
 
 #include <CLI/CLI.hpp>

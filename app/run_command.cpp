@@ -3,7 +3,7 @@
 #include "report/atomic_write.hpp"
 #include "report/csv.hpp"
 #include "scene.hpp"
-#include "solvers/gpu/gpu_wave.hpp"
+#include "solvers/gpu/gpu_grid.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/measure.hpp"
 #include "verification/stability.hpp"
@@ -103,7 +103,7 @@ PreparedRun prepare_run(const RunOptions& o) {
     throw InputError(fmt::format("{}: {} (model {})", o.method ? "--method" : s.where("run.method"), method_requirement(*method, *p.model), s.model));
   // a GPU method's grid must be a texture its device renders to (asked of the device)
   if (method->source == "OpenGL shader")
-    if (const std::string problem = gpu::grid_problem(p.model->wave_grid()->points); !problem.empty())
+    if (const std::string problem = gpu::device_problem(*p.model); !problem.empty())
       throw InputError(fmt::format("{}: {}: {}", o.method ? "--method" : s.where("run.method"), p.method, problem));
 
   const std::string location = o.event_location.value_or(s.event_location.value_or("linear"));

@@ -164,6 +164,11 @@ class Cloth final : public Model {
       }
     view_.nodes = free_;
     view_.mass.assign(free_, node_mass_);
+    grid_ = ClothGridView{rows_, columns_, rest_, free_index_, dx, dz,
+                          {p.at("stiffness"), p.at("shear_stiffness"), p.at("bend_stiffness")},
+                          {p.at("structural") == 1, p.at("shear") == 1, p.at("bend") == 1}, gamma, node_mass_, drag_, g_, wind_, wind_k_, gust_,
+                          gust_frequency_, pick_row >= 0 ? pick_row * columns_ + pick_column : -1, pick_force_, sphere_radius_, sphere_centre_,
+                          ground_, ground_y_, friction_};
     auto pairs = spring_pairs(view_.springs);
     if (wind_k_ > 0)
       for (const auto& tri : triangles_)
@@ -207,6 +212,7 @@ class Cloth final : public Model {
   bool autonomous() const override { return gust_ == 0 || wind_k_ == 0; }
   std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * free_}; }
   const MassSpringView* mass_spring() const override { return &view_; }
+  const ClothGridView* cloth_grid() const override { return &grid_; }
   std::vector<std::string> state_names() const override { return particle_state_names(free_); }
   Eigen::VectorXd initial_state() const override {
     Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
@@ -365,6 +371,7 @@ class Cloth final : public Model {
   int picked_ = -1;
   std::vector<std::array<int, 3>> triangles_;  // grid nodes
   MassSpringView view_;
+  ClothGridView grid_;
   std::unique_ptr<BlockPattern> pattern_;
   std::vector<std::array<BlockPattern::Slot, 4>> spring_slots_;
   std::vector<BlockPattern::Slot> diagonal_slots_;

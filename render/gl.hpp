@@ -39,6 +39,9 @@ namespace stepwise::render {
   X(PFNGLGETUNIFORMLOCATIONPROC, GetUniformLocation)                                                    \
   X(PFNGLUNIFORM1IPROC, Uniform1i)                                                                      \
   X(PFNGLUNIFORM1FPROC, Uniform1f)                                                                      \
+  X(PFNGLUNIFORM1FVPROC, Uniform1fv)                                                                    \
+  X(PFNGLUNIFORM1IVPROC, Uniform1iv)                                                                    \
+  X(PFNGLUNIFORM2IPROC, Uniform2i)                                                                      \
   X(PFNGLUNIFORM2FPROC, Uniform2f)                                                                      \
   X(PFNGLUNIFORM3FVPROC, Uniform3fv)                                                                    \
   X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                                                        \
@@ -71,6 +74,7 @@ namespace stepwise::render {
   X(PFNGLNAMEDFRAMEBUFFERRENDERBUFFERPROC, NamedFramebufferRenderbuffer)                                \
   X(PFNGLCHECKNAMEDFRAMEBUFFERSTATUSPROC, CheckNamedFramebufferStatus)                                  \
   X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                                                          \
+  X(PFNGLNAMEDFRAMEBUFFERDRAWBUFFERSPROC, NamedFramebufferDrawBuffers)                                  \
   X(PFNGLCLEARNAMEDFRAMEBUFFERFVPROC, ClearNamedFramebufferfv)                                          \
   X(PFNGLCLEARNAMEDFRAMEBUFFERFIPROC, ClearNamedFramebufferfi)
 

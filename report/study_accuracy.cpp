@@ -326,7 +326,13 @@ StudyOutput work_precision(const StudyContext& ctx) {
                  fmt::format("Error at t_end (max norm against the exact solution; for the cloth, against {} at rtol {:.0e}) against cost.", reference_method, reference_rtol) +
                  " Fixed-step methods are swept over dt halvings, "
                  "adaptive ones over rtol (atol = 1e-3 rtol). CPU time is the minimum over repeated runs after a discarded warm-up. "
-                 "Failed or diverged points are drawn as crosses at the top of each diagram and stay in the CSV with their status.\n\n" +
+                 "Failed or diverged points are drawn as crosses at the top of each diagram and stay in the CSV with their status. "
+                 "The GPU methods (`gpu-wave`, `gpu-symplectic-euler`, `gpu-cloth`) run their passes on llvmpipe in the calling thread, so "
+                 "their CPU time is their whole cost: a pass and a read-back per step, which on these small grids costs more than the "
+                 "CPU's step. They compute in float32, which sets a floor: `gpu-wave`'s is its rounded coefficients (the convergence "
+                 "section), and on the 6 x 6 sheet `gpu-cloth`'s error rises as dt falls, since an increment h v below u |x| "
+                 "(u = 6e-8) is rounded away and the roundings pile up over more steps: float32 explicit cloth wants steps near its "
+                 "stability limit.\n\n" +
                  std::string(dense_note) + sections;
   out.tables = {{"work_precision", std::move(points)}, {"work_precision_pareto", std::move(fronts)}, {"recommendations", std::move(advice)}};
   return out;

@@ -54,6 +54,9 @@ constexpr std::array method_table{
                "through EGL), fixed step", "2", "OpenGL shader", 2, 2, true, false, false, false, false, true},
     MethodInfo{"gpu-symplectic-euler", "the second seed's scheme, symplectic Euler with the damping explicit, as a fragment-shader pass on "
                "float32 textures (OpenGL), fixed step", "1", "OpenGL shader", 1, 1, true, false, false, false, false, true},
+    MethodInfo{"gpu-cloth", "the explicit mass-spring cloth (twelve springs a node, pins, gravity, wind, pick force, sphere and ground) "
+               "as symplectic Euler in a fragment-shader pass on float32 textures (OpenGL), fixed step", "1", "OpenGL shader", 1, 1, true, false,
+               false, false, false, false, false, false, false, true},
     MethodInfo{"rigid-splitting", "the free rigid body split into exact rotations about its principal axes, Strang-composed (symplectic, fixed step)",
                "2", "hand-written", 2, 2, true, false, false, false, false, false, true},
     MethodInfo{"sequential-impulses", "rigid bodies in contact: kick, contact impulses by projected Gauss-Seidel (restitution, Coulomb "
@@ -79,6 +82,7 @@ bool method_applies(const MethodInfo& method, const OdeSystem& system) {
   if (method.needs_free_rigid_body && !system.free_rigid_body()) return false;
   if (method.resolves_contacts != system.contact_bodies().has_value()) return false;
   if (method.needs_mass_spring && !system.mass_spring()) return false;
+  if (method.needs_cloth_grid && !system.cloth_grid()) return false;
   return true;
 }
 
@@ -89,6 +93,7 @@ std::string method_requirement(const MethodInfo& method, const OdeSystem& system
   if (method.needs_wave_grid) return fmt::format("{} needs a wave equation on a grid (a water scene)", method.name);
   if (method.needs_free_rigid_body)
     return fmt::format("{} needs a torque-free rigid body (a rigid-body scene without drag or torque)", method.name);
+  if (method.needs_cloth_grid) return fmt::format("{} needs a cloth on a grid (a cloth scene)", method.name);
   if (method.needs_mass_spring) return fmt::format("{} needs a mass-spring system (a cloth or chain scene)", method.name);
   if (method.needs_second_order) return fmt::format("{} needs a second-order model y = (x, v)", method.name);
   return {};

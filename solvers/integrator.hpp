@@ -109,6 +109,7 @@ struct MethodInfo {
   bool needs_free_rigid_body = false;  // only for a torque-free rigid body (OdeSystem::free_rigid_body)
   bool resolves_contacts = false;   // steps rigid bodies in contact (OdeSystem::contact_bodies), and only them
   bool needs_mass_spring = false;   // only for a mass-spring system (OdeSystem::mass_spring)
+  bool needs_cloth_grid = false;    // only for a cloth on a grid (OdeSystem::cloth_grid)
 };
 
 std::span<const MethodInfo> methods();

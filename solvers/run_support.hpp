@@ -41,6 +41,7 @@ class CountedSystem final : public OdeSystem {
   }
   std::optional<WaveGridView> wave_grid() const override { return inner_.wave_grid(); }
   const MassSpringView* mass_spring() const override { return inner_.mass_spring(); }
+  const ClothGridView* cloth_grid() const override { return inner_.cloth_grid(); }
   void force_jacobians(double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                        Eigen::SparseMatrix<double>& dfdv) const override {
     ++stats_.jac_evals;

@@ -87,7 +87,7 @@ std::optional<double> mass_spring_stable_dt(std::string_view method, const Stiff
   const double w = mode.omega, a = mode.damping;
   // symplectic Euler on x'' = -w^2 x - 2 a x': amplification [[1 - h^2 w^2, h (1 - 2 h a)], [-h w^2, 1 - 2 h a]],
   // determinant 1 - 2 h a, trace 2 - h^2 w^2 - 2 h a; |trace| <= 1 + determinant gives h^2 w^2 <= 4 - 4 h a
-  if (method == "symplectic-euler") return 2 * (std::sqrt(a * a + w * w) - a) / (w * w);
+  if (method == "symplectic-euler" || method == "gpu-cloth") return 2 * (std::sqrt(a * a + w * w) - a) / (w * w);
   // explicit Euler and rk4: |R(h lambda)| <= 1 at lambda = -a + i sqrt(w^2 - a^2), |lambda| = w
   const std::complex<double> lambda(-a, std::sqrt(std::max(w * w - a * a, 0.0)));
   if (method == "euler") return 2 * a / (w * w);

@@ -182,12 +182,12 @@ inline constexpr double float32_wave_roundings = 7;
 inline constexpr double float32_unit_roundoff = 0x1p-24;
 // k steps of a new error of at most delta per cell, carried as above: k min(k + 1, 1 / sin theta_min)
 // sqrt(cells) delta
-inline double float32_carried(long steps, double sin_theta_min, double cells, double delta) {
+inline double carried_roundoff(long steps, double sin_theta_min, double cells, double delta) {
   const double growth = std::min(static_cast<double>(steps) + 1, 1 / sin_theta_min);
   return static_cast<double>(steps) * growth * std::sqrt(cells) * delta;
 }
 inline double float32_wave_bound(long steps, double sin_theta_min, double coefficient_sum, double max_abs_z, double cells) {
-  return float32_carried(steps, sin_theta_min, cells, float32_wave_roundings * float32_unit_roundoff * coefficient_sum * max_abs_z);
+  return carried_roundoff(steps, sin_theta_min, cells, float32_wave_roundings * float32_unit_roundoff * coefficient_sum * max_abs_z);
 }
 
 // the second seed's symplectic Euler in float32 (GPU pass against the CPU loop): eliminating v, its z obeys
@@ -197,7 +197,40 @@ inline double float32_wave_bound(long steps, double sin_theta_min, double coeffi
 // carried as there
 inline double float32_symplectic_wave_bound(long steps, double sin_theta_min, double h, double c2, double max_abs_z, double max_abs_v, double cells) {
   const double delta = float32_unit_roundoff * (2 * (max_abs_z + h * max_abs_v) + 6 * h * (max_abs_v + 8 * h * c2 * max_abs_z));
-  return float32_carried(steps, sin_theta_min, cells, delta);
+  return carried_roundoff(steps, sin_theta_min, cells, delta);
+}
+
+// the cloth's symplectic Euler step node by node (solvers/cloth_grid.hpp; gpu-cloth's pass), in a precision of
+// unit round-off u, against the same step in exact arithmetic (or a conforming GPU's reordering of it).
+// Per free node and step the roundings are: at most 40 in the acceleration (a spring's force takes 18: the
+// span, its dot product and square root, the unit vector, the elongation, the closing speed's dot product,
+// the products and sums of (c e + gamma de/dt) u; then up to 18 sums of the node's terms and 4 for the mass,
+// drag and gravity), each at most u times the acceleration's scale
+//   A = (12 c_max (L_max + l_max) + 12 gamma 2 V + 6 k_w (|w| + V) L_max^2 / 2 + |pick|) / m + drag V + g
+// (every term's magnitude bounded: springs at most L_max long, velocities at most V), which reach x through
+// h^2; 2 in v1 = v + h a (at most u (V + h A) each, reaching x through h) and 2 in x1 = x + h v1
+// (u (X + h V)). One step from the same state therefore differs by at most
+//   delta = u (2 (X + h V) + 2 h (V + h A) + 40 h^2 A) per node, sqrt(nodes) delta in the positions' 2-norm.
+inline constexpr double cloth_acceleration_roundings = 40;
+inline constexpr double float64_unit_roundoff = 0x1p-53;
+struct ClothRoundoffScale {
+  double max_x = 0, max_v = 0;  // X, V: the largest |x| and |v| component over the run (m, m/s)
+  double acceleration = 0;      // A above (m/s^2)
+};
+inline double cloth_step_roundoff(double unit, double h, double nodes, const ClothRoundoffScale& s) {
+  return unit * (2 * (s.max_x + h * s.max_v) + 2 * h * (s.max_v + h * s.acceleration) + cloth_acceleration_roundings * h * h * s.acceleration) *
+         std::sqrt(nodes);
+}
+// k steps: each step's new error carried by symplectic Euler's linearised propagator, whose powers map a
+// position error by at most 1 / cos(theta / 2) (theta a mode's angle; <= 1 / cos(pi / 4) for h omega <= sqrt 2)
+// and a velocity error into x by at most k h: with the step's errors split so (the x roundings and the rest),
+// at most k sqrt 2 d_x + k (k + 1) / 2 (d - d_x); d_x = 2 u (X + h V) sqrt(nodes), d = cloth_step_roundoff. A
+// linearised bound, for h omega <= sqrt 2 (the tests run at half the limit, h omega = 1): it holds while the
+// motion stays near-linear over the k steps (a buckling sheet can amplify errors faster), which the tests'
+// horizons keep
+inline double cloth_steps_bound(double unit, long steps, double h, double nodes, const ClothRoundoffScale& s) {
+  const double k = static_cast<double>(steps), d = cloth_step_roundoff(unit, h, nodes, s), d_x = 2 * unit * (s.max_x + h * s.max_v) * std::sqrt(nodes);
+  return k * std::sqrt(2.0) * d_x + k * (k + 1) / 2 * (d - d_x);
 }
 
 // CVODE's method of lines on a mode of frequency w over t: a tolerance-proportional code's global error is

@@ -5,27 +5,13 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <vector>
 
 namespace stepwise::gpu {
 
-using render::Backend;
 using render::GlError;
-using render::check_gl;
-using render::link_program;
-using render::make_context;
-using render::parse_backend;
 
 namespace {
-
-// a triangle covering the viewport, from the vertex index alone
-const char* const full_screen = R"(#version 450
-void main() {
-  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
-  gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
-}
-)";
 
 // what every grid pass shares: the state, its output, whether a texel is on the grid's boundary, and the
 // sum of a texel's four neighbours in neighbour_sum's order. Texel (x, y) is cell i * points + j with
@@ -90,99 +76,22 @@ void main() {
 
 }  // namespace
 
-std::string texture_problem(const Context& context, int points) {
-  context.make_current();
-  const Gl& gl = context.gl();
-  GLint max_size = 0;
-  gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
-  if (points > max_size) return fmt::format("a {} x {} grid passes this GL's largest texture, GL_MAX_TEXTURE_SIZE = {}", points, points, max_size);
-  GLuint texture = 0, framebuffer = 0;
-  gl.CreateTextures(GL_TEXTURE_2D, 1, &texture);
-  gl.TextureStorage2D(texture, 1, GL_RGBA32F, 1, 1);
-  gl.CreateFramebuffers(1, &framebuffer);
-  gl.NamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, texture, 0);
-  const GLenum status = gl.CheckNamedFramebufferStatus(framebuffer, GL_FRAMEBUFFER);
-  gl.DeleteFramebuffers(1, &framebuffer);
-  gl.DeleteTextures(1, &texture);
-  if (status != GL_FRAMEBUFFER_COMPLETE)
-    return fmt::format("this GL cannot render to float textures (RGBA32F): glCheckNamedFramebufferStatus = 0x{:04x}", status);
-  return {};
-}
+GpuWaveGrid::GpuWaveGrid(const Context& context, int points, const char* pass, const std::string& name)
+    : GpuGrid(context, points, points, 1, std::string(grid_pass) + pass, name) {}
 
-GpuGrid::GpuGrid(const Context& context, int points, const char* pass, const std::string& name)
-    : context_(context), gl_(context.gl()), points_(points) {
-  if (const std::string problem = texture_problem(context, points); !problem.empty()) throw GlError(problem);
-  gl_.CreateTextures(GL_TEXTURE_2D, 2, textures_);
-  gl_.CreateFramebuffers(2, framebuffers_);
-  for (int t = 0; t < 2; ++t) {
-    gl_.TextureStorage2D(textures_[t], 1, GL_RGBA32F, points, points);
-    // one level and texelFetch: no filtering, and a texture complete without mipmaps
-    gl_.TextureParameteri(textures_[t], GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    gl_.TextureParameteri(textures_[t], GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    gl_.NamedFramebufferTexture(framebuffers_[t], GL_COLOR_ATTACHMENT0, textures_[t], 0);
-    if (const GLenum status = gl_.CheckNamedFramebufferStatus(framebuffers_[t], GL_FRAMEBUFFER); status != GL_FRAMEBUFFER_COMPLETE)
-      throw GlError(fmt::format("this context cannot render to float textures: glCheckNamedFramebufferStatus (RGBA32F {}^2) = 0x{:04x}", points, status));
-  }
-  program_ = link_program(gl_, full_screen, nullptr, (std::string(grid_pass) + pass).c_str(), name);
-  gl_.CreateVertexArrays(1, &vertex_array_);
-  check_gl(gl_, fmt::format("the {}'s textures and program", name));
-}
-
-GpuGrid::~GpuGrid() {
-  if (!context_.try_make_current()) return;
-  gl_.DeleteVertexArrays(1, &vertex_array_);
-  gl_.DeleteProgram(program_);
-  gl_.DeleteFramebuffers(2, framebuffers_);
-  gl_.DeleteTextures(2, textures_);
-}
-
-void GpuGrid::uniform(const char* name, float value) const {
-  context_.make_current();
-  gl_.UseProgram(program_);
-  gl_.Uniform1f(gl_.GetUniformLocation(program_, name), value);
-}
-
-void GpuGrid::upload_channels(const Eigen::VectorXf& red, const Eigen::VectorXf& green) {
-  context_.make_current();
+void GpuWaveGrid::upload_channels(const Eigen::VectorXf& red, const Eigen::VectorXf& green) {
   std::vector<float> texels(4 * static_cast<size_t>(red.size()));
   for (Eigen::Index c = 0; c < red.size(); ++c) {
     texels[4 * c] = red[c];
     texels[4 * c + 1] = green[c];
   }
-  gl_.TextureSubImage2D(textures_[current_], 0, 0, 0, points_, points_, GL_RGBA, GL_FLOAT, texels.data());
-  check_gl(gl_, "glTextureSubImage2D (a grid's state)");
+  upload_plane(0, texels);
 }
 
-void GpuGrid::step(long count) {
-  context_.make_current();
-  gl_.Disable(GL_BLEND);
-  gl_.Disable(GL_DEPTH_TEST);
-  gl_.Disable(GL_CULL_FACE);
-  gl_.Viewport(0, 0, points_, points_);
-  gl_.UseProgram(program_);
-  gl_.BindVertexArray(vertex_array_);
-  for (long s = 0; s < count; ++s) {
-    gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffers_[1 - current_]);
-    gl_.BindTextureUnit(0, textures_[current_]);
-    gl_.DrawArrays(GL_TRIANGLES, 0, 3);
-    current_ = 1 - current_;
-  }
-  gl_.BindTextureUnit(0, 0);
-  gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
-  check_gl(gl_, "a grid pass (glDrawArrays)");
-}
-
-void GpuGrid::finish() const {
-  context_.make_current();
-  gl_.Finish();
-}
-
-void GpuGrid::download_channels(Eigen::VectorXf& red, Eigen::VectorXf& green) const {
-  context_.make_current();
-  const Eigen::Index cells = static_cast<Eigen::Index>(points_) * points_;
-  std::vector<float> texels(4 * static_cast<size_t>(cells));
-  gl_.GetTextureImage(textures_[current_], 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(texels.size() * sizeof(float)), texels.data());
-  check_gl(gl_, "glGetTextureImage (a grid's state)");
+void GpuWaveGrid::download_channels(Eigen::VectorXf& red, Eigen::VectorXf& green) const {
+  std::vector<float> texels;
+  download_plane(0, texels);
+  const Eigen::Index cells = static_cast<Eigen::Index>(texels.size() / 4);
   red.resize(cells);
   green.resize(cells);
   for (Eigen::Index c = 0; c < cells; ++c) {
@@ -191,7 +100,7 @@ void GpuGrid::download_channels(Eigen::VectorXf& red, Eigen::VectorXf& green) co
   }
 }
 
-GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k) : GpuGrid(context, points, wave_pass, "wave pass") {
+GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k) : GpuWaveGrid(context, points, wave_pass, "wave pass") {
   set_coefficients(k);
 }
 
@@ -202,20 +111,13 @@ void GpuWave::set_coefficients(const BasicWaveCoefficients<float>& k) {
 }
 
 GpuSymplecticWave::GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt)
-    : GpuGrid(context, points, symplectic_pass, "symplectic wave pass") {
+    : GpuWaveGrid(context, points, symplectic_pass, "symplectic wave pass") {
   uniform("c2", c2);
   uniform("mu", mu);
   set_step(dt);
 }
 
 void GpuSymplecticWave::set_step(float dt) { uniform("dt", dt); }
-
-Backend backend() {
-  const char* name = std::getenv("STEPWISE_GPU_BACKEND");
-  if (!name || !*name) return Backend::osmesa;
-  if (const auto b = parse_backend(name)) return *b;
-  throw GlError(fmt::format("STEPWISE_GPU_BACKEND must be osmesa or egl, got '{}'", name));
-}
 
 namespace {
 
@@ -230,7 +132,7 @@ class GpuWaveStepper final : public ThreeLevelWaveStepper {
     const int n = grid().points;
     const Eigen::Index cells = static_cast<Eigen::Index>(n) * n;
     try {
-      if (!context_) context_ = make_context(backend());
+      if (!context_) context_ = make_device_context();
       if (!gpu_) gpu_ = std::make_unique<GpuWave>(*context_, n, to_float(k));
       if (fresh) {
         gpu_->set_coefficients(to_float(k));
@@ -260,7 +162,7 @@ class GpuSymplecticStepper final : public FixedStepper {
     ++system_.stats().rhs_evals;
     const bool continuing = gpu_ && h == h_ && std::abs(t - t_last_) <= 1e-9 * h && y.data() == last_;
     try {
-      if (!context_) context_ = make_context(backend());
+      if (!context_) context_ = make_device_context();
       if (!gpu_) {
         const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
         gpu_ = std::make_unique<GpuSymplecticWave>(*context_, grid_.points, static_cast<float>(c2), static_cast<float>(grid_.mu), static_cast<float>(h));
@@ -297,15 +199,7 @@ class GpuSymplecticStepper final : public FixedStepper {
 
 }  // namespace
 
-std::string grid_problem(int points) {
-  try {
-    return texture_problem(*make_context(backend()), points);
-  } catch (const GlError& e) {
-    return e.what();
-  }
-}
-
-void register_gpu_methods() {
+void register_wave_methods() {
   register_stepper("gpu-wave", [](const CountedSystem& system) { return std::make_unique<GpuWaveStepper>(system); });
   register_stepper("gpu-symplectic-euler", [](const CountedSystem& system) { return std::make_unique<GpuSymplecticStepper>(system); });
 }

@@ -12,7 +12,7 @@
 // one another the state stays on the device; the methods read each new level back for the run's samples.
 #pragma once
 
-#include "render/context.hpp"
+#include "gpu_grid.hpp"
 #include "solvers/wave_step.hpp"
 
 #include <Eigen/Dense>
@@ -21,42 +21,20 @@
 
 namespace stepwise::gpu {
 
-using render::Context;
-using render::Gl;
-
-// a grid's state in the red and green channels of two RGBA32F textures of its size, stepped by a full-screen
-// fragment pass from one into the other, ping-pong; texel (x, y) is cell y * points + x. `pass`: the
-// subclass's GLSL main and uniforms, after the shared part (gpu_wave.cpp's grid_pass)
-class GpuGrid {
+// a square grid's two channels (R, G) in one plane of GpuGrid, the pass's GLSL main after the shared
+// part (gpu_wave.cpp's grid_pass)
+class GpuWaveGrid : public GpuGrid {
  public:
-  // GlError naming the limit where points passes GL_MAX_TEXTURE_SIZE, or where the context cannot render to
-  // RGBA32F
-  GpuGrid(const Context& context, int points, const char* pass, const std::string& name);
-  virtual ~GpuGrid();
-  GpuGrid(const GpuGrid&) = delete;
-  GpuGrid& operator=(const GpuGrid&) = delete;
-  // `count` passes; GL errors thrown as GlError
-  void step(long count);
-  // glFinish: the passes issued are done (for timing)
-  void finish() const;
+  GpuWaveGrid(const Context& context, int points, const char* pass, const std::string& name);
 
  protected:
   // the two channels, points^2 each, row-major (the CPU grids' layout)
   void upload_channels(const Eigen::VectorXf& red, const Eigen::VectorXf& green);
   void download_channels(Eigen::VectorXf& red, Eigen::VectorXf& green) const;
-  void uniform(const char* name, float value) const;
-
- private:
-  const Context& context_;
-  const Gl& gl_;
-  int points_;
-  unsigned textures_[2] = {0, 0}, framebuffers_[2] = {0, 0};
-  unsigned program_ = 0, vertex_array_ = 0;
-  int current_ = 0;  // the texture holding the state
 };
 
 // the seeds' three-level scheme: R = z^k, G = z^{k-1}
-class GpuWave final : public GpuGrid {
+class GpuWave final : public GpuWaveGrid {
  public:
   GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k);
   // the coefficients of another step size
@@ -67,7 +45,7 @@ class GpuWave final : public GpuGrid {
 
 // the second seed's scheme, symplectic Euler with the damping explicit: v += (c^2 Lap z - mu v) dt, then
 // z += v dt (models/height_field.hpp's wave_acceleration, in float32, `precise`); R = z, G = v
-class GpuSymplecticWave final : public GpuGrid {
+class GpuSymplecticWave final : public GpuWaveGrid {
  public:
   GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt);  // c2 = c^2 / d^2
   void set_step(float dt);
@@ -75,20 +53,8 @@ class GpuSymplecticWave final : public GpuGrid {
   void download(Eigen::VectorXf& z, Eigen::VectorXf& v) const { download_channels(z, v); }
 };
 
-// the backend the GPU methods make their contexts with: OSMesa, unless STEPWISE_GPU_BACKEND=egl; GlError
-// for another value
-render::Backend backend();
-
-// "" or why a points^2 grid cannot be stepped on `context`: past its GL_MAX_TEXTURE_SIZE, or RGBA32F not
-// a render target there; the limit named
-std::string texture_problem(const Context& context, int points);
-// the same asked of a context of the GPU methods' backend (OSMesa, or STEPWISE_GPU_BACKEND=egl), made for
-// the question; a context that cannot be made is the answer
-std::string grid_problem(int points);
-
-// registers the GPU shader methods with the solvers' method table: gpu-wave (GpuWave stepping a wave scene,
-// wave_fd.hpp's start and velocities around it) and gpu-symplectic-euler (GpuSymplecticWave). Each run
-// makes its own context, OSMesa unless STEPWISE_GPU_BACKEND=egl
-void register_gpu_methods();
+// registers gpu-wave (GpuWave stepping a wave scene, wave_fd.hpp's start and velocities around it) and
+// gpu-symplectic-euler (GpuSymplecticWave) with the solvers' method table
+void register_wave_methods();
 
 }  // namespace stepwise::gpu

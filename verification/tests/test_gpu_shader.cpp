@@ -1,9 +1,14 @@
-// The seeds' GPU simulation (issue 9) on llvmpipe through OSMesa, no GPU needed: the wave scheme's
-// fragment pass against the float32 CPU loop step for step, against float64 to show what precision costs,
-// and against the exactly evolved DST modes.
+// The seeds' GPU simulation (issue 9) on llvmpipe through OSMesa, no GPU needed: the wave schemes'
+// fragment passes against the float32 CPU loops step for step, against float64 to show what precision
+// costs, and against the exactly evolved DST modes; the cloth's pass against its float32 CPU step, that step
+// in float64 against the model's own symplectic Euler, and gpu-cloth as `run` takes it.
 #include "models/height_field.hpp"
+#include "models/model.hpp"
+#include "solvers/gpu/gpu_cloth.hpp"
 #include "solvers/gpu/gpu_wave.hpp"
 #include "solvers/integrator.hpp"
+#include "verification/gpu_references.hpp"
+#include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
 #include "verification/wave_modes.hpp"
 
@@ -144,10 +149,136 @@ TEST(GpuShader, GpuWaveMethodFollowsWaveFdToFloat32RoundOff) {
 
 TEST(GpuShader, AGridPastTheLargestTextureIsRefusedNamingTheLimit) {
   // the check the run makes before a GPU method starts (exit 2): no texture is made for it
-  EXPECT_EQ(gpu::grid_problem(64), "");
-  const std::string problem = gpu::grid_problem(1 << 20);
+  EXPECT_EQ(gpu::texture_problem(context(), 64, 64), "");
+  const std::string problem = gpu::texture_problem(context(), 64, 1 << 20);
   std::cout << problem << '\n';
   EXPECT_NE(problem.find("GL_MAX_TEXTURE_SIZE = "), std::string::npos) << problem;
+}
+
+// ---- the cloth
+
+// a 12 x 16 flag (rows != columns, so a swapped texel axis shows) with every force the pass has: its four
+// corners pinned, the gusting wind through its normals, a pick force; and a 12 x 12 sheet dropped onto a
+// sphere, whose nodes meet it within the run. Each at half its symplectic Euler limit (the stiffest mode's)
+Params flag_params() {
+  return {{"rows", 12}, {"columns", 16}, {"width", 1.2}, {"height", 0.8}, {"wind_x", 1}, {"wind_z", 4}, {"pick_row", 5}, {"pick_column", 7},
+          {"pick_fx", 0.3}, {"pick_fz", -0.5}};
+}
+Params draping_params() {
+  return {{"rows", 12}, {"columns", 12}, {"width", 0.6}, {"height", 0.6}, {"horizontal", 1}, {"elevation", 0.52}, {"pin_corners", 0},
+          {"wind_coefficient", 0}, {"sphere_radius", 0.5}, {"ground", 1}, {"ground_y", -0.5}, {"friction", 0.4}};
+}
+double half_limit(const Model& model) {
+  return 0.5 * *mass_spring_stable_dt("symplectic-euler", stiffest_mode(model, 0, model.initial_state()));
+}
+
+TEST(GpuShader, ClothPassMatchesTheFloat32CpuStepStepForStep) {
+  // step for step: each of 400 steps from the same float32 state on both sides (the CPU's, uploaded), one
+  // pass against one CPU step, held to one step's round-off bound; and the device left to run on its own
+  // state, which on llvmpipe (IEEE float32 with the operations kept in order) is the CPU's to the bit
+  const bool llvmpipe = context().description().find("llvmpipe") != std::string::npos;
+  for (const auto& [name, params] : {std::pair{"flag", flag_params()}, std::pair{"draping sheet", draping_params()}}) {
+    const auto model = make_model("cloth", params);
+    const ClothGridView& view = *model->cloth_grid();
+    const double h = half_limit(*model), nodes = static_cast<double>(view.start.size());
+    gpu::GpuCloth stepped(context(), view), running(context(), view);
+    cloth_grid::State<float> cpu = cloth_grid::spread<float>(view, model->initial_state()), next, shader;
+    running.upload(cpu);
+    tolerance::ClothRoundoffScale scale;
+    widen_roundoff_scale(view, cpu, scale);
+    double worst = 0, worst_bound = 0, precision = 0;  // precision: one float32 step against float64 from the same state
+    const long steps = 400;
+    for (long done = 0; done < steps; ++done) {
+      const auto k = cloth_grid::constants<float>(view, static_cast<double>(done) * h, h);
+      stepped.upload(cpu);
+      stepped.set_constants(k);
+      stepped.step(1);
+      running.set_constants(k);
+      running.step(1);
+      cloth_grid::State<double> wide{std::vector<cloth_grid::Vec3<double>>(cpu.x.size()), std::vector<cloth_grid::Vec3<double>>(cpu.v.size())}, wide_next;
+      for (size_t n = 0; n < cpu.x.size(); ++n) {
+        wide.x[n] = {cpu.x[n].x, cpu.x[n].y, cpu.x[n].z};
+        wide.v[n] = {cpu.v[n].x, cpu.v[n].y, cpu.v[n].z};
+      }
+      cloth_grid::step(cloth_grid::constants<double>(view, static_cast<double>(done) * h, h), view.free_index, wide, wide_next);
+      cloth_grid::step(k, view.free_index, cpu, next);
+      std::swap(cpu, next);
+      widen_roundoff_scale(view, cpu, scale);
+      precision = std::max(precision, position_difference(cpu, wide_next) / tolerance::cloth_step_roundoff(tolerance::float32_unit_roundoff, h, nodes, scale));
+      stepped.download(shader);
+      const double difference = position_difference(shader, cpu), bound = tolerance::cloth_step_roundoff(tolerance::float32_unit_roundoff, h, nodes, scale);
+      EXPECT_LE(difference, bound) << name << ", step " << done + 1;
+      if (difference >= worst) worst = difference, worst_bound = bound;
+    }
+    running.download(shader);
+    const double chained = position_difference(shader, cpu);
+    std::cout << name << ", " << steps << " steps of " << h << " s: largest one-step |shader x - cpu float32 x| = " << worst << " (bound "
+              << worst_bound << "); after " << steps << " steps on the device's own state: " << chained << " (bound "
+              << tolerance::cloth_steps_bound(tolerance::float32_unit_roundoff, steps, h, nodes, scale) << "); one float32 step from float64's "
+              << "at most " << precision << " of the one-step bound\n";
+    EXPECT_LE(precision, 1) << name << ": float32's own one-step round-off";
+    EXPECT_LE(chained, tolerance::cloth_steps_bound(tolerance::float32_unit_roundoff, steps, h, nodes, scale)) << name;
+    if (llvmpipe) {
+      EXPECT_EQ(chained, 0) << name << ": llvmpipe computes the CPU's float32 operations in the CPU's order";
+    }
+    if (name == std::string("draping sheet")) {
+      // the sheet met the sphere: some node lies on it (to float rounding), none inside
+      double closest = 1e9;
+      for (const auto& x : shader.x) closest = std::min(closest, double(cloth_grid::norm(x)));
+      std::cout << "  closest node to the sphere's centre: " << closest << " m (radius 0.5)\n";
+      EXPECT_NEAR(closest, 0.5, 1e-6);
+    }
+  }
+}
+
+TEST(GpuShader, ClothGridStepInFloat64IsTheModelsSymplecticEuler) {
+  // the node-by-node step (gathering each node's forces) against the model's spring list and triangle loop
+  // under symplectic-euler, both float64: equal to round-off, so the grid form (and the shader's) is the
+  // model's physics; the float32 step's distance from it is what precision costs, inside float32's bound
+  const auto model = make_model("cloth", flag_params());
+  const ClothGridView& view = *model->cloth_grid();
+  const double h = half_limit(*model);
+  const long steps = 400;
+  tolerance::ClothRoundoffScale scale;
+  const auto wide = run_cloth_grid<double>(view, model->initial_state(), 0, h, steps, scale);
+  const auto narrow = run_cloth_grid<float>(view, model->initial_state(), 0, h, steps, scale);
+  const RunResult run = make_integrator("symplectic-euler", StepControl::fixed(h))->integrate(*model, 0, model->initial_state(), std::vector<double>{steps * h});
+  ASSERT_EQ(run.status, Status::ok) << run.message;
+  const auto model_state = cloth_grid::spread<double>(view, run.y_stop);
+  const double nodes = static_cast<double>(view.start.size());
+  const double to_model = position_difference(wide, model_state), precision = position_difference(narrow, wide);
+  const double bound64 = tolerance::cloth_steps_bound(tolerance::float64_unit_roundoff, steps, h, nodes, scale);
+  const double bound32 = tolerance::cloth_steps_bound(tolerance::float32_unit_roundoff, steps, h, nodes, scale);
+  std::cout << steps << " steps: |grid float64 - model| = " << to_model << " (bound " << bound64 << "), |grid float32 - float64| = " << precision
+            << " (bound " << bound32 << ")\n";
+  EXPECT_LE(to_model, bound64);
+  EXPECT_LE(precision, bound32);
+}
+
+TEST(GpuShader, GpuClothMethodFollowsSymplecticEulerToFloat32RoundOff) {
+  // gpu-cloth as `run` takes it (the state uploaded once rounded to float, the constants each step, each
+  // new state read back) against symplectic-euler on the model; the sheet that meets the sphere runs too
+  gpu::register_gpu_methods();
+  for (const auto& params : {flag_params(), draping_params()}) {
+    const auto model = make_model("cloth", params);
+    const double h = half_limit(*model);
+    const long steps = 200;
+    const std::vector<double> t_out{steps * h};
+    const auto run = [&](const char* method) { return make_integrator(method, StepControl::fixed(h))->integrate(*model, 0, model->initial_state(), t_out); };
+    const RunResult gpu = run("gpu-cloth"), cpu = run("symplectic-euler");
+    ASSERT_EQ(gpu.status, Status::ok) << gpu.message;
+    const ClothGridView& view = *model->cloth_grid();
+    tolerance::ClothRoundoffScale scale;
+    run_cloth_grid<double>(view, model->initial_state(), 0, h, steps, scale);
+    const double difference = position_difference(cloth_grid::spread<double>(view, gpu.y_stop), cloth_grid::spread<double>(view, cpu.y_stop));
+    const double bound = tolerance::cloth_steps_bound(tolerance::float32_unit_roundoff, steps, h, static_cast<double>(view.start.size()), scale);
+    std::cout << "gpu-cloth against symplectic-euler after " << steps << " steps: " << difference << ", bound " << bound << '\n';
+    EXPECT_LE(difference, bound);
+  }
+  // and only on a cloth
+  const auto water = make_model("standing-wave", {});
+  EXPECT_FALSE(method_applies(*find_method("gpu-cloth"), *water));
+  EXPECT_NE(method_requirement(*find_method("gpu-cloth"), *water).find("cloth"), std::string::npos);
 }
 
 }  // namespace

@@ -1,0 +1,96 @@
+// The explicit cloth (issue 9): one symplectic Euler step of the seeds' flag (the cloth model's defaults:
+// four corners pinned, the gusting wind through its normals, twelve springs a node) at N x N nodes, N = 256,
+// 1024, 2048, from the flat start. In one run:
+//  - gpu-cloth's fragment pass on the GL's device (llvmpipe here, its threads LP_NUM_THREADS, by default one
+//    per core; a GPU through EGL with STEPWISE_GPU_BACKEND=egl), in float32, finished before the clock stops;
+//  - the same step on one CPU core, node by node (solvers/cloth_grid.hpp), in float64 (the CPU solver) and
+//    in float32 (the shader's reference).
+// The model itself stops at 1024 a side (its sparse Jacobians' pattern), so the view is built here from the
+// model's defaults, the grid scaled. Ratios: the pass's time over the CPU step's at each size.
+#include "models/model.hpp"
+#include "solvers/cloth_grid.hpp"
+#include "solvers/gpu/gpu_cloth.hpp"
+
+#include "ratio_reporter.hpp"
+
+#include <fmt/format.h>
+
+#include <map>
+
+namespace {
+
+// the flag's view at n x n: the defaults' physics (from a small model), its nodes' start and pins
+const stepwise::ClothGridView& flag_view(int n) {
+  static std::map<int, stepwise::ClothGridView> views;
+  if (const auto it = views.find(n); it != views.end()) return it->second;
+  const auto small = stepwise::make_model("cloth", {{"rows", 4}, {"columns", 4}});
+  stepwise::ClothGridView view = *small->cloth_grid();
+  const double width = view.across * 3, height = view.down * 3, mass = view.node_mass * 16;
+  view.rows = view.columns = n;
+  view.across = width / (n - 1);
+  view.down = height / (n - 1);
+  view.node_mass = mass / (static_cast<double>(n) * n);
+  view.start.clear();
+  view.free_index.assign(static_cast<size_t>(n) * n, 0);
+  int free = 0;
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      view.start.emplace_back(c * view.across - width / 2, -r * view.down, 0);
+      const bool corner = (r == 0 || r == n - 1) && (c == 0 || c == n - 1);
+      view.free_index[static_cast<size_t>(r * n + c)] = corner ? -1 : free++;
+    }
+  return views.emplace(n, std::move(view)).first->second;
+}
+
+Eigen::VectorXd flat_start(const stepwise::ClothGridView& view) {
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(6 * static_cast<Eigen::Index>(view.start.size() - 4));
+  for (size_t k = 0; k < view.start.size(); ++k)
+    if (const int i = view.free_index[k]; i >= 0) y.segment<3>(3 * i) = view.start[k];
+  return y;
+}
+
+constexpr double h = 1e-4;  // below the 2048^2 flag's limit
+
+template <class T>
+void BM_cloth_grid_cpu(benchmark::State& state) {
+  const auto& view = flag_view(static_cast<int>(state.range(0)));
+  auto s = stepwise::cloth_grid::spread<T>(view, flat_start(view)), next = s;
+  double t = 0;
+  for (auto _ : state) {
+    stepwise::cloth_grid::step(stepwise::cloth_grid::constants<T>(view, t, h), view.free_index, s, next);
+    std::swap(s, next);
+    t += h;
+    benchmark::DoNotOptimize(s.x.data());
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(view.start.size()));
+}
+
+void BM_gpu_cloth(benchmark::State& state) {
+  static const std::unique_ptr<stepwise::render::Context> context = stepwise::render::make_context(stepwise::gpu::backend());
+  const auto& view = flag_view(static_cast<int>(state.range(0)));
+  stepwise::gpu::GpuCloth gpu(*context, view);
+  gpu.upload(stepwise::cloth_grid::spread<float>(view, flat_start(view)));
+  gpu.set_constants(stepwise::cloth_grid::constants<float>(view, 0, h));
+  for (auto _ : state) {
+    gpu.step(1);
+    gpu.finish();
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(view.start.size()));
+  state.SetLabel(context->description());
+}
+
+#define SIZES ->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime()
+BENCHMARK(BM_cloth_grid_cpu<double>) SIZES;
+BENCHMARK(BM_cloth_grid_cpu<float>) SIZES;
+BENCHMARK(BM_gpu_cloth) SIZES;
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::pair<std::string, std::string>> pairs;
+  for (const char* n : {"256", "1024", "2048"}) {
+    pairs.emplace_back(fmt::format("BM_gpu_cloth/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
+    pairs.emplace_back(fmt::format("BM_cloth_grid_cpu<float>/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
+  }
+  return stepwise::bench::run_with_ratios(argc, argv, pairs);
+}

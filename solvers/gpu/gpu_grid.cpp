@@ -1,0 +1,161 @@
+#include "gpu_grid.hpp"
+
+#include "gpu_cloth.hpp"
+#include "gpu_wave.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <mutex>
+
+namespace stepwise::gpu {
+
+using render::Backend;
+using render::GlError;
+using render::check_gl;
+using render::link_program;
+using render::make_context;
+using render::parse_backend;
+
+namespace {
+
+// a triangle covering the viewport, from the vertex index alone
+const char* const full_screen = R"(#version 450
+void main() {
+  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
+  gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
+}
+)";
+
+}  // namespace
+
+std::string texture_problem(const Context& context, int width, int height) {
+  context.make_current();
+  const Gl& gl = context.gl();
+  GLint max_size = 0;
+  gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+  if (width > max_size || height > max_size)
+    return fmt::format("a {} x {} grid passes this GL's largest texture, GL_MAX_TEXTURE_SIZE = {}", width, height, max_size);
+  GLuint texture = 0, framebuffer = 0;
+  gl.CreateTextures(GL_TEXTURE_2D, 1, &texture);
+  gl.TextureStorage2D(texture, 1, GL_RGBA32F, 1, 1);
+  gl.CreateFramebuffers(1, &framebuffer);
+  gl.NamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, texture, 0);
+  const GLenum status = gl.CheckNamedFramebufferStatus(framebuffer, GL_FRAMEBUFFER);
+  gl.DeleteFramebuffers(1, &framebuffer);
+  gl.DeleteTextures(1, &texture);
+  if (status != GL_FRAMEBUFFER_COMPLETE)
+    return fmt::format("this GL cannot render to float textures (RGBA32F): glCheckNamedFramebufferStatus = 0x{:04x}", status);
+  return {};
+}
+
+GpuGrid::GpuGrid(const Context& context, int width, int height, int planes, const std::string& fragment, const std::string& name)
+    : context_(context), gl_(context.gl()), width_(width), height_(height), planes_(planes) {
+  if (const std::string problem = texture_problem(context, width, height); !problem.empty()) throw GlError(problem);
+  gl_.CreateFramebuffers(2, framebuffers_);
+  std::vector<GLenum> attachments;
+  for (int p = 0; p < planes; ++p) attachments.push_back(GL_COLOR_ATTACHMENT0 + p);
+  for (int set = 0; set < 2; ++set) {
+    textures_[set].resize(planes);
+    gl_.CreateTextures(GL_TEXTURE_2D, planes, textures_[set].data());
+    for (int p = 0; p < planes; ++p) {
+      gl_.TextureStorage2D(textures_[set][p], 1, GL_RGBA32F, width, height);
+      // one level and texelFetch: no filtering, and a texture complete without mipmaps
+      gl_.TextureParameteri(textures_[set][p], GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      gl_.TextureParameteri(textures_[set][p], GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      gl_.NamedFramebufferTexture(framebuffers_[set], attachments[p], textures_[set][p], 0);
+    }
+    gl_.NamedFramebufferDrawBuffers(framebuffers_[set], planes, attachments.data());
+    if (const GLenum status = gl_.CheckNamedFramebufferStatus(framebuffers_[set], GL_FRAMEBUFFER); status != GL_FRAMEBUFFER_COMPLETE)
+      throw GlError(fmt::format("this context cannot render to float textures: glCheckNamedFramebufferStatus ({} RGBA32F {} x {}) = 0x{:04x}",
+                                planes, width, height, status));
+  }
+  program_ = link_program(gl_, full_screen, nullptr, fragment.c_str(), name);
+  gl_.CreateVertexArrays(1, &vertex_array_);
+  check_gl(gl_, fmt::format("the {}'s textures and program", name));
+}
+
+GpuGrid::~GpuGrid() {
+  if (!context_.try_make_current()) return;
+  gl_.DeleteVertexArrays(1, &vertex_array_);
+  gl_.DeleteProgram(program_);
+  gl_.DeleteFramebuffers(2, framebuffers_);
+  for (auto& set : textures_) gl_.DeleteTextures(static_cast<GLsizei>(set.size()), set.data());
+}
+
+unsigned GpuGrid::use_program() const {
+  context_.make_current();
+  gl_.UseProgram(program_);
+  return program_;
+}
+
+void GpuGrid::uniform(const char* name, float value) const { gl_.Uniform1f(gl_.GetUniformLocation(use_program(), name), value); }
+
+void GpuGrid::upload_plane(int plane, const std::vector<float>& texels) {
+  context_.make_current();
+  gl_.TextureSubImage2D(textures_[current_][plane], 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT, texels.data());
+  check_gl(gl_, "glTextureSubImage2D (a grid's state)");
+}
+
+void GpuGrid::step(long count) {
+  context_.make_current();
+  gl_.Disable(GL_BLEND);
+  gl_.Disable(GL_DEPTH_TEST);
+  gl_.Disable(GL_CULL_FACE);
+  gl_.Viewport(0, 0, width_, height_);
+  gl_.UseProgram(program_);
+  gl_.BindVertexArray(vertex_array_);
+  for (long s = 0; s < count; ++s) {
+    gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffers_[1 - current_]);
+    for (int p = 0; p < planes_; ++p) gl_.BindTextureUnit(p, textures_[current_][p]);
+    gl_.DrawArrays(GL_TRIANGLES, 0, 3);
+    current_ = 1 - current_;
+  }
+  for (int p = 0; p < planes_; ++p) gl_.BindTextureUnit(p, 0);
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  check_gl(gl_, "a grid pass (glDrawArrays)");
+}
+
+void GpuGrid::finish() const {
+  context_.make_current();
+  gl_.Finish();
+}
+
+void GpuGrid::download_plane(int plane, std::vector<float>& texels) const {
+  context_.make_current();
+  texels.resize(4 * static_cast<size_t>(width_) * static_cast<size_t>(height_));
+  gl_.GetTextureImage(textures_[current_][plane], 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(texels.size() * sizeof(float)), texels.data());
+  check_gl(gl_, "glGetTextureImage (a grid's state)");
+}
+
+Backend backend() {
+  const char* name = std::getenv("STEPWISE_GPU_BACKEND");
+  if (!name || !*name) return Backend::osmesa;
+  if (const auto b = parse_backend(name)) return *b;
+  throw GlError(fmt::format("STEPWISE_GPU_BACKEND must be osmesa or egl, got '{}'", name));
+}
+
+std::unique_ptr<Context> make_device_context() {
+  static std::once_flag once;
+  std::call_once(once, [] { setenv("LP_NUM_THREADS", "0", 0); });
+  return make_context(backend());
+}
+
+std::string device_problem(const OdeSystem& system) {
+  int width = 0, height = 0;
+  if (const auto grid = system.wave_grid()) width = height = grid->points;
+  else if (const ClothGridView* cloth = system.cloth_grid()) width = cloth->columns, height = cloth->rows;
+  else return "no grid a GPU method steps (a water or cloth scene)";
+  try {
+    return texture_problem(*make_device_context(), width, height);
+  } catch (const GlError& e) {
+    return e.what();
+  }
+}
+
+void register_gpu_methods() {
+  register_wave_methods();
+  register_cloth_methods();
+}
+
+}  // namespace stepwise::gpu
