@@ -251,8 +251,9 @@ TEST(GpuShader, ClothGridStepInFloat64IsTheModelsSymplecticEuler) {
   const double bound32 = tolerance::cloth_steps_bound(tolerance::float32_unit_roundoff, steps, h, nodes, scale);
   std::cout << steps << " steps: |grid float64 - model| = " << to_model << " (bound " << bound64 << "), |grid float32 - float64| = " << precision
             << " (bound " << bound32 << ")\n";
-  EXPECT_LE(to_model, bound64);
-  EXPECT_LE(precision, bound32);
+  // each side is within its bound of the exact step's result: their difference within the sum
+  EXPECT_LE(to_model, 2 * bound64);
+  EXPECT_LE(precision, bound32 + bound64);
 }
 
 TEST(GpuShader, GpuClothMethodFollowsSymplecticEulerToFloat32RoundOff) {
