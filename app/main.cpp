@@ -5,8 +5,7 @@
 
 #include "models/model.hpp"
 #include "report/report.hpp"
-#include "solvers/gpu/gpu_grid.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -21,13 +20,13 @@ int list_methods(bool json) {
   if (json) {
     nlohmann::json j = nlohmann::json::array();
     for (const auto& m : stepwise::methods())
-      j.push_back({{"name", m.name}, {"kind", m.kind}, {"order", m.order}, {"source", m.source},
-                   {"fixed_step", m.fixed_step}, {"adaptive", m.adaptive}});
+      j.push_back({{"name", m.name}, {"kind", m.description}, {"order", m.order.text}, {"source", m.source}, {"family", m.family},
+                   {"fixed_step", m.fixed_step()}, {"adaptive", m.adaptive()}});
     std::cout << j.dump(2) << '\n';
     return 0;
   }
   fmt::print("{:<18} {:<8} {:<16} {}\n", "name", "order", "source", "kind");
-  for (const auto& m : stepwise::methods()) fmt::print("{:<18} {:<8} {:<16} {}\n", m.name, m.order, m.source, m.kind);
+  for (const auto& m : stepwise::methods()) fmt::print("{:<18} {:<8} {:<16} {}\n", m.name, m.order.text, m.source, m.description);
   return 0;
 }
 
@@ -52,7 +51,6 @@ int list_scenes() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  stepwise::gpu::register_gpu_methods();
   CLI::App app{"stepwise: the numerics behind physically based animation"};
   app.require_subcommand(1);
 

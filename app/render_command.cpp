@@ -102,10 +102,10 @@ void encode_movies(const fs::path& dir, int fps) {
 int render_command(const RenderOptions& options) {
   PreparedRun p;
   std::pair<int, int> size;
-  render::Backend backend{};
+  gl::Backend backend{};
   try {
     size = parse_size(options.size);
-    const auto parsed = render::parse_backend(options.backend);
+    const auto parsed = gl::parse_backend(options.backend);
     if (!parsed) throw InputError(fmt::format("--backend {}: unknown backend (osmesa or egl)", options.backend));
     backend = *parsed;
     if (options.frames < 1 || options.frames > 100000) throw InputError(fmt::format("--frames {}: must lie in 1..100000", options.frames));
@@ -124,10 +124,10 @@ int render_command(const RenderOptions& options) {
     return 2;
   }
 
-  std::unique_ptr<render::Context> context;
+  std::unique_ptr<gl::Context> context;
   try {
-    context = render::make_context(backend);
-  } catch (const render::GlError& e) {
+    context = gl::make_context(backend);
+  } catch (const gl::GlError& e) {
     std::cerr << "stepwise render: --backend " << options.backend << ": " << e.what() << '\n';
     return 2;
   }
@@ -180,7 +180,7 @@ int render_command(const RenderOptions& options) {
     const int fps = span > 0 ? std::clamp(static_cast<int>(std::lround((shapes.size() - 1) / span)), 1, 60) : 1;
     if (shapes.size() > 1) encode_movies(out, fps);
     summary["fps"] = fps;
-  } catch (const render::GlError& e) {
+  } catch (const gl::GlError& e) {
     std::cerr << "stepwise render: " << e.what() << '\n';
     return 2;
   } catch (const std::runtime_error& e) {

@@ -3,8 +3,6 @@
 #include "report/atomic_write.hpp"
 #include "report/csv.hpp"
 #include "scene.hpp"
-#include "solvers/gpu/gpu_grid.hpp"
-#include "solvers/wave_step.hpp"
 #include "verification/measure.hpp"
 #include "verification/stability.hpp"
 
@@ -69,7 +67,7 @@ PreparedRun prepare_run(const RunOptions& o) {
 
   // method and step control: the command line wins over the scene; --dt and --rtol exclude each other
   p.method = o.method.value_or(s.method.value_or("rk4"));
-  const MethodInfo* method = find_method(p.method);
+  const Method* method = find_method(p.method);
   if (!method) throw InputError(fmt::format("{}: unknown method '{}' (see `stepwise methods`)", o.method ? "--method" : s.where("run.method"), p.method));
   if (o.dt && (o.rtol || o.atol)) throw InputError("--dt: give either --dt or --rtol/--atol, not both");
   require_positive(o.dt, "--dt");
@@ -83,15 +81,15 @@ PreparedRun prepare_run(const RunOptions& o) {
   require_positive(s.t_end, s.where("run.t_end"));
   require_positive(s.output_dt, s.where("run.output_dt"));
 
-  const bool adaptive = o.rtol || o.atol || (!o.dt && (!s.dt || !method->fixed_step) && method->adaptive);
+  const bool adaptive = o.rtol || o.atol || (!o.dt && (!s.dt || !method->fixed_step()) && method->adaptive());
   if (adaptive) {
-    if (!method->adaptive) throw InputError(fmt::format("--rtol: {} is a fixed-step method: give --dt", p.method));
+    if (!method->adaptive()) throw InputError(fmt::format("--rtol: {} is a fixed-step method: give --dt", p.method));
     p.control.rtol = o.rtol.value_or(s.rtol.value_or(p.control.rtol));
     p.control.atol = o.atol.value_or(s.atol.value_or(p.control.atol));
   } else {
     p.control.dt = o.dt ? o.dt : s.dt;
     if (!p.control.dt) throw InputError(fmt::format("{}: {} is a fixed-step method and neither --dt nor run.dt is given", s.file, p.method));
-    if (!method->fixed_step) throw InputError(fmt::format("--dt: {} is adaptive only: give --rtol/--atol", p.method));
+    if (!method->fixed_step()) throw InputError(fmt::format("--dt: {} is adaptive only: give --rtol/--atol", p.method));
   }
   if (const double bytes = dense_matrix_bytes(*method, *p.model); bytes > 0.5 * physical_memory_bytes())
     throw InputError(fmt::format("{}: {} keeps dense {} x {} matrices ({:.3g} GiB) for this {}-entry state, more than half this "
@@ -101,9 +99,9 @@ PreparedRun prepare_run(const RunOptions& o) {
                                  p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
   if (!method_applies(*method, *p.model))
     throw InputError(fmt::format("{}: {} (model {})", o.method ? "--method" : s.where("run.method"), method_requirement(*method, *p.model), s.model));
-  // a GPU method's grid must be a texture its device renders to (asked of the device)
-  if (method->source == "OpenGL shader")
-    if (const std::string problem = gpu::device_problem(*p.model); !problem.empty())
+  // a method with a device of its own (a GPU method: its grid must be a texture the device renders to) is asked
+  if (method->device_problem)
+    if (const std::string problem = method->device_problem(*p.model); !problem.empty())
       throw InputError(fmt::format("{}: {}: {}", o.method ? "--method" : s.where("run.method"), p.method, problem));
 
   const std::string location = o.event_location.value_or(s.event_location.value_or("linear"));
@@ -116,16 +114,16 @@ PreparedRun prepare_run(const RunOptions& o) {
   if (p.control.dt && *p.control.dt > p.t_end)
     throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.t_end));
   // a step past the method's stability limit is the user's to try: said, then run, and reported diverged
-  if (const auto grid = p.model->wave_grid(); grid && p.control.dt)
-    if (const auto limit = wave_method_stable_dt(p.method, *grid); limit && *p.control.dt > *limit)
+  if (const auto grid = p.model->wave_grid(); grid && p.control.dt && method->stability.wave_dt)
+    if (const double limit = method->stability.wave_dt(*grid); *p.control.dt > limit)
       fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s on this grid (d = {} m, c = {} m/s, "
-                 "mu = {} 1/s); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method, *limit,
+                 "mu = {} 1/s); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method, limit,
                  grid->spacing, grid->c, grid->mu);
   // and on a mass-spring system, the limit its stiffest mode sets at the start (verification/stability.hpp), for
   // the methods that have one (asked first with any mode, so the eigenproblem is solved only for those)
-  if (p.model->mass_spring() && p.control.dt && mass_spring_stable_dt(p.method, StiffestMode{1, 0})) {
+  if (p.model->mass_spring() && p.control.dt && method->stability.oscillator_dt) {
     const StiffestMode mode = stiffest_mode(*p.model, 0, p.model->initial_state());
-    if (const double limit = *mass_spring_stable_dt(p.method, mode); *p.control.dt > limit)
+    if (const double limit = method->stability.oscillator_dt(mode.omega, mode.damping); *p.control.dt > limit)
       fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s for this system's stiffest mode (omega = {:.6g} "
                  "rad/s, damping {:.3g} 1/s at the start); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method,
                  limit, mode.omega, mode.damping);

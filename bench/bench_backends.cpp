@@ -2,7 +2,7 @@
 // 10 s) at the same tolerance: the same RHS count is expected, and the ratio is the adapters' overhead.
 #include "models/model.hpp"
 #include "ratio_reporter.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 
 #include <cvode/cvode.h>
 #include <gsl/gsl_errno.h>

@@ -14,7 +14,7 @@
 // BLAS instead. The program prints the library its dgemm_ comes from.
 #include "app/scene.hpp"
 #include "models/model.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "solvers/mass_spring_implicit.hpp"
 #include "solvers/run_support.hpp"
 #include "solvers/sparse_cholesky.hpp"

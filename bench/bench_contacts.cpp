@@ -3,7 +3,7 @@
 // started from zero rather than from the last step's impulses (warm start), measured in the same run, with
 // the Gauss-Seidel sweeps each step took on average.
 #include "models/model.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "verification/measure.hpp"
 
 #include "ratio_reporter.hpp"

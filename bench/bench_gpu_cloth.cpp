@@ -66,7 +66,7 @@ void BM_cloth_grid_cpu(benchmark::State& state) {
 }
 
 void BM_gpu_cloth(benchmark::State& state) {
-  static const std::unique_ptr<stepwise::render::Context> context = stepwise::render::make_context(stepwise::gpu::backend());
+  static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
   const auto& view = flag_view(static_cast<int>(state.range(0)));
   stepwise::gpu::GpuCloth gpu(*context, view);
   gpu.upload(stepwise::cloth_grid::spread<float>(view, flat_start(view)));

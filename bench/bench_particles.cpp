@@ -12,7 +12,7 @@
 #include "models/cell_list.hpp"
 #include "models/model.hpp"
 #include "ratio_reporter.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 
 #include <random>
 

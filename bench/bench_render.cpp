@@ -18,8 +18,8 @@ using namespace stepwise;
 
 constexpr int width = 1280, height = 720;
 
-render::Context& context() {
-  static const std::unique_ptr<render::Context> c = render::make_osmesa_context();
+gl::Context& context() {
+  static const std::unique_ptr<gl::Context> c = gl::make_osmesa_context();
   return *c;
 }
 

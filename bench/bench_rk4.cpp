@@ -2,7 +2,7 @@
 // theta0 = 1, dt = 1e-3, 10 s, both with fixed steps and the same number of RHS calls.
 #include "models/model.hpp"
 #include "ratio_reporter.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 
 #include <boost/numeric/odeint.hpp>
 

@@ -67,7 +67,7 @@ void BM_wave_blocked(benchmark::State& state) {
 // finished before the clock stops
 void BM_gpu_wave(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  static const std::unique_ptr<stepwise::render::Context> context = stepwise::render::make_context(stepwise::gpu::backend());
+  static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
   Grids g(n);
   stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k));
   gpu.upload(g.z_prev.cast<float>(), g.z.cast<float>());

@@ -60,10 +60,10 @@ void main() { color = vec4(irradiance, 0.0, 0.0, 1.0); }
 
 }  // namespace
 
-PhotonMap::PhotonMap(const Context& context, int resolution) : context_(context), gl_(context.gl()), resolution_(resolution) {
+PhotonMap::PhotonMap(const gl::Context& context, int resolution) : context_(context), gl_(context.gl()), resolution_(resolution) {
   context_.make_current();
   const std::string geometry = std::string("#version 450 core\n") + glsl_fresnel + geometry_shader_body;
-  program_ = link_program(gl_, vertex_shader, geometry.c_str(), fragment_shader, "photon map");
+  program_ = gl::link_program(gl_, vertex_shader, geometry.c_str(), fragment_shader, "photon map");
   gl_.CreateTextures(GL_TEXTURE_2D, 1, &texture_);
   gl_.TextureStorage2D(texture_, 1, GL_RGBA32F, resolution, resolution);
   gl_.TextureParameteri(texture_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
@@ -73,7 +73,7 @@ PhotonMap::PhotonMap(const Context& context, int resolution) : context_(context)
   gl_.CreateFramebuffers(1, &framebuffer_);
   gl_.NamedFramebufferTexture(framebuffer_, GL_COLOR_ATTACHMENT0, texture_, 0);
   if (const GLenum status = gl_.CheckNamedFramebufferStatus(framebuffer_, GL_FRAMEBUFFER); status != GL_FRAMEBUFFER_COMPLETE)
-    throw GlError(fmt::format("glCheckNamedFramebufferStatus (photon map, RGBA32F {}^2) = 0x{:04x}", resolution, status));
+    throw gl::GlError(fmt::format("glCheckNamedFramebufferStatus (photon map, RGBA32F {}^2) = 0x{:04x}", resolution, status));
   gl_.CreateVertexArrays(1, &vertex_array_);
   gl_.CreateBuffers(1, &buffer_);
   gl_.VertexArrayVertexBuffer(vertex_array_, 0, buffer_, 0, 6 * sizeof(float));
@@ -82,7 +82,7 @@ PhotonMap::PhotonMap(const Context& context, int resolution) : context_(context)
     gl_.VertexArrayAttribFormat(vertex_array_, a, 3, GL_FLOAT, GL_FALSE, 3 * a * sizeof(float));
     gl_.VertexArrayAttribBinding(vertex_array_, a, 0);
   }
-  check_gl(gl_, "photon map set-up");
+  gl::check_gl(gl_, "photon map set-up");
 }
 
 PhotonMap::~PhotonMap() {
@@ -131,14 +131,14 @@ void PhotonMap::build(const Shapes::Water& water, const Eigen::Vector3d& light, 
   gl_.BindVertexArray(vertex_array_);
   gl_.DrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(vertices.size() / 6));
   gl_.Disable(GL_BLEND);
-  check_gl(gl_, "photon map pass (glDrawArrays)");
+  gl::check_gl(gl_, "photon map pass (glDrawArrays)");
 }
 
 std::vector<float> PhotonMap::read() const {
   context_.make_current();
   std::vector<float> map(static_cast<size_t>(resolution_) * resolution_);
   gl_.GetTextureImage(texture_, 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(map.size() * sizeof(float)), map.data());
-  check_gl(gl_, "glGetTextureImage (photon map)");
+  gl::check_gl(gl_, "glGetTextureImage (photon map)");
   return map;
 }
 

@@ -6,7 +6,7 @@
 // that overlap at a fold add up. Pass 2 (render/renderer.cpp) lights the floor with the map.
 #pragma once
 
-#include "context.hpp"
+#include "gl/context.hpp"
 #include "models/shapes.hpp"
 
 #include <Eigen/Dense>
@@ -19,7 +19,7 @@ namespace stepwise::render {
 class PhotonMap {
  public:
   // resolution x resolution texels over the floor [0, side]^2; GlError if the program or target fails
-  PhotonMap(const Context& context, int resolution);
+  PhotonMap(const gl::Context& context, int resolution);
   ~PhotonMap();
   PhotonMap(const PhotonMap&) = delete;
   PhotonMap& operator=(const PhotonMap&) = delete;
@@ -36,8 +36,8 @@ class PhotonMap {
   int resolution() const { return resolution_; }
 
  private:
-  const Context& context_;
-  const Gl& gl_;
+  const gl::Context& context_;
+  const gl::Gl& gl_;
   int resolution_;
   std::vector<float> vertices_;
   unsigned program_ = 0, texture_ = 0, framebuffer_ = 0, vertex_array_ = 0, buffer_ = 0;

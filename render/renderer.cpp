@@ -220,8 +220,8 @@ View make_view(std::span<const Shapes> frames, const Look& look, int width, int 
 }
 
 struct Renderer::Impl {
-  const Context& context;
-  const Gl& gl;
+  const gl::Context& context;
+  const gl::Gl& gl;
   int width, height;
   GLuint lit = 0, pool = 0, surface = 0;
   GLuint framebuffer = 0, color = 0, depth = 0;
@@ -230,12 +230,12 @@ struct Renderer::Impl {
   // the unit sphere at subdivision levels 0..3 (20·4^level triangles): many balls are drawn coarser
   std::array<std::vector<float>, 4> sphere_vertices;
 
-  Impl(const Context& context_, int w, int h) : context(context_), gl(context_.gl()), width(w), height(h) {
+  Impl(const gl::Context& context_, int w, int h) : context(context_), gl(context_.gl()), width(w), height(h) {
     context.make_current();
-    lit = link_program(gl, lit_vertex, nullptr, lit_fragment, "lit");
+    lit = gl::link_program(gl, lit_vertex, nullptr, lit_fragment, "lit");
     const std::string head = std::string("#version 450 core\n") + glsl_fresnel + pool_common;
-    pool = link_program(gl, pool_vertex, nullptr, (head + pool_fragment_body).c_str(), "pool");
-    surface = link_program(gl, pool_vertex, nullptr, (head + surface_fragment_body).c_str(), "water surface");
+    pool = gl::link_program(gl, pool_vertex, nullptr, (head + pool_fragment_body).c_str(), "pool");
+    surface = gl::link_program(gl, pool_vertex, nullptr, (head + surface_fragment_body).c_str(), "water surface");
     gl.CreateRenderbuffers(1, &color);
     gl.NamedRenderbufferStorage(color, GL_RGBA8, width, height);
     gl.CreateRenderbuffers(1, &depth);
@@ -244,7 +244,7 @@ struct Renderer::Impl {
     gl.NamedFramebufferRenderbuffer(framebuffer, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
     gl.NamedFramebufferRenderbuffer(framebuffer, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
     if (const GLenum status = gl.CheckNamedFramebufferStatus(framebuffer, GL_FRAMEBUFFER); status != GL_FRAMEBUFFER_COMPLETE)
-      throw GlError(fmt::format("glCheckNamedFramebufferStatus ({} x {} RGBA8 + depth) = 0x{:04x}", width, height, status));
+      throw gl::GlError(fmt::format("glCheckNamedFramebufferStatus ({} x {} RGBA8 + depth) = 0x{:04x}", width, height, status));
     gl.CreateVertexArrays(1, &vertex_array);
     gl.CreateBuffers(1, &vertices);
     gl.CreateBuffers(1, &instances);
@@ -265,7 +265,7 @@ struct Renderer::Impl {
         append_triangle(sphere_vertices[level], p, p);
       }
     }
-    check_gl(gl, "renderer set-up");
+    gl::check_gl(gl, "renderer set-up");
   }
 
   ~Impl() {
@@ -449,7 +449,7 @@ struct Renderer::Impl {
       }
       draw_batch(block, one, stone, stone, 0);  // the sides plain
     }
-    check_gl(gl, "drawing a frame");
+    gl::check_gl(gl, "drawing a frame");
   }
 
   // the framebuffer, top row first
@@ -459,7 +459,7 @@ struct Renderer::Impl {
     std::vector<std::uint8_t> rows(image.rgba.size());
     gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
     gl.ReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rows.data());
-    check_gl(gl, "glReadPixels");
+    gl::check_gl(gl, "glReadPixels");
     const size_t stride = static_cast<size_t>(width) * 4;
     for (int r = 0; r < height; ++r)
       std::copy_n(rows.data() + static_cast<size_t>(height - 1 - r) * stride, stride, image.rgba.data() + static_cast<size_t>(r) * stride);
@@ -467,7 +467,7 @@ struct Renderer::Impl {
   }
 };
 
-Renderer::Renderer(const Context& context, int width, int height) : impl_(std::make_unique<Impl>(context, width, height)) {}
+Renderer::Renderer(const gl::Context& context, int width, int height) : impl_(std::make_unique<Impl>(context, width, height)) {}
 Renderer::~Renderer() = default;
 
 void Renderer::render(const Shapes& shapes, const std::vector<std::vector<Eigen::Vector3d>>& trails, const View& view) {

@@ -5,7 +5,7 @@
 #pragma once
 
 #include "camera.hpp"
-#include "context.hpp"
+#include "gl/context.hpp"
 #include "image.hpp"
 
 #include <memory>
@@ -31,7 +31,7 @@ View make_view(std::span<const Shapes> frames, const Look& look, int width, int 
 class Renderer {
  public:
   // GlError if a program fails to build or the framebuffer is incomplete
-  Renderer(const Context& context, int width, int height);
+  Renderer(const gl::Context& context, int width, int height);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;

@@ -4,7 +4,7 @@
 #include "pictures.hpp"
 #include "process.hpp"
 #include "studies.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 
 #include <fmt/format.h>
 
@@ -52,7 +52,7 @@ void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, bool 
   for (const auto& f : figures) list.rows.push_back({f.stem(), f.kind, f.subject});
   write_file_atomic(dir / "figures.csv", to_csv(list));
   Table method_table{{"name", "order", "source", "kind"}, {}};
-  for (const auto& m : methods()) method_table.rows.push_back({std::string(m.name), std::string(m.order), std::string(m.source), std::string(m.kind)});
+  for (const auto& m : methods()) method_table.rows.push_back({std::string(m.name), std::string(m.order.text), std::string(m.source), std::string(m.description)});
   write_file_atomic(dir / "methods.csv", to_csv(method_table));
   const std::string python = STEPWISE_PYTHON, script = fs::path(STEPWISE_REPORT_DIR) / "plot.py", where = dir.string();
   std::vector<std::string> args{python, script, where};

@@ -87,17 +87,17 @@ constexpr std::string_view dense_note =
     "cloth, GSL's implicit steppers (a dense Jacobian by differences every step: 3-4 s a point at rtol 1e-6) are left out too; "
     "implicit-euler on CHOLMOD and fast-mass-spring join cvode-bdf there.\n\n";
 
-bool in_sweep(const MethodInfo& method, const Model& model, bool dense) {
+bool in_sweep(const Method& method, const Model& model, bool dense) {
   const double bytes = dense_matrix_bytes(method, model);
   return method_applies(method, model) && bytes <= dense_matrix_budget && (dense || bytes == 0);
 }
 
 // the methods of a scene's sweeps, fixed-step ones only if asked
-std::vector<const MethodInfo*> scene_methods(const StudyScene& scene, bool fixed_only) {
+std::vector<const Method*> scene_methods(const StudyScene& scene, bool fixed_only) {
   const auto model = make_model(scene.model, scene.params);
-  std::vector<const MethodInfo*> chosen;
+  std::vector<const Method*> chosen;
   for (const auto& method : methods())
-    if (in_sweep(method, *model, scene.dense) && (method.fixed_step || !fixed_only)) chosen.push_back(&method);
+    if (in_sweep(method, *model, scene.dense) && (method.fixed_step() || !fixed_only)) chosen.push_back(&method);
   return chosen;
 }
 
@@ -122,13 +122,13 @@ StudyOutput convergence(const StudyContext& ctx) {
   // one point per (scene, method): its whole sweep of halvings, which the fit needs together
   struct Point {
     const StudyScene* scene;
-    const MethodInfo* method;
+    const Method* method;
   };
   const auto scenes = ode_scenes();
   std::vector<Point> plan;
   std::vector<std::string> labels;
   for (const auto& scene : scenes)
-    for (const MethodInfo* method : scene_methods(scene, true)) {
+    for (const Method* method : scene_methods(scene, true)) {
       plan.push_back({&scene, method});
       labels.push_back(fmt::format("{} {}", scene.label, method->name));
     }
@@ -158,8 +158,8 @@ StudyOutput convergence(const StudyContext& ctx) {
     for (const auto& m : sweep.runs)
       if (m.error) errors.push_back(*m.error);
     const double coarsest = errors.empty() ? NAN : errors.front(), finest = errors.empty() ? NAN : errors.back();
-    orders.rows.push_back({scene->label, std::string(method->name), std::string(method->order), sweep.observed_order, coarsest, finest});
-    out.markdown += fmt::format("| {} | {} | {:.2f} | {} | {} |\n", method->name, method->order, sweep.observed_order, sci(coarsest), sci(finest));
+    orders.rows.push_back({scene->label, std::string(method->name), std::string(method->order.text), sweep.observed_order, coarsest, finest});
+    out.markdown += fmt::format("| {} | {} | {:.2f} | {} | {} |\n", method->name, method->order.text, sweep.observed_order, sci(coarsest), sci(finest));
   }
   out.markdown += "\n";
   out.tables = {{"convergence", std::move(points)}, {"convergence_orders", std::move(orders)}};
@@ -181,7 +181,7 @@ Measured timed_run(const Model& model, std::string_view method, const StepContro
 // one point of a work-precision sweep
 struct WorkPoint {
   const StudyScene* scene = nullptr;
-  const MethodInfo* method = nullptr;
+  const Method* method = nullptr;
   StepControl control;
   std::optional<double> error;  // empty: failed or diverged
   double rhs_evals = 0, cpu_seconds = 0;
@@ -232,17 +232,17 @@ StudyOutput work_precision(const StudyContext& ctx) {
   std::vector<WorkPoint> plan;
   std::vector<std::string> labels;
   for (const auto& scene : scenes)
-    for (const MethodInfo* method : scene_methods(scene, false)) {
+    for (const Method* method : scene_methods(scene, false)) {
       WorkPoint point{&scene, method, {}, {}, 0, 0, 0, Status::ok, false};
-      if (method->fixed_step)
+      if (method->fixed_step())
         for (int k = 0; k <= halvings; ++k) {
-          const bool implicit = method->dense_matrix || method->needs_mass_spring;
+          const bool implicit = method->dense != DenseMatrices::none || method->needs == Capability::mass_spring;
           const double coarse = implicit && scene.implicit_dt > 0 ? scene.implicit_dt : coarse_dt(*method, scene.time_scale);
           point.control = StepControl::fixed(coarse / std::pow(2.0, k));
           point.coarsest = k == 0;
           plan.push_back(point);
         }
-      if (method->adaptive)
+      if (method->adaptive())
         for (const double rtol : rtols) {
           point.control = StepControl::adaptive(rtol, 1e-3 * rtol);
           point.coarsest = rtol == rtols.front();

@@ -1,7 +1,7 @@
-// Fixed-step integration: one loop over the step grid, shared by hand-written and GSL steppers.
+// Fixed-step integration: one loop over the step grid, shared by hand-written, GSL and GPU steppers.
 #pragma once
 
-#include "integrator.hpp"
+#include "method.hpp"
 
 #include <functional>
 #include <optional>
@@ -32,41 +32,23 @@ class FixedStepper {
 
 using FixedStepperFactory = std::function<std::unique_ptr<FixedStepper>(const CountedSystem& system)>;
 
-// a fixed-step method of the table whose stepper another library makes (the GPU shader methods of
-// solvers/gpu/, which need render/'s GL context), registered by that library before any run
-// (gpu::register_gpu_methods); make_integrator finds it by name
-void register_stepper(std::string_view method, FixedStepperFactory factory);
-
 // steps of exactly dt, the last one before each output time shortened to land on it
 class FixedStepIntegrator final : public Integrator {
  public:
-  FixedStepIntegrator(std::string method, StepControl control, FixedStepperFactory make_stepper)
-      : method_(std::move(method)), control_(control), make_stepper_(std::move(make_stepper)) {}
+  // `method` is the table's entry (it outlives every run); BadMethod from integrate() for a system without
+  // the structure the method needs
+  FixedStepIntegrator(const Method& method, StepControl control, FixedStepperFactory make_stepper)
+      : method_(method), control_(control), make_stepper_(std::move(make_stepper)) {}
   RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                       std::span<const double> t_out) const override;
 
  private:
-  std::string method_;
+  const Method& method_;
   StepControl control_;
   FixedStepperFactory make_stepper_;
 };
 
-// the hand-written steppers of DESIGN.md's table
-std::unique_ptr<FixedStepper> make_euler(const CountedSystem& system);
-std::unique_ptr<FixedStepper> make_symplectic_euler(const CountedSystem& system);
-std::unique_ptr<FixedStepper> make_rk4(const CountedSystem& system);
-// backward Euler: on a mass-spring system Baraff & Witkin's linearised step on CHOLMOD (mass_spring_implicit.hpp),
-// otherwise Newton's method to convergence on a dense (or sparse) matrix
-std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system);
-// backward Euler iterated to convergence: on a mass-spring system by Newton on CHOLMOD, otherwise as above
-std::unique_ptr<FixedStepper> make_implicit_euler_newton(const CountedSystem& system);
-// Liu et al. 2013's prefactored local/global method; the system has a mass_spring()
-std::unique_ptr<FixedStepper> make_fast_mass_spring(const CountedSystem& system);
-// the seeds' three-level scheme for a wave equation on a grid (wave_step.hpp); the system has a wave_grid()
-std::unique_ptr<FixedStepper> make_wave_fd(const CountedSystem& system);
-// the free rigid body's splitting into exact rotations; the system has a free_rigid_body()
-std::unique_ptr<FixedStepper> make_rigid_splitting(const CountedSystem& system);
-// kick, contact impulses, drift for rigid bodies in contact; the system has contact_bodies()
-std::unique_ptr<FixedStepper> make_contact_stepping(const CountedSystem& system);
+// a fixed-step method's MakeIntegrator (method.hpp): the loop above around the steps `make_stepper` makes
+MakeIntegrator fixed_steps(FixedStepperFactory make_stepper);
 
 }  // namespace stepwise

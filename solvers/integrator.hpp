@@ -1,4 +1,5 @@
-// Time integration by method name: one interface over hand-written steppers, CVODE and GSL odeiv2.
+// What a run is and what it returns: the step control, the counters, the result, and the Integrator interface
+// every method is made as (method.hpp registers methods; method_table.hpp makes one by name).
 #pragma once
 
 #include "ode_system.hpp"
@@ -84,6 +85,9 @@ struct RunResult {
   std::vector<EventRecord> events;
 };
 
+// this machine's physical memory, the bound memory checks (a method's dense matrices, a particle count) are made against
+double physical_memory_bytes();
+
 class Integrator {
  public:
   virtual ~Integrator() = default;
@@ -91,47 +95,5 @@ class Integrator {
   virtual RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                               std::span<const double> t_out) const = 0;
 };
-
-// one row of DESIGN.md's method table
-struct MethodInfo {
-  std::string_view name;
-  std::string_view kind;
-  std::string_view order;   // as documented ("4", "1-12")
-  std::string_view source;
-  int order_min = 0;        // documented order range of the stepper
-  int order_max = 0;
-  bool fixed_step = false;  // accepts a fixed dt
-  bool adaptive = false;    // accepts rtol/atol
-  bool needs_second_order = false;  // needs y = (x, v)
-  bool dense_matrix = false;        // keeps a dense size() x size() Newton matrix ...
-  bool sparse_newton = false;       // ... unless the system has a sparse Jacobian, which it solves with (KLU)
-  bool needs_wave_grid = false;     // only for a wave equation on a grid (OdeSystem::wave_grid)
-  bool needs_free_rigid_body = false;  // only for a torque-free rigid body (OdeSystem::free_rigid_body)
-  bool resolves_contacts = false;   // steps rigid bodies in contact (OdeSystem::contact_bodies), and only them
-  bool needs_mass_spring = false;   // only for a mass-spring system (OdeSystem::mass_spring)
-  bool needs_cloth_grid = false;    // only for a cloth on a grid (OdeSystem::cloth_grid)
-};
-
-std::span<const MethodInfo> methods();
-const MethodInfo* find_method(std::string_view name);
-
-// whether the method can run this system at all (the structure it needs: y = (x, v), a wave grid; bodies
-// in contact need a method that resolves contacts), and if not, why, in words naming the structure
-bool method_applies(const MethodInfo& method, const OdeSystem& system);
-std::string method_requirement(const MethodInfo& method, const OdeSystem& system);
-
-// thrown for an unknown method or a step control the method cannot use
-struct BadMethod : std::invalid_argument {
-  using std::invalid_argument::invalid_argument;
-};
-
-std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control);
-
-// bytes of the dense n x n matrices the method would keep for this system (0 when it keeps none): a large
-// system (a particle system) cannot be run by such a method, and the caller says so before trying
-double dense_matrix_bytes(const MethodInfo& method, const OdeSystem& system);
-
-// this machine's physical memory, the bound such checks (and a particle count's) are made against
-double physical_memory_bytes();
 
 }  // namespace stepwise

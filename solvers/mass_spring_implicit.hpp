@@ -69,4 +69,9 @@ class BaraffWitkinSystem {
 
 std::unique_ptr<FixedStepper> make_mass_spring_implicit(const CountedSystem& system, const MassSpringImplicitOptions& options);
 
+// the steppers of implicit-euler (this step on a mass-spring system, dense Newton otherwise) and of
+// fast-mass-spring (solvers/methods/), for the benches that step them one at a time
+std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system);
+std::unique_ptr<FixedStepper> make_fast_mass_spring(const CountedSystem& system);
+
 }  // namespace stepwise

@@ -38,12 +38,6 @@ double symplectic_euler_wave_dt(const WaveGridView& grid) {
   return grid.mu > 0 ? std::min(limit, 2 / grid.mu) : limit;
 }
 
-std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid) {
-  if (method == "wave-fd" || method == "gpu-wave") return wave_stable_dt(grid);
-  if (method == "symplectic-euler" || method == "gpu-symplectic-euler") return symplectic_euler_wave_dt(grid);
-  return std::nullopt;
-}
-
 namespace {
 
 // how far ahead of the sweep the streaming row kernel asks for the two streams it reads from memory

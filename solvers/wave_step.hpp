@@ -51,10 +51,6 @@ double wave_stable_dt(const WaveGridView& grid);
 // dt <= (-mu + sqrt(mu^2 + 4 w_max^2)) / w_max^2, shorter the more damping
 double symplectic_euler_wave_dt(const WaveGridView& grid);
 
-// the limit above for a method that has one derived here (wave-fd and gpu-wave, symplectic-euler and
-// gpu-symplectic-euler), else none
-std::optional<double> wave_method_stable_dt(std::string_view method, const WaveGridView& grid);
-
 // one cell of the update: the one formula every loop shares (the kernels below, the wave-fd stepper, the
 // float32 reference of the GPU's shader, whose GLSL spells the same operations in the same order)
 template <class T>

@@ -2,7 +2,7 @@
 
 #include "models/model.hpp"
 #include "models/pendulum.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 
 #include <cmath>
 #include <numbers>

@@ -7,19 +7,19 @@
 
 namespace stepwise {
 
-double coarse_dt(const MethodInfo& method, double time_scale) {
-  if (method.order_min != method.order_max) return time_scale / 32;
-  const int p = method.order_max;
+double coarse_dt(const Method& method, double time_scale) {
+  if (method.order.min != method.order.max) return time_scale / 32;
+  const int p = method.order.max;
   const double fraction = p <= 1 ? 1.0 / 256 : p <= 3 ? 1.0 / 32 : p <= 4 ? 1.0 / 4 : p <= 5 ? 1.0 / 2 : 1.0;
   return time_scale * fraction;
 }
 
-ConvergenceSweep convergence_sweep(const Model& model, const MethodInfo& method, double t_end, int halvings,
+ConvergenceSweep convergence_sweep(const Model& model, const Method& method, double t_end, int halvings,
                                    double coarse) {
   ConvergenceSweep sweep;
   // an eighth-order error falls 256-fold per halving: four halvings span more than the range between the
   // asymptotic ceiling and round-off, so high orders refine by sqrt(2) over the same range of dt
-  const int per_halving = method.order_max > 5 ? 2 : 1;
+  const int per_halving = method.order.max > 5 ? 2 : 1;
   for (int k = 0; k <= halvings * per_halving; ++k) {
     StepControl control;
     control.dt = coarse / std::pow(2.0, static_cast<double>(k) / per_halving);

@@ -19,10 +19,10 @@ struct ConvergenceSweep {
 // time_scale (s): the fraction shrinks with the order so that the error starts near 1e-3 and stays above
 // round-off for at least four halvings (chosen by measurement on the pendulum, flow-field and projectile scenes);
 // a power of two of time_scale, so that t_end is a whole number of steps
-double coarse_dt(const MethodInfo& method, double time_scale);
+double coarse_dt(const Method& method, double time_scale);
 
 // run model with method from dt = coarse down to coarse / 2^halvings, to t_end
-ConvergenceSweep convergence_sweep(const Model& model, const MethodInfo& method, double t_end, int halvings,
+ConvergenceSweep convergence_sweep(const Model& model, const Method& method, double t_end, int halvings,
                                    double coarse);
 
 }  // namespace stepwise

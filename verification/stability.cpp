@@ -3,6 +3,7 @@
 #include "models/hanging_chain.hpp"
 #include "models/height_field.hpp"
 #include "solvers/fd_jacobian.hpp"
+#include "solvers/stability.hpp"
 #include "solvers/wave_step.hpp"
 #include "tolerances.hpp"
 #include "wave_modes.hpp"
@@ -48,7 +49,7 @@ std::function<bool(double dt)> wave_stays_bounded(std::string_view method, int p
 
 WaveStability wave_stability(std::string_view method, int points, double spacing, double c, double mu, long steps) {
   const WaveGridView grid{points, spacing, c, mu};
-  const double derived = *wave_method_stable_dt(method, grid);
+  const double derived = find_method(method)->stability.wave_dt(grid);
   const double measured = bisect_stability(wave_stays_bounded(method, points, spacing, c, mu, steps), 0.5 * derived, 2 * derived,
                                            tolerance::stability_bisection_width);
   return {measured, derived, seeds_wave_condition(grid)};
@@ -84,16 +85,9 @@ StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::Vecto
 }
 
 std::optional<double> mass_spring_stable_dt(std::string_view method, const StiffestMode& mode) {
-  const double w = mode.omega, a = mode.damping;
-  // symplectic Euler on x'' = -w^2 x - 2 a x': amplification [[1 - h^2 w^2, h (1 - 2 h a)], [-h w^2, 1 - 2 h a]],
-  // determinant 1 - 2 h a, trace 2 - h^2 w^2 - 2 h a; |trace| <= 1 + determinant gives h^2 w^2 <= 4 - 4 h a
-  if (method == "symplectic-euler" || method == "gpu-cloth") return 2 * (std::sqrt(a * a + w * w) - a) / (w * w);
-  // explicit Euler and rk4: |R(h lambda)| <= 1 at lambda = -a + i sqrt(w^2 - a^2), |lambda| = w
-  const std::complex<double> lambda(-a, std::sqrt(std::max(w * w - a * a, 0.0)));
-  if (method == "euler") return 2 * a / (w * w);
-  // rk4 has no closed form: the step where |R(h lambda)| reaches 1 on the mode's pair of eigenvalues
-  if (method == "rk4") return spectrum_stable_dt(method, Eigen::Vector2cd(lambda, std::conj(lambda)));
-  return std::nullopt;
+  const Method* m = find_method(method);
+  if (!m || !m->stability.oscillator_dt) return std::nullopt;
+  return m->stability.oscillator_dt(mode.omega, mode.damping);
 }
 
 double measured_stable_dt(const Model& model, std::string_view method, long steps, double predicted) {
@@ -104,10 +98,9 @@ double measured_stable_dt(const Model& model, std::string_view method, long step
 }
 
 std::optional<std::complex<double>> stability_function(std::string_view method, std::complex<double> z) {
-  if (method == "euler") return 1.0 + z;
-  if (method == "rk4") return 1.0 + z * (1.0 + z / 2.0 * (1.0 + z / 3.0 * (1.0 + z / 4.0)));
-  if (method == "implicit-euler") return 1.0 / (1.0 - z);
-  return std::nullopt;
+  const Method* m = find_method(method);
+  if (!m || !m->stability.R) return std::nullopt;
+  return m->stability.R(z);
 }
 
 Eigen::VectorXcd jacobian_spectrum(const OdeSystem& system, double t, const Eigen::VectorXd& y) {
@@ -117,37 +110,9 @@ Eigen::VectorXcd jacobian_spectrum(const OdeSystem& system, double t, const Eige
 }
 
 std::optional<double> spectrum_stable_dt(std::string_view method, const Eigen::VectorXcd& eigenvalues) {
-  if (!stability_function(method, 0) || eigenvalues.size() == 0) return std::nullopt;
-  // the spectrum is as accurate as the Jacobian: a difference Jacobian's relative error is ~sqrt(machine
-  // epsilon) = 1.5e-8, so an eigenvalue on the imaginary axis (an undamped mode) may come out with a positive real
-  // part of that order of the largest |lambda|, and a zero (a fixed boundary value, an invariant) as a speck of
-  // that size. Real parts up to this fraction of the largest are taken as 0, and eigenvalues smaller than it are
-  // left out: R(0) = 1 for every consistent method, so zeros never grow.
-  constexpr double jacobian_resolution = 1e-6;
-  // what remains is exact to round-off: this much growth per step is taken as none
-  constexpr double spectrum_growth_allowance = 1e-9;
-  const double largest = eigenvalues.cwiseAbs().maxCoeff();
-  std::vector<std::complex<double>> spectrum;
-  for (const auto& lambda : eigenvalues)
-    if (std::abs(lambda) > jacobian_resolution * largest)
-      spectrum.emplace_back(lambda.real() > 0 && lambda.real() < jacobian_resolution * largest ? 0.0 : lambda.real(), lambda.imag());
-  const auto grows = [&](double h) {
-    for (const auto& lambda : spectrum)
-      if (std::abs(*stability_function(method, h * lambda)) > 1 + spectrum_growth_allowance) return true;
-    return false;
-  };
-  double smallest = largest;
-  for (const auto& lambda : spectrum) smallest = std::min(smallest, std::abs(lambda));
-  double low = 1e-3 / largest;
-  if (grows(low)) return 0.0;
-  double high = 2 * low;
-  while (!grows(high)) {
-    low = high;
-    high *= 2;
-    if (low > 1e6 / smallest) return std::numeric_limits<double>::infinity();
-  }
-  while (high - low > 1e-9 * high) (grows((low + high) / 2) ? high : low) = (low + high) / 2;
-  return low;
+  const Method* m = find_method(method);
+  if (!m || !m->stability.R || eigenvalues.size() == 0) return std::nullopt;
+  return largest_stable_step(m->stability.R, eigenvalues);
 }
 
 std::unique_ptr<Model> stability_sheet(double stiffness) {

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "models/model.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 
 #include <complex>
 #include <functional>

@@ -1,6 +1,7 @@
 #include "gpu_cloth.hpp"
 
 #include "solvers/fixed_step.hpp"
+#include "solvers/stability.hpp"
 #include "solvers/run_support.hpp"
 
 #include <fmt/format.h>
@@ -9,7 +10,7 @@
 
 namespace stepwise::gpu {
 
-using render::GlError;
+using gl::GlError;
 
 namespace {
 
@@ -227,8 +228,20 @@ class GpuClothStepper final : public FixedStepper {
 
 }  // namespace
 
-void register_cloth_methods() {
-  register_stepper("gpu-cloth", [](const CountedSystem& system) { return std::make_unique<GpuClothStepper>(system); });
+void register_cloth_methods(MethodTable& table) {
+  table.add({
+      .name = "gpu-cloth",
+      .family = "gpu",
+      .source = "OpenGL shader",
+      .description = "the explicit mass-spring cloth (twelve springs a node, pins, gravity, wind, pick force, sphere and ground) "
+                     "as symplectic Euler in a fragment-shader pass on float32 textures (OpenGL), fixed step",
+      .order = {1, 1, "1"},
+      .stepping = Stepping::fixed,
+      .needs = Capability::cloth_grid,
+      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<GpuClothStepper>(system); }),
+      .stability = {.oscillator_dt = symplectic_euler_oscillator_dt},
+      .device_problem = device_problem,
+  });
 }
 
 }  // namespace stepwise::gpu

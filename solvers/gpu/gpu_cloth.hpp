@@ -33,6 +33,6 @@ class GpuCloth final : public GpuGrid {
 
 // registers gpu-cloth (GpuCloth stepping a cloth scene, one pass a step, read back for the run's state) with
 // the solvers' method table
-void register_cloth_methods();
+void register_cloth_methods(MethodTable& table);
 
 }  // namespace stepwise::gpu

@@ -1,5 +1,7 @@
 #include "gpu_grid.hpp"
 
+#include "solvers/method.hpp"
+
 #include "gpu_cloth.hpp"
 #include "gpu_wave.hpp"
 
@@ -10,12 +12,12 @@
 
 namespace stepwise::gpu {
 
-using render::Backend;
-using render::GlError;
-using render::check_gl;
-using render::link_program;
-using render::make_context;
-using render::parse_backend;
+using gl::Backend;
+using gl::GlError;
+using gl::check_gl;
+using gl::link_program;
+using gl::make_context;
+using gl::parse_backend;
 
 namespace {
 
@@ -153,9 +155,9 @@ std::string device_problem(const OdeSystem& system) {
   }
 }
 
-void register_gpu_methods() {
-  register_wave_methods();
-  register_cloth_methods();
+void register_gpu_methods(MethodTable& table) {
+  register_wave_methods(table);
+  register_cloth_methods(table);
 }
 
 }  // namespace stepwise::gpu

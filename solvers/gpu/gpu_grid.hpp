@@ -1,21 +1,20 @@
 // What the GPU shader methods (issue 9) share: a grid's state in RGBA32F textures of its size, stepped by
 // full-screen fragment passes that read one set of textures and write the other, then swap (ping-pong), on
-// render/'s GL context (OSMesa's llvmpipe, or a GPU through EGL). They are solvers: they step model state,
-// so they live here and not in render/, which only lends them its context. gpu_wave.hpp and gpu_cloth.hpp
-// have the passes; this file also has the device questions a run asks before it starts, and the
-// registration of the methods with the solvers' table.
+// the GL context of gl/ (OSMesa's llvmpipe, or a GPU through EGL), which render/ uses too. They are solvers:
+// they step model state, so they live here and not in render/. gpu_wave.cpp and gpu_cloth.cpp have the
+// passes and register their methods; this file also has the device questions a run asks before it starts.
 #pragma once
 
-#include "render/context.hpp"
-#include "solvers/ode_system.hpp"
+#include "gl/context.hpp"
+#include "solvers/method.hpp"
 
 #include <string>
 #include <vector>
 
 namespace stepwise::gpu {
 
-using render::Context;
-using render::Gl;
+using gl::Context;
+using gl::Gl;
 
 // a width x height grid's state in `planes` RGBA32F textures (plane p bound to texture unit p and written
 // to colour attachment p), twice over, stepped by a fragment pass from one set into the other; texel (x, y)
@@ -56,7 +55,7 @@ class GpuGrid {
 
 // the backend the GPU methods make their contexts with: OSMesa, unless STEPWISE_GPU_BACKEND=egl; GlError
 // for another value
-render::Backend backend();
+gl::Backend backend();
 
 // a context of that backend for a GPU method's run. On llvmpipe the passes are rasterised on the calling
 // thread (LP_NUM_THREADS=0, unless the environment sets it; read when the process's first context is
@@ -72,10 +71,5 @@ std::string texture_problem(const Context& context, int width, int height);
 // the same asked of a context of the GPU methods' backend, made for the question, about the grid a GPU
 // method would step for `system` (its wave grid or cloth grid); a context that cannot be made is the answer
 std::string device_problem(const OdeSystem& system);
-
-// registers the GPU shader methods with the solvers' method table: gpu-wave, gpu-symplectic-euler
-// (gpu_wave.hpp) and gpu-cloth (gpu_cloth.hpp). Each run makes its own context, OSMesa unless
-// STEPWISE_GPU_BACKEND=egl
-void register_gpu_methods();
 
 }  // namespace stepwise::gpu

@@ -1,6 +1,7 @@
 #include "gpu_wave.hpp"
 
-#include "solvers/wave_fd.hpp"
+#include "solvers/method.hpp"
+#include "solvers/three_level_wave.hpp"
 
 #include <fmt/format.h>
 
@@ -9,7 +10,7 @@
 
 namespace stepwise::gpu {
 
-using render::GlError;
+using gl::GlError;
 
 namespace {
 
@@ -199,9 +200,33 @@ class GpuSymplecticStepper final : public FixedStepper {
 
 }  // namespace
 
-void register_wave_methods() {
-  register_stepper("gpu-wave", [](const CountedSystem& system) { return std::make_unique<GpuWaveStepper>(system); });
-  register_stepper("gpu-symplectic-euler", [](const CountedSystem& system) { return std::make_unique<GpuSymplecticStepper>(system); });
+void register_wave_methods(MethodTable& table) {
+  table.add({
+      .name = "gpu-wave",
+      .family = "gpu",
+      .source = "OpenGL shader",
+      .description = "the seeds' three-level scheme as a fragment-shader pass on float32 textures (OpenGL: llvmpipe, or a GPU "
+                     "through EGL), fixed step",
+      .order = {2, 2, "2"},
+      .stepping = Stepping::fixed,
+      .needs = Capability::wave_grid,
+      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<GpuWaveStepper>(system); }),
+      .stability = {.wave_dt = wave_stable_dt},
+      .device_problem = device_problem,
+  });
+  table.add({
+      .name = "gpu-symplectic-euler",
+      .family = "gpu",
+      .source = "OpenGL shader",
+      .description = "the second seed's scheme, symplectic Euler with the damping explicit, as a fragment-shader pass on "
+                     "float32 textures (OpenGL), fixed step",
+      .order = {1, 1, "1"},
+      .stepping = Stepping::fixed,
+      .needs = Capability::wave_grid,
+      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<GpuSymplecticStepper>(system); }),
+      .stability = {.wave_dt = symplectic_euler_wave_dt},
+      .device_problem = device_problem,
+  });
 }
 
 }  // namespace stepwise::gpu

@@ -53,8 +53,8 @@ class GpuSymplecticWave final : public GpuWaveGrid {
   void download(Eigen::VectorXf& z, Eigen::VectorXf& v) const { download_channels(z, v); }
 };
 
-// registers gpu-wave (GpuWave stepping a wave scene, wave_fd.hpp's start and velocities around it) and
+// registers gpu-wave (GpuWave stepping a wave scene, three_level_wave.hpp's start and velocities around it) and
 // gpu-symplectic-euler (GpuSymplecticWave) with the solvers' method table
-void register_wave_methods();
+void register_wave_methods(MethodTable& table);
 
 }  // namespace stepwise::gpu

@@ -18,9 +18,9 @@ const double deg170 = 170 * std::numbers::pi / 180;
 TEST(Adaptive, ErrorFallsAsToleranceTightens) {
   const auto model = make_model("pendulum", {{"theta0", 1.0}});
   for (const auto& method : methods()) {
-    if (!method.adaptive) continue;
+    if (!method.adaptive()) continue;
     // low-order steppers need ~rtol^(-1/p) steps: keep them to tolerances they reach in reasonable work
-    const int tightest = method.order_max <= 1 ? 7 : method.order_max == 2 ? 10 : 12;
+    const int tightest = method.order.max <= 1 ? 7 : method.order.max == 2 ? 10 : 12;
     std::vector<double> rtols, errors;
     for (int e = 3; e <= tightest; ++e) {
       const double rtol = std::pow(10.0, -e);
@@ -32,7 +32,7 @@ TEST(Adaptive, ErrorFallsAsToleranceTightens) {
     const double slope = loglog_slope(rtols, errors);
     std::cout << method.name << ": error " << errors.front() << " at rtol 1e-3 -> " << errors.back() << " at rtol 1e-"
               << tightest << ", slope " << slope << '\n';
-    EXPECT_GT(slope, tolerance::min_tolerance_slope(method.order_min)) << method.name;
+    EXPECT_GT(slope, tolerance::min_tolerance_slope(method.order.min)) << method.name;
     EXPECT_LT(errors.back(), errors.front()) << method.name;
   }
 }

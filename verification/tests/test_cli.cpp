@@ -1,6 +1,6 @@
 // The command-line contract of DESIGN.md, pinned against the built binary: names and shapes of
 // methods --json, trajectory.csv and summary.json, exit statuses, and one-line errors naming file, line and key.
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "verification/tolerances.hpp"
 
 #include <fmt/format.h>

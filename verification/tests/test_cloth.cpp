@@ -4,7 +4,7 @@
 #include "models/hanging_chain.hpp"
 #include "models/model.hpp"
 #include "models/springs.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "solvers/mass_spring_implicit.hpp"
 #include "solvers/run_support.hpp"
 #include "verification/measure.hpp"

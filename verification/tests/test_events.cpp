@@ -1,7 +1,7 @@
 // Events in every integrator, checked on the bouncing ball against its closed form: impact times, apex
 // heights eps^(2n) h0, resting contact instead of the Zeno point, and no energy gained at eps = 1.
 #include "models/bouncing_ball.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "verification/measure.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/tolerances.hpp"
@@ -27,7 +27,7 @@ TEST(Events, EveryMethodSeesEveryImpactAndTheRest) {
     if (!method_applies(method, *make_model("bouncing-ball", ball))) continue;
     for (const auto location : {EventLocation::linear, EventLocation::restep}) {
       // adaptive where the method can be and is not of low order (rk1imp at rtol 1e-10 takes millions of steps)
-      const bool adaptive = method.adaptive && (!method.fixed_step || method.order_max > 2);
+      const bool adaptive = method.adaptive() && (!method.fixed_step() || method.order.max > 2);
       StepControl control = adaptive ? StepControl::adaptive(1e-10, 1e-12) : StepControl::fixed(1e-4);
       control.event_location = location;
       const RunResult r = run_ball(ball, method.name, control, {t_end});

@@ -6,7 +6,7 @@
 #include "models/model.hpp"
 #include "solvers/gpu/gpu_cloth.hpp"
 #include "solvers/gpu/gpu_wave.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "verification/gpu_references.hpp"
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
@@ -21,8 +21,8 @@
 namespace stepwise {
 namespace {
 
-render::Context& context() {
-  static const std::unique_ptr<render::Context> c = render::make_osmesa_context();
+gl::Context& context() {
+  static const std::unique_ptr<gl::Context> c = gl::make_osmesa_context();
   return *c;
 }
 
@@ -128,7 +128,6 @@ TEST(GpuShader, GpuWaveMethodFollowsWaveFdToFloat32RoundOff) {
   // the method as `run` takes it (wave_fd.hpp's start in double, then passes on the device, each level
   // read back): against wave-fd on the standing wave, 400 steps at 0.9 of the limit; the state enters the
   // texture rounded to float (one more rounding, once) and the coefficients too (one more per step)
-  gpu::register_gpu_methods();
   const auto model = make_model("standing-wave", {{"size", 33}, {"spacing", 1.0 / 32}, {"mode_m", 2}, {"mode_n", 3}, {"amplitude", 1.0}, {"mu", 0.0}});
   const WaveGridView grid = *model->wave_grid();
   const double dt = 0.9 * wave_stable_dt(grid);
@@ -259,7 +258,6 @@ TEST(GpuShader, ClothGridStepInFloat64IsTheModelsSymplecticEuler) {
 TEST(GpuShader, GpuClothMethodFollowsSymplecticEulerToFloat32RoundOff) {
   // gpu-cloth as `run` takes it (the state uploaded once rounded to float, the constants each step, each
   // new state read back) against symplectic-euler on the model; the sheet that meets the sphere runs too
-  gpu::register_gpu_methods();
   for (const auto& params : {flag_params(), draping_params()}) {
     const auto model = make_model("cloth", params);
     const double h = half_limit(*model);

@@ -24,12 +24,12 @@ TEST_P(Order, FixedStepMethodsConvergeAtTheirDocumentedOrder) {
   const Scene& scene = GetParam();
   const auto model = make_model(scene.model, scene.params);
   for (const auto& method : methods()) {
-    if (!method.fixed_step || !method_applies(method, *model)) continue;
+    if (!method.fixed_step() || !method_applies(method, *model)) continue;
     const ConvergenceSweep sweep = convergence_sweep(*model, method, scene.t_end, 6, coarse_dt(method, scene.time_scale));
     // an order-p error falls 2^(4p)-fold over four halvings: for p > 5 more than the window between the
     // asymptotic range and round-off; rk8pd has its own test below on a longer run
-    if (method.order_max > 5) continue;
-    if (method.order_min != method.order_max) {
+    if (method.order.max > 5) continue;
+    if (method.order.min != method.order.max) {
       // variable-order steppers (extrapolation, multistep) pick their order from the error control, so at a
       // fixed step their error may already sit at round-off: the claim is that the finest step is as accurate
       // as the coarsest that succeeded (msadams' functional iteration can fail at a coarse fixed step)
@@ -44,8 +44,8 @@ TEST_P(Order, FixedStepMethodsConvergeAtTheirDocumentedOrder) {
     }
     ASSERT_GE(sweep.fit_dt.size(), 5u) << method.name << ": at least four halvings in the asymptotic range above round-off";
     std::cout << scene.model << " " << method.name << ": observed order " << sweep.observed_order << " (documented "
-              << method.order << "), error " << sweep.fit_error.front() << " -> " << sweep.fit_error.back() << '\n';
-    EXPECT_NEAR(sweep.observed_order, method.order_max, tolerance::order_band) << method.name;
+              << method.order.text << "), error " << sweep.fit_error.front() << " -> " << sweep.fit_error.back() << '\n';
+    EXPECT_NEAR(sweep.observed_order, method.order.max, tolerance::order_band) << method.name;
   }
 }
 
@@ -54,12 +54,12 @@ TEST(Order, Rk8pdConvergesAtNinthOrderOnALongPendulumRun) {
   // over two halvings (five steps, each by sqrt 2) before round-off. GSL documents rk8pd as an 8(9) pair;
   // it advances with the ninth-order solution (measured here: 9.00).
   const auto model = make_model("pendulum", {{"theta0", 1.0}});
-  const MethodInfo& method = *find_method("gsl-rk8pd");
+  const Method& method = *find_method("gsl-rk8pd");
   const ConvergenceSweep sweep = convergence_sweep(*model, method, 40.0, 2, 0.25);
   ASSERT_GE(sweep.fit_dt.size(), 5u);
   std::cout << "gsl-rk8pd: observed order " << sweep.observed_order << ", error " << sweep.fit_error.front() << " -> "
             << sweep.fit_error.back() << '\n';
-  EXPECT_NEAR(sweep.observed_order, method.order_max, tolerance::order_band);
+  EXPECT_NEAR(sweep.observed_order, method.order.max, tolerance::order_band);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Order,

@@ -3,7 +3,7 @@
 // without drag and never drifts under symplectic Euler, and bad counts are refused by key.
 #include "models/cell_list.hpp"
 #include "models/model.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "verification/measure.hpp"
 #include "verification/tolerances.hpp"
 

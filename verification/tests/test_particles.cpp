@@ -3,7 +3,7 @@
 #include "models/model.hpp"
 #include "models/particle_mesh.hpp"
 #include "models/plane_collision.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "verification/measure.hpp"
 #include "verification/tolerances.hpp"
 
@@ -184,10 +184,10 @@ TEST(ParticleMesh, NoParticleEndsAStepBehindTheGroundOrInsideTheMeshAndEnergyOnl
   const auto model = make_model("particle-mesh", rain(30));
   const double e0 = *model->energy(model->initial_state());
   for (const char* method : {"rk4", "symplectic-euler", "gsl-rkf45", "cvode-bdf"}) {
-    const MethodInfo& info = *find_method(method);
-    StepControl control = info.fixed_step ? StepControl::fixed(1e-3) : StepControl::adaptive(1e-9, 1e-12);
+    const Method& info = *find_method(method);
+    StepControl control = info.fixed_step() ? StepControl::fixed(1e-3) : StepControl::adaptive(1e-9, 1e-12);
     control.event_location = EventLocation::restep;
-    const Measured m = run_and_measure(*model, method, control, 3.0, info.fixed_step ? 1e-3 : 0.01);
+    const Measured m = run_and_measure(*model, method, control, 3.0, info.fixed_step() ? 1e-3 : 0.01);
     ASSERT_EQ(m.result.status, Status::ok) << method << ": " << m.result.message;
     std::map<std::string, int> kinds;
     for (const auto& e : m.result.events) ++kinds[e.kind];

@@ -31,8 +31,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-render::Context& context() {
-  static const std::unique_ptr<render::Context> c = render::make_osmesa_context();
+gl::Context& context() {
+  static const std::unique_ptr<gl::Context> c = gl::make_osmesa_context();
   return *c;
 }
 
@@ -360,10 +360,10 @@ TEST(Frames, EverySceneIsDrawnWhereItsShapesProject) {
 }
 
 TEST(Frames, OsmesaAndEglDrawTheSameBytes) {
-  std::unique_ptr<render::Context> egl;
+  std::unique_ptr<gl::Context> egl;
   try {
-    egl = render::make_egl_context();
-  } catch (const render::GlError& e) {
+    egl = gl::make_egl_context();
+  } catch (const gl::GlError& e) {
     GTEST_SKIP() << "no EGL here: " << e.what();
   }
   const auto model = make_model("water-drop", {{"size", 32}});
@@ -372,7 +372,7 @@ TEST(Frames, OsmesaAndEglDrawTheSameBytes) {
   const render::View view = render::make_view({&shapes, 1}, {}, 200, 150);
   std::string hashes[2];
   for (int k = 0; k < 2; ++k) {
-    render::Context& c = k == 0 ? *egl : context();
+    gl::Context& c = k == 0 ? *egl : context();
     render::Renderer renderer(c, 200, 150);
     hashes[k] = render::pixel_hash(renderer.draw(shapes, {}, view));
   }

@@ -4,7 +4,7 @@
 // period; the stable axes; a falling body against the projectile's exact solution.
 #include "models/mass_properties.hpp"
 #include "models/rigid_body.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "verification/invariants.hpp"
 #include "verification/measure.hpp"
 #include "verification/order_fit.hpp"
@@ -307,7 +307,7 @@ TEST(RigidBody, AFallingBodyWithoutRotationIsTheProjectile) {
 }
 
 TEST(RigidBody, TheSplittingAppliesOnlyToATorqueFreeBody) {
-  const MethodInfo& split = *find_method("rigid-splitting");
+  const Method& split = *find_method("rigid-splitting");
   EXPECT_TRUE(method_applies(split, *make_model("rigid-body", {{"g", 9.81}})));
   EXPECT_FALSE(method_applies(split, *make_model("rigid-body", {{"angular_drag", 0.1}})));
   EXPECT_FALSE(method_applies(split, *make_model("rigid-body", {{"fx", 1}, {"pz", 0.5}}))) << "a force off the centre of mass is a torque";

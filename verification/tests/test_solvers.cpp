@@ -1,7 +1,7 @@
 // Solver backends: counting, the pitfalls of the exact library versions, divergence, and the seeds'
 // claim about explicit and implicit Euler in a position-independent force field.
 #include "models/model.hpp"
-#include "solvers/integrator.hpp"
+#include "solvers/method_table.hpp"
 #include "verification/measure.hpp"
 #include "verification/tolerances.hpp"
 
@@ -41,7 +41,7 @@ TEST(Solvers, EveryCallOfTheRightHandSideIsCountedWithOrWithoutAnAnalyticJacobia
     if (!method_applies(method, *model)) continue;
     for (const bool hide : {false, true}) {
       SelfCounting system(*model, hide);
-      const auto control = method.adaptive ? StepControl::adaptive(1e-8, 1e-10) : StepControl::fixed(1e-2);
+      const auto control = method.adaptive() ? StepControl::adaptive(1e-8, 1e-10) : StepControl::fixed(1e-2);
       const RunResult r = make_integrator(method.name, control)->integrate(system, 0, model->initial_state(), t_out);
       ASSERT_EQ(r.status, Status::ok) << method.name << ": " << r.message;
       // difference-quotient Jacobians (CVODE's, GSL's implicit steppers') included: nothing escapes the wrapper
@@ -156,7 +156,7 @@ TEST(Solvers, ABlowUpIsReportedAsDivergedAtTheTimeItHappened) {
   const std::vector<double> t_out{0.5, 1.5, 2.0};
   for (const auto& method : methods()) {
     if (!method_applies(method, system)) continue;
-    auto control = method.adaptive ? StepControl::adaptive(1e-8, 1e-10) : StepControl::fixed(1e-4);
+    auto control = method.adaptive() ? StepControl::adaptive(1e-8, 1e-10) : StepControl::fixed(1e-4);
     // CVODE Adams' fixed-point iteration needs h |df/dy| = 2 h y < 1, so its steps collapse near the
     // singularity: a step budget ends it (measured: 5e7 steps, a minute, without one)
     control.max_steps = 200'000;

@@ -1,4 +1,4 @@
-// GSL odeiv2 adapter.
+// gsl-*: every GSL odeiv2 stepper, fixed step or adaptive (GSL's types stay in this file).
 //
 // Pitfalls with GSL 2.7 handled here:
 // - rk1imp, rk2imp, rk4imp, bsimp and msbdf dereference the Jacobian: a NULL one segfaults, so the
@@ -7,33 +7,18 @@
 //   runs call gsl_odeiv2_step_apply directly, through the shared fixed-step loop;
 // - msadams and msbdf need their driver (they read the control's error level), so a driver is always allocated;
 // - GSL's default error handler aborts the process: it is switched off once, and return codes are reported.
-#include "gsl_backend.hpp"
-
-#include "events.hpp"
-#include "fd_jacobian.hpp"
-#include "fixed_step.hpp"
-#include "run_support.hpp"
+#include "solvers/events.hpp"
+#include "solvers/fd_jacobian.hpp"
+#include "solvers/fixed_step.hpp"
+#include "solvers/run_support.hpp"
 
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_odeiv2.h>
 
-#include <map>
 #include <mutex>
 
 namespace stepwise {
 namespace {
-
-const gsl_odeiv2_step_type* step_type(std::string_view method) {
-  static const std::map<std::string_view, const gsl_odeiv2_step_type*> types = {
-      {"gsl-rk2", gsl_odeiv2_step_rk2},       {"gsl-rk4", gsl_odeiv2_step_rk4},
-      {"gsl-rkf45", gsl_odeiv2_step_rkf45},   {"gsl-rkck", gsl_odeiv2_step_rkck},
-      {"gsl-rk8pd", gsl_odeiv2_step_rk8pd},   {"gsl-rk1imp", gsl_odeiv2_step_rk1imp},
-      {"gsl-rk2imp", gsl_odeiv2_step_rk2imp}, {"gsl-rk4imp", gsl_odeiv2_step_rk4imp},
-      {"gsl-bsimp", gsl_odeiv2_step_bsimp},   {"gsl-msadams", gsl_odeiv2_step_msadams},
-      {"gsl-msbdf", gsl_odeiv2_step_msbdf}};
-  const auto it = types.find(method);
-  return it == types.end() ? nullptr : it->second;
-}
 
 void switch_off_abort_handler() {
   static std::once_flag once;
@@ -218,17 +203,53 @@ class GslAdaptiveIntegrator final : public Integrator {
   StepControl control_;
 };
 
+// one integrator of GSL's stepper `type`: fixed step when control.dt is set, else adaptive to rtol/atol
+MakeIntegrator gsl_integrator(const gsl_odeiv2_step_type* type) {
+  return [type](const Method& method, const StepControl& control) -> std::unique_ptr<Integrator> {
+    switch_off_abort_handler();
+    if (!control.dt) return std::make_unique<GslAdaptiveIntegrator>(std::string(method.name), type, control);
+    return std::make_unique<FixedStepIntegrator>(
+        method, control, [name = std::string(method.name), type, control](const CountedSystem& system) {
+          return std::make_unique<GslFixedStepper>(system, name, type, control);
+        });
+  };
+}
+
 }  // namespace
 
-std::unique_ptr<Integrator> make_gsl_integrator(std::string_view method, const StepControl& control) {
-  switch_off_abort_handler();
-  const gsl_odeiv2_step_type* type = step_type(method);
-  if (!type) throw BadMethod(fmt::format("unknown GSL method '{}'", method));
-  if (!control.dt) return std::make_unique<GslAdaptiveIntegrator>(std::string(method), type, control);
-  return std::make_unique<FixedStepIntegrator>(
-      std::string(method), control, [name = std::string(method), type, control](const CountedSystem& system) {
-        return std::make_unique<GslFixedStepper>(system, name, type, control);
-      });
+// GSL's orders as measured by the convergence tests: its embedded pairs advance with the higher-order
+// solution (rk2 is a 2(3) pair of order 3, rk8pd an 8(9) pair of order 9)
+void register_gsl_methods(MethodTable& table) {
+  struct Stepper {
+    std::string_view name;
+    const gsl_odeiv2_step_type* type;
+    std::string_view description;
+    Order order;
+    DenseMatrices dense;
+  };
+  const Stepper steppers[] = {
+      {"gsl-rk2", gsl_odeiv2_step_rk2, "explicit embedded Runge-Kutta (2,3), advances with the third-order solution", {3, 3, "3"}, DenseMatrices::none},
+      {"gsl-rk4", gsl_odeiv2_step_rk4, "explicit classical Runge-Kutta, error by step doubling", {4, 4, "4"}, DenseMatrices::none},
+      {"gsl-rkf45", gsl_odeiv2_step_rkf45, "explicit embedded Runge-Kutta-Fehlberg (4,5)", {5, 5, "5"}, DenseMatrices::none},
+      {"gsl-rkck", gsl_odeiv2_step_rkck, "explicit embedded Runge-Kutta Cash-Karp (4,5)", {5, 5, "5"}, DenseMatrices::none},
+      {"gsl-rk8pd", gsl_odeiv2_step_rk8pd, "explicit embedded Runge-Kutta Prince-Dormand (8,9), advances with the ninth-order solution",
+       {9, 9, "9"}, DenseMatrices::none},
+      {"gsl-rk1imp", gsl_odeiv2_step_rk1imp, "implicit Gaussian first order Runge-Kutta (backward Euler)", {1, 1, "1"}, DenseMatrices::always},
+      {"gsl-rk2imp", gsl_odeiv2_step_rk2imp, "implicit Gaussian second order Runge-Kutta (midpoint)", {2, 2, "2"}, DenseMatrices::always},
+      {"gsl-rk4imp", gsl_odeiv2_step_rk4imp, "implicit Gaussian fourth order Runge-Kutta", {4, 4, "4"}, DenseMatrices::always},
+      {"gsl-bsimp", gsl_odeiv2_step_bsimp, "implicit Bulirsch-Stoer (Bader-Deuflhard)", {1, 12, "variable"}, DenseMatrices::always},
+      {"gsl-msadams", gsl_odeiv2_step_msadams, "variable order Adams, functional iteration", {1, 12, "1-12"}, DenseMatrices::none},
+      {"gsl-msbdf", gsl_odeiv2_step_msbdf, "variable order BDF, Newton iteration", {1, 5, "1-5"}, DenseMatrices::always},
+  };
+  for (const auto& s : steppers)
+    table.add({.name = s.name,
+               .family = "gsl",
+               .source = "GSL odeiv2",
+               .description = s.description,
+               .order = s.order,
+               .stepping = Stepping::fixed_or_adaptive,
+               .dense = s.dense,
+               .make = gsl_integrator(s.type)});
 }
 
 }  // namespace stepwise

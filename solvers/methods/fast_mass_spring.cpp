@@ -12,9 +12,9 @@
 // right-hand sides. Every force that is not an elastic spring (gravity, drag, wind, the springs' Voigt
 // damping, a picked node's pull) is f_ext, held at the step's start: explicit, which bounds how much
 // damping a step can take. A fixed number of iterations (the paper's 10) per step; then v1 = (x1 - x0) / h.
-#include "fixed_step.hpp"
-#include "run_support.hpp"
-#include "sparse_cholesky.hpp"
+#include "solvers/fixed_step.hpp"
+#include "solvers/run_support.hpp"
+#include "solvers/sparse_cholesky.hpp"
 
 #include <fmt/format.h>
 
@@ -136,6 +136,20 @@ class FastMassSpring final : public FixedStepper {
 std::unique_ptr<FixedStepper> make_fast_mass_spring(const CountedSystem& system) {
   if (!system.mass_spring()) throw std::invalid_argument("fast-mass-spring needs a mass-spring system");
   return std::make_unique<FastMassSpring>(system);
+}
+
+void register_fast_mass_spring_methods(MethodTable& table) {
+  table.add({
+      .name = "fast-mass-spring",
+      .family = "fast-mass-spring",
+      .source = "hand-written",
+      .description = "mass-spring systems: prefactored local/global implicit Euler of the springs (Liu et al. 2013), "
+                     "other forces explicit, fixed step",
+      .order = {1, 1, "1"},
+      .stepping = Stepping::fixed,
+      .needs = Capability::mass_spring,
+      .make = fixed_steps(make_fast_mass_spring),
+  });
 }
 
 }  // namespace stepwise

@@ -1,6 +1,6 @@
 // The seeds' three-level scheme (wave_step.hpp) as a stepper on y = (z, v), with where its levels are
-// advanced left to a subclass: `wave-fd` on the CPU in double, `gpu-wave` in a fragment shader in float32
-// (solvers/gpu/gpu_wave.cpp).
+// advanced left to a subclass: `wave-fd` on the CPU in double (solvers/methods/wave_fd.cpp), `gpu-wave`
+// in a fragment shader in float32 (solvers/gpu/gpu_wave.cpp).
 //
 // The scheme carries z^{k-1} and z^k, the state carries z and v: the stepper keeps z^{k-1} itself between
 // consecutive steps of one size, and reports v^{k+1} = (3 z^{k+1} - 4 z^k + z^{k-1}) / (2 dt), the

@@ -1,4 +1,4 @@
-// The OpenGL 4.5 core functions render/ uses, loaded through the context's own GetProcAddress (OSMesa or
+// The OpenGL 4.5 core functions render/ and the GPU methods use, loaded through the context's own GetProcAddress (OSMesa or
 // EGL): no GL library is linked, so no dispatcher stands between a call and the context that is current.
 #pragma once
 
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace stepwise::render {
+namespace stepwise::gl {
 
 #define STEPWISE_GL_FUNCTIONS(X)                                                                        \
   X(PFNGLGETSTRINGPROC, GetString)                                                                      \
@@ -100,4 +100,4 @@ void check_gl(const Gl& gl, const std::string& what);
 // a compiled and linked program from GLSL 4.50 sources (geometry may be empty); GlError with the log
 GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, const char* fragment, const std::string& name);
 
-}  // namespace stepwise::render
+}  // namespace stepwise::gl

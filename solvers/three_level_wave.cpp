@@ -1,5 +1,5 @@
-// `wave-fd`: the seeds' three-level scheme on the CPU (wave_fd.hpp)
-#include "wave_fd.hpp"
+// The seeds' three-level scheme as a stepper, its levels advanced by a subclass (three_level_wave.hpp)
+#include "three_level_wave.hpp"
 
 #include <cmath>
 
@@ -56,24 +56,5 @@ bool ThreeLevelWaveStepper::step(double t, double h, const Eigen::VectorXd& y, E
   last_ = y_next.data();
   return true;
 }
-
-namespace {
-
-class WaveFd final : public ThreeLevelWaveStepper {
- public:
-  using ThreeLevelWaveStepper::ThreeLevelWaveStepper;
-
- private:
-  bool advance(const WaveCoefficients& k, const double* z_prev, const double* z, double* z_next, bool, std::string&) override {
-    const int n = grid().points;
-    for (int i = 1; i < n - 1; ++i)
-      for (int j = i * n + 1; j < (i + 1) * n - 1; ++j) z_next[j] = wave_cell(k, z[j], z_prev[j], neighbour_sum(z, j, n));
-    return true;
-  }
-};
-
-}  // namespace
-
-std::unique_ptr<FixedStepper> make_wave_fd(const CountedSystem& system) { return std::make_unique<WaveFd>(system); }
 
 }  // namespace stepwise

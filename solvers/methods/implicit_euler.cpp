@@ -3,10 +3,10 @@
 // G(y1) = y1 - y0 - h f(t1, y1) = 0, G'(y1) = I - h J(t1, y1); each iteration solves
 // (I - h J) d = -G and sets y1 += d, until |d|inf <= newton_tol (1 + |y1|inf). The iteration starts
 // from y0; the Jacobian is re-evaluated every iteration (full Newton, quadratic convergence).
-#include "fixed_step.hpp"
-#include "mass_spring_implicit.hpp"
-#include "newton_matrix.hpp"
-#include "run_support.hpp"
+#include "solvers/fixed_step.hpp"
+#include "solvers/mass_spring_implicit.hpp"
+#include "solvers/newton_matrix.hpp"
+#include "solvers/run_support.hpp"
 
 namespace stepwise {
 namespace {
@@ -49,6 +49,8 @@ class ImplicitEuler final : public FixedStepper {
   Eigen::VectorXd f_, residual_, d_, y1_;
 };
 
+std::complex<double> implicit_euler_stability(std::complex<double> z) { return 1.0 / (1.0 - z); }
+
 }  // namespace
 
 std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system) {
@@ -63,6 +65,31 @@ std::unique_ptr<FixedStepper> make_implicit_euler_newton(const CountedSystem& sy
     return make_mass_spring_implicit(system, options);
   }
   return std::make_unique<ImplicitEuler>(system);
+}
+
+void register_implicit_euler_methods(MethodTable& table) {
+  table.add({
+      .name = "implicit-euler",
+      .family = "implicit-euler",
+      .source = "hand-written",
+      .description = "implicit, fixed step; Newton + dense LU, or for mass-spring systems Baraff-Witkin's linearised step "
+                     "on CHOLMOD (a kept factor preconditioning CG)",
+      .order = {1, 1, "1"},
+      .stepping = Stepping::fixed,
+      .dense = DenseMatrices::unless_mass_spring,
+      .make = fixed_steps(make_implicit_euler),
+      .stability = {.R = implicit_euler_stability},
+  });
+  table.add({
+      .name = "implicit-euler-newton",
+      .family = "implicit-euler",
+      .source = "hand-written",
+      .description = "implicit, fixed step, Newton to convergence (CHOLMOD for mass-spring systems, else dense LU)",
+      .order = {1, 1, "1"},
+      .stepping = Stepping::fixed,
+      .dense = DenseMatrices::unless_mass_spring,
+      .make = fixed_steps(make_implicit_euler_newton),
+  });
 }
 
 }  // namespace stepwise

@@ -1,4 +1,4 @@
-// SUNDIALS CVODE (6.4) adapter.
+// cvode-adams, cvode-bdf: SUNDIALS CVODE (6.4), always adaptive (SUNDIALS' types stay in this file).
 //
 // Pitfalls handled here:
 // - Adams with CVODE's default Newton solver and no linear solver fails (CVode returns -13,
@@ -10,9 +10,9 @@
 //   re-initialisations; a root exactly at the restart point is not reported again by CVODE;
 // - a right-hand side that produces non-finite values returns 1 (recoverable): CVODE cuts the step,
 //   and a run that still fails is reported as diverged, not as a solver failure.
-#include "cvode_backend.hpp"
+#include "solvers/method.hpp"
 
-#include "run_support.hpp"
+#include "solvers/run_support.hpp"
 
 #include <cvode/cvode.h>
 #include <cvode/cvode_proj.h>
@@ -273,9 +273,27 @@ class CvodeIntegrator final : public Integrator {
 
 }  // namespace
 
-std::unique_ptr<Integrator> make_cvode_integrator(std::string_view method, const StepControl& control) {
-  if (method != "cvode-adams" && method != "cvode-bdf") throw BadMethod(fmt::format("unknown CVODE method '{}'", method));
-  return std::make_unique<CvodeIntegrator>(std::string(method), method == "cvode-bdf", control);
+void register_cvode_methods(MethodTable& table) {
+  const auto cvode = [](bool bdf) {
+    return [bdf](const Method& method, const StepControl& control) -> std::unique_ptr<Integrator> {
+      return std::make_unique<CvodeIntegrator>(std::string(method.name), bdf, control);
+    };
+  };
+  table.add({.name = "cvode-adams",
+             .family = "cvode",
+             .source = "SUNDIALS CVODE",
+             .description = "adaptive, variable order Adams-Moulton, fixed-point iteration",
+             .order = {1, 12, "1-12"},
+             .stepping = Stepping::adaptive,
+             .make = cvode(false)});
+  table.add({.name = "cvode-bdf",
+             .family = "cvode",
+             .source = "SUNDIALS CVODE",
+             .description = "adaptive, variable order BDF, Newton + dense LU or KLU",
+             .order = {1, 5, "1-5"},
+             .stepping = Stepping::adaptive,
+             .dense = DenseMatrices::unless_sparse_jacobian,
+             .make = cvode(true)});
 }
 
 }  // namespace stepwise

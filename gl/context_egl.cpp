@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-namespace stepwise::render {
+namespace stepwise::gl {
 namespace {
 
 class EglContext final : public Context {
@@ -59,4 +59,4 @@ class EglContext final : public Context {
 
 std::unique_ptr<Context> make_egl_context() { return std::make_unique<EglContext>(); }
 
-}  // namespace stepwise::render
+}  // namespace stepwise::gl

@@ -8,8 +8,8 @@
 // Lett. 71 (1993) 3043; Dullweber, Leimkuhler & McLachlan, "Symplectic splitting methods for rigid body
 // molecular dynamics", J. Chem. Phys. 107 (1997) 5840. The centre of mass moves under its constant
 // acceleration exactly.
-#include "fixed_step.hpp"
-#include "run_support.hpp"
+#include "solvers/fixed_step.hpp"
+#include "solvers/run_support.hpp"
 
 #include <Eigen/Geometry>
 
@@ -58,6 +58,17 @@ class RigidSplitting final : public FixedStepper {
 
 }  // namespace
 
-std::unique_ptr<FixedStepper> make_rigid_splitting(const CountedSystem& system) { return std::make_unique<RigidSplitting>(system); }
+void register_rigid_splitting_methods(MethodTable& table) {
+  table.add({
+      .name = "rigid-splitting",
+      .family = "rigid-splitting",
+      .source = "hand-written",
+      .description = "the free rigid body split into exact rotations about its principal axes, Strang-composed (symplectic, fixed step)",
+      .order = {2, 2, "2"},
+      .stepping = Stepping::fixed,
+      .needs = Capability::free_rigid_body,
+      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<RigidSplitting>(system); }),
+  });
+}
 
 }  // namespace stepwise

@@ -7,7 +7,7 @@
 
 #include <array>
 
-namespace stepwise::render {
+namespace stepwise::gl {
 namespace {
 
 class OsmesaContext final : public Context {
@@ -44,4 +44,4 @@ class OsmesaContext final : public Context {
 
 std::unique_ptr<Context> make_osmesa_context() { return std::make_unique<OsmesaContext>(); }
 
-}  // namespace stepwise::render
+}  // namespace stepwise::gl

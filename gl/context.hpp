@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-namespace stepwise::render {
+namespace stepwise::gl {
 
 enum class Backend { osmesa, egl };
 
@@ -38,4 +38,4 @@ std::unique_ptr<Context> make_context(Backend backend);
 std::unique_ptr<Context> make_osmesa_context();
 std::unique_ptr<Context> make_egl_context();
 
-}  // namespace stepwise::render
+}  // namespace stepwise::gl

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <vector>
 
-namespace stepwise::render {
+namespace stepwise::gl {
 
 Gl load_gl(void* (*get_proc)(const char* name)) {
   Gl gl;
@@ -66,4 +66,4 @@ GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, cons
   return program;
 }
 
-}  // namespace stepwise::render
+}  // namespace stepwise::gl

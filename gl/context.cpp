@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-namespace stepwise::render {
+namespace stepwise::gl {
 
 std::optional<Backend> parse_backend(std::string_view name) {
   if (name == "osmesa") return Backend::osmesa;
@@ -32,4 +32,4 @@ std::unique_ptr<Context> make_context(Backend backend) {
   return backend == Backend::osmesa ? make_osmesa_context() : make_egl_context();
 }
 
-}  // namespace stepwise::render
+}  // namespace stepwise::gl

@@ -7,8 +7,8 @@
 //             Coulomb friction), and its push out of penetration (OdeSystem::resolve_contacts)
 //   drift     x += h v, q = q (x) exp(h w / 2)       (the rotation at the new body rate, exact for it)
 // Without contacts this is symplectic Euler on the translation; order 1.
-#include "fixed_step.hpp"
-#include "run_support.hpp"
+#include "solvers/fixed_step.hpp"
+#include "solvers/run_support.hpp"
 
 #include <Eigen/Geometry>
 
@@ -66,6 +66,18 @@ class ContactStepping final : public FixedStepper {
 
 }  // namespace
 
-std::unique_ptr<FixedStepper> make_contact_stepping(const CountedSystem& system) { return std::make_unique<ContactStepping>(system); }
+void register_sequential_impulses_methods(MethodTable& table) {
+  table.add({
+      .name = "sequential-impulses",
+      .family = "sequential-impulses",
+      .source = "hand-written",
+      .description = "rigid bodies in contact: kick, contact impulses by projected Gauss-Seidel (restitution, Coulomb "
+                     "friction), drift (velocity-level time stepping, fixed step)",
+      .order = {1, 1, "1"},
+      .stepping = Stepping::fixed,
+      .needs = Capability::contact_bodies,
+      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<ContactStepping>(system); }),
+  });
+}
 
 }  // namespace stepwise

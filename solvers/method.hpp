@@ -1,0 +1,115 @@
+// A method is one registered object: its name, family and order, what it needs of a system, how it is made,
+// and what the project knows of its stability. Each method family registers its methods from its own file
+// (solvers/methods/*.cpp, solvers/gpu/*.cpp); solvers/method_table.hpp is the table they make, and the only
+// place a method's name is looked up.
+#pragma once
+
+#include "integrator.hpp"
+
+#include <complex>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace stepwise {
+
+// a structure a system offers beyond f, which a method may need (OdeSystem's views)
+enum class Capability {
+  none,
+  second_order,     // y = (x, v): OdeSystem::second_order
+  wave_grid,        // a damped wave equation on a grid: OdeSystem::wave_grid
+  free_rigid_body,  // a torque-free rigid body: OdeSystem::free_rigid_body
+  contact_bodies,   // rigid bodies in contact, resolved by impulses: OdeSystem::contact_bodies
+  mass_spring,      // lumped masses and force Jacobians on a fixed pattern: OdeSystem::mass_spring
+  cloth_grid,       // a cloth on a grid of nodes: OdeSystem::cloth_grid
+};
+
+// whether the system offers it (Capability::none: every system does)
+bool offers(const OdeSystem& system, Capability capability);
+
+// how a method can be stepped
+enum class Stepping { fixed, adaptive, fixed_or_adaptive };
+
+// when a method keeps dense n x n matrices (a Jacobian and a Newton matrix), which the memory rule counts
+enum class DenseMatrices {
+  none,                    // explicit, or no Newton iteration: no matrix
+  always,                  // every system
+  unless_sparse_jacobian,  // KLU on the system's fixed sparse pattern when it has one (CVODE BDF)
+  unless_mass_spring,      // CHOLMOD on a mass-spring system's pattern (the hand-written backward Euler)
+};
+
+// the documented order range; text as `stepwise methods` shows it ("4", "1-12", "variable")
+struct Order {
+  int min = 0, max = 0;
+  std::string_view text;
+};
+
+// what the project knows of a method's stability, where it knows it
+struct Stability {
+  // R(z) of a one-step method on y' = lambda y, z = h lambda (empty for a map on (x, v) pairs, multistep and
+  // adaptive methods): the regions and every spectrum's stable step (stability.hpp) come from it
+  std::complex<double> (*R)(std::complex<double> z) = nullptr;
+  // the largest stable step on a damped oscillator mode x'' = -omega^2 x - 2 a x' (omega rad/s, a 1/s): the
+  // stiffest mode of a mass-spring system (verification/stability.hpp) sets the method's limit there
+  std::function<double(double omega, double damping)> oscillator_dt;
+  // the largest stable step on a height-field grid (solvers/wave_step.hpp's derived limits)
+  std::function<double(const WaveGridView& grid)> wave_dt;
+};
+
+struct Method;
+// the integrator for one run of `method` with `control` (the control already checked against the method)
+using MakeIntegrator = std::function<std::unique_ptr<Integrator>(const Method& method, const StepControl& control)>;
+
+struct Method {
+  std::string_view name;         // as DESIGN.md's table spells it, everywhere: CLI, CSV, plots
+  std::string_view family;       // the family file that registers it ("rk4", "gsl", "cvode", "gpu")
+  std::string_view source;       // whose code steps: "hand-written", "GSL odeiv2", "SUNDIALS CVODE", "OpenGL shader"
+  std::string_view description;  // one line: what it is
+  Order order;
+  Stepping stepping = Stepping::fixed;
+  Capability needs = Capability::none;
+  DenseMatrices dense = DenseMatrices::none;
+  MakeIntegrator make;
+  Stability stability;
+  // "" or why this system cannot be run on the method's device (a GPU method's grid past the largest texture),
+  // asked before a run starts; empty for a method with no device of its own
+  std::function<std::string(const OdeSystem& system)> device_problem;
+
+  bool fixed_step() const { return stepping != Stepping::adaptive; }
+  bool adaptive() const { return stepping != Stepping::fixed; }
+};
+
+// the methods in the order they were registered; a family file adds its own with add()
+class MethodTable {
+ public:
+  // std::logic_error for a name already taken
+  void add(Method method);
+  const std::vector<Method>& all() const { return methods_; }
+  const Method* find(std::string_view name) const;
+
+ private:
+  std::vector<Method> methods_;
+};
+
+// whether the method can run this system at all (the structure it needs: y = (x, v), a wave grid; bodies in
+// contact need a method that resolves contacts), and if not, why, in words naming the structure
+bool method_applies(const Method& method, const OdeSystem& system);
+std::string method_requirement(const Method& method, const OdeSystem& system);
+
+// thrown for an unknown method or a step control the method cannot use
+struct BadMethod : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+// BadMethod unless the method can be stepped with this control (fixed against adaptive; a finite positive dt,
+// rtol and atol): the one check every way into a method goes through
+void check_step_control(const Method& method, const StepControl& control);
+
+// bytes of the dense n x n matrices the method would keep for this system (0 when it keeps none): a large
+// system (a particle system) cannot be run by such a method, and the caller says so before trying
+double dense_matrix_bytes(const Method& method, const OdeSystem& system);
+
+}  // namespace stepwise

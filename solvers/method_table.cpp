@@ -1,0 +1,57 @@
+#include "method_table.hpp"
+
+#include <fmt/format.h>
+
+namespace stepwise {
+
+// each family's file registers its own methods (solvers/methods/, solvers/gpu/); a new family adds its file
+// and one line here, where the lines' order is the table's
+void register_euler_methods(MethodTable& table);
+void register_symplectic_euler_methods(MethodTable& table);
+void register_rk4_methods(MethodTable& table);
+void register_implicit_euler_methods(MethodTable& table);
+void register_cvode_methods(MethodTable& table);
+void register_gsl_methods(MethodTable& table);
+void register_wave_fd_methods(MethodTable& table);
+void register_rigid_splitting_methods(MethodTable& table);
+void register_sequential_impulses_methods(MethodTable& table);
+void register_fast_mass_spring_methods(MethodTable& table);
+namespace gpu {
+void register_gpu_methods(MethodTable& table);
+}
+
+namespace {
+
+const MethodTable& table() {
+  static const MethodTable made = [] {
+    MethodTable t;
+    register_euler_methods(t);
+    register_symplectic_euler_methods(t);
+    register_rk4_methods(t);
+    register_implicit_euler_methods(t);
+    register_cvode_methods(t);
+    register_gsl_methods(t);
+    register_wave_fd_methods(t);
+    gpu::register_gpu_methods(t);
+    register_rigid_splitting_methods(t);
+    register_sequential_impulses_methods(t);
+    register_fast_mass_spring_methods(t);
+    return t;
+  }();
+  return made;
+}
+
+}  // namespace
+
+std::span<const Method> methods() { return table().all(); }
+
+const Method* find_method(std::string_view name) { return table().find(name); }
+
+std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control) {
+  const Method* m = find_method(method);
+  if (!m) throw BadMethod(fmt::format("unknown method '{}' (see `stepwise methods`)", method));
+  check_step_control(*m, control);
+  return m->make(*m, control);
+}
+
+}  // namespace stepwise

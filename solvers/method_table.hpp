@@ -1,0 +1,21 @@
+// The table of every method (DESIGN.md's), made once from what each family file registers, in the order
+// `stepwise methods`, methods.csv and the report's sweeps list them. The one place a method's name is
+// looked up: the command line, the report, the tests and the benches all come here.
+#pragma once
+
+#include "method.hpp"
+
+#include <memory>
+#include <span>
+#include <string_view>
+
+namespace stepwise {
+
+std::span<const Method> methods();
+// nullptr for a name not in the table
+const Method* find_method(std::string_view name);
+
+// the integrator for one run: BadMethod for an unknown name or a step control the method cannot use
+std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control);
+
+}  // namespace stepwise

@@ -1,0 +1,52 @@
+#include "stability.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace stepwise {
+
+double largest_stable_step(std::complex<double> (*R)(std::complex<double>), const Eigen::VectorXcd& eigenvalues) {
+  // the spectrum is as accurate as the Jacobian: a difference Jacobian's relative error is ~sqrt(machine
+  // epsilon) = 1.5e-8, so an eigenvalue on the imaginary axis (an undamped mode) may come out with a positive real
+  // part of that order of the largest |lambda|, and a zero (a fixed boundary value, an invariant) as a speck of
+  // that size. Real parts up to this fraction of the largest are taken as 0, and eigenvalues smaller than it are
+  // left out: R(0) = 1 for every consistent method, so zeros never grow.
+  constexpr double jacobian_resolution = 1e-6;
+  // what remains is exact to round-off: this much growth per step is taken as none
+  constexpr double spectrum_growth_allowance = 1e-9;
+  const double largest = eigenvalues.cwiseAbs().maxCoeff();
+  std::vector<std::complex<double>> spectrum;
+  for (const auto& lambda : eigenvalues)
+    if (std::abs(lambda) > jacobian_resolution * largest)
+      spectrum.emplace_back(lambda.real() > 0 && lambda.real() < jacobian_resolution * largest ? 0.0 : lambda.real(), lambda.imag());
+  const auto grows = [&](double h) {
+    for (const auto& lambda : spectrum)
+      if (std::abs(R(h * lambda)) > 1 + spectrum_growth_allowance) return true;
+    return false;
+  };
+  double smallest = largest;
+  for (const auto& lambda : spectrum) smallest = std::min(smallest, std::abs(lambda));
+  double low = 1e-3 / largest;
+  if (grows(low)) return 0.0;
+  double high = 2 * low;
+  while (!grows(high)) {
+    low = high;
+    high *= 2;
+    if (low > 1e6 / smallest) return std::numeric_limits<double>::infinity();
+  }
+  while (high - low > 1e-9 * high) (grows((low + high) / 2) ? high : low) = (low + high) / 2;
+  return low;
+}
+
+Eigen::Vector2cd oscillator_eigenvalues(double omega, double damping) {
+  const std::complex<double> lambda(-damping, std::sqrt(std::max(omega * omega - damping * damping, 0.0)));
+  return {lambda, std::conj(lambda)};
+}
+
+double symplectic_euler_oscillator_dt(double omega, double damping) {
+  return 2 * (std::sqrt(damping * damping + omega * omega) - damping) / (omega * omega);
+}
+
+}  // namespace stepwise

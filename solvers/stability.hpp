@@ -1,0 +1,27 @@
+// Stable steps from what a method's stability is known by (method.hpp's Stability): the largest step for a
+// spectrum from R(z), and the closed forms on a damped oscillator mode that more than one method shares.
+#pragma once
+
+#include <Eigen/Dense>
+
+#include <complex>
+
+namespace stepwise {
+
+// The largest h with |R(h lambda)| <= 1 for every eigenvalue (not empty): h is raised by factors of 2 from
+// 1e-3 / max |lambda| until some |R| exceeds 1 + 1e-9, then bisected to 1e-9. Positive real parts below 1e-6 of
+// the largest |lambda| are taken as 0 and smaller eigenvalues left out (a difference Jacobian resolves no
+// finer). 0 where even the first h grows (explicit Euler on an undamped spectrum), infinity where no h up to
+// 1e6 / min |lambda| grows (implicit Euler).
+double largest_stable_step(std::complex<double> (*R)(std::complex<double>), const Eigen::VectorXcd& eigenvalues);
+
+// the eigenvalues of the damped oscillator x'' = -omega^2 x - 2 a x': lambda = -a +- i sqrt(omega^2 - a^2)
+Eigen::Vector2cd oscillator_eigenvalues(double omega, double damping);
+
+// symplectic Euler on that oscillator: amplification [[1 - h^2 w^2, h (1 - 2 h a)], [-h w^2, 1 - 2 h a]],
+// determinant 1 - 2 h a, trace 2 - h^2 w^2 - 2 h a; |trace| <= 1 + determinant gives h^2 w^2 <= 4 - 4 h a, so
+// h < 2 (sqrt(a^2 + w^2) - a) / w^2 (h w < 2 undamped; the damping, explicit, shrinks it). The CPU and the GPU
+// symplectic Euler share it.
+double symplectic_euler_oscillator_dt(double omega, double damping);
+
+}  // namespace stepwise
