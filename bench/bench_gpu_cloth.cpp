@@ -24,7 +24,7 @@ const stepwise::ClothGridView& flag_view(int n) {
   static std::map<int, stepwise::ClothGridView> views;
   if (const auto it = views.find(n); it != views.end()) return it->second;
   const auto small = stepwise::make_model("cloth", {{"rows", 4}, {"columns", 4}});
-  stepwise::ClothGridView view = *small->cloth_grid();
+  stepwise::ClothGridView view = *small->as<stepwise::ClothGridView>();
   const double width = view.across * 3, height = view.down * 3, mass = view.node_mass * 16;
   view.rows = view.columns = n;
   view.across = width / (n - 1);

@@ -112,7 +112,7 @@ const stepwise::Model& standing() {
   static const auto model = stepwise::make_model("standing-wave", {{"size", 65}, {"spacing", 1.0 / 64}, {"mode_m", 1}, {"mode_n", 2}, {"amplitude", 1.0}});
   return *model;
 }
-double fd_dt() { return stepwise::wave_stable_dt(*standing().wave_grid()) / 2; }
+double fd_dt() { return stepwise::wave_stable_dt(*standing().as<stepwise::WaveGridView>()) / 2; }
 
 stepwise::StepControl equal_accuracy(const std::string& method) {
   const double target = *stepwise::run_and_measure(standing(), "wave-fd", stepwise::StepControl::fixed(fd_dt()), 2.0, 2.0).error;

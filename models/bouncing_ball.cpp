@@ -1,5 +1,7 @@
 #include "bouncing_ball.hpp"
 
+#include "solvers/capabilities/second_order.hpp"
+
 #include <cmath>
 
 namespace stepwise {
@@ -49,7 +51,7 @@ class BouncingBall final : public Model {
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"y", "vy"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector2d(h0_, 0); }
-  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{1}; }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
   std::span<const Event> events() const override { return events_; }
   // the shortest flight: a rebound at rest_speed, up and down
   double event_free_interval() const override { return 2 * rest_speed_ / g_; }
@@ -86,6 +88,7 @@ class BouncingBall final : public Model {
  private:
   double h0_, eps_, g_, rest_speed_;
   std::vector<Event> events_;
+  SecondOrderView second_order_{1};  // y = (x, v)
 };
 
 }  // namespace

@@ -1,5 +1,9 @@
 #include "cloth.hpp"
 
+#include "solvers/capabilities/second_order.hpp"
+#include "solvers/capabilities/mass_spring.hpp"
+#include "solvers/capabilities/cloth_grid.hpp"
+
 #include "particle_common.hpp"
 #include "plane_collision.hpp"
 #include "springs.hpp"
@@ -186,7 +190,13 @@ class Cloth final : public Model {
             if (free_index_[tri[i]] >= 0 && free_index_[tri[j]] >= 0) slots[3 * i + j] = pattern_->slot(free_index_[tri[i]], free_index_[tri[j]]);
         triangle_slots_.push_back(slots);
       }
+    second_order_.positions = 3 * free_;
+    second_order_.acceleration = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
+    view_.force_jacobians = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                                   Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
   }
+  Cloth(const Cloth&) = delete;  // its capabilities hold `this`
+  Cloth& operator=(const Cloth&) = delete;
 
   std::string_view name() const override { return "cloth"; }
   // the sheet (pinned nodes where they were pinned), the sphere, the ground, and the pole along a pinned left edge
@@ -210,9 +220,7 @@ class Cloth final : public Model {
   }
   int size() const override { return 6 * free_; }
   bool autonomous() const override { return gust_ == 0 || wind_k_ == 0; }
-  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * free_}; }
-  const MassSpringView* mass_spring() const override { return &view_; }
-  const ClothGridView* cloth_grid() const override { return &grid_; }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, grid_); }
   std::vector<std::string> state_names() const override { return particle_state_names(free_); }
   Eigen::VectorXd initial_state() const override {
     Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
@@ -224,7 +232,7 @@ class Cloth final : public Model {
     dydt.head(3 * free_) = y.tail(3 * free_);
     acceleration(t, y, dydt.tail(3 * free_));
   }
-  void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
+  void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const {
     const double* x = y.data();
     const double* v = y.data() + 3 * free_;
     a.setZero();
@@ -244,7 +252,7 @@ class Cloth final : public Model {
   }
 
   void force_jacobians(double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
-                       Eigen::SparseMatrix<double>& dfdv) const override {
+                       Eigen::SparseMatrix<double>& dfdv) const {
     const double* x = y.data();
     const double* v = y.data() + 3 * free_;
     pattern_->zero(dfdx);
@@ -370,6 +378,7 @@ class Cloth final : public Model {
   int free_ = 0;
   int picked_ = -1;
   std::vector<std::array<int, 3>> triangles_;  // grid nodes
+  SecondOrderView second_order_;  // y = (x, v), with the acceleration below
   MassSpringView view_;
   ClothGridView grid_;
   std::unique_ptr<BlockPattern> pattern_;

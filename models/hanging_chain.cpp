@@ -1,5 +1,8 @@
 #include "hanging_chain.hpp"
 
+#include "solvers/capabilities/second_order.hpp"
+#include "solvers/capabilities/mass_spring.hpp"
+
 #include "particle_common.hpp"
 #include "springs.hpp"
 
@@ -38,7 +41,13 @@ class HangingChain final : public Model {
         slots_(spring_slots(view_.springs, pattern_)) {
     y0_ = Eigen::VectorXd::Zero(6 * n_);
     for (int k = 0; k < n_; ++k) y0_[3 * k + 1] = -(k + 1) * p.at("rest_length");
+    second_order_.positions = 3 * n_;
+    second_order_.acceleration = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
+    view_.force_jacobians = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                                   Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
   }
+  HangingChain(const HangingChain&) = delete;  // its capabilities hold `this`
+  HangingChain& operator=(const HangingChain&) = delete;
 
   std::string_view name() const override { return "hanging-chain"; }
   // the pin at the origin, then the nodes, y up
@@ -52,7 +61,7 @@ class HangingChain final : public Model {
   }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
-  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_); }
   std::vector<std::string> state_names() const override {
     std::vector<std::string> names;
     for (const char* q : {"", "v"})
@@ -66,7 +75,7 @@ class HangingChain final : public Model {
     dydt.head(3 * n_) = y.tail(3 * n_);
     acceleration(t, y, dydt.tail(3 * n_));
   }
-  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
+  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const {
     a.setZero();
     add_spring_forces(view_.springs, y.data(), y.data() + 3 * n_, a.data());
     a /= mass_;
@@ -81,9 +90,8 @@ class HangingChain final : public Model {
     mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
   }
 
-  const MassSpringView* mass_spring() const override { return &view_; }
   void force_jacobians(double, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
-                       Eigen::SparseMatrix<double>& dfdv) const override {
+                       Eigen::SparseMatrix<double>& dfdv) const {
     pattern_.zero(dfdx);
     pattern_.zero(dfdv);
     for (int k = 0; k < n_; ++k) pattern_.add(dfdv, k, k, -mass_ * drag_ * Eigen::Matrix3d::Identity());
@@ -110,6 +118,7 @@ class HangingChain final : public Model {
  private:
   int n_;
   double mass_, drag_, g_;
+  SecondOrderView second_order_;  // y = (x, v), with the acceleration below
   MassSpringView view_;
   BlockPattern pattern_;
   std::vector<std::array<BlockPattern::Slot, 4>> slots_;

@@ -1,5 +1,8 @@
 #include "height_field.hpp"
 
+#include "solvers/capabilities/second_order.hpp"
+#include "solvers/capabilities/wave_grid.hpp"
+
 #include "particle_common.hpp"
 
 #include <fmt/format.h>
@@ -125,7 +128,11 @@ class HeightField final : public Model {
                                   return std::string("drop");
                                 }});
     }
+    second_order_.positions = static_cast<int>(cells_);
+    second_order_.acceleration = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
   }
+  HeightField(const HeightField&) = delete;  // its capabilities hold `this`
+  HeightField& operator=(const HeightField&) = delete;
 
   std::string_view name() const override {
     return scene_ == Scene::drop ? "water-drop" : scene_ == Scene::standing ? "standing-wave" : "pool";
@@ -137,8 +144,7 @@ class HeightField final : public Model {
   }
   int size() const override { return static_cast<int>(2 * cells_); }
   bool autonomous() const override { return true; }
-  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{static_cast<int>(cells_)}; }
-  std::optional<WaveGridView> wave_grid() const override { return grid_; }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, grid_); }
   std::span<const Event> events() const override { return events_; }
 
   std::vector<std::string> state_names() const override {
@@ -164,7 +170,7 @@ class HeightField final : public Model {
   }
 
   // c^2 Lap z - mu v on the interior, 0 on the boundary
-  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
+  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const {
     const double* z = y.data();
     const double* v = z + cells_;
     const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
@@ -234,6 +240,7 @@ class HeightField final : public Model {
   int n_;                       // grid points per side
   Eigen::Index cells_;          // n^2
   WaveGridView grid_;
+  SecondOrderView second_order_;  // y = (z, v), with the acceleration below
   std::vector<Drop> drops_;     // the drop (water-drop) or the drops in time order (pool)
   double radius_ = 0, height_ = 0;
   int m_ = 0, mode_n_ = 0;      // standing wave's mode

@@ -1,5 +1,7 @@
 #include "particle_mesh.hpp"
 
+#include "solvers/capabilities/second_order.hpp"
+
 #include "particle_common.hpp"
 #include "plane_collision.hpp"
 
@@ -65,7 +67,7 @@ class ParticleMesh final : public Model {
   }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
-  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
   std::span<const Event> events() const override { return events_; }
   // the shortest return to a surface: a rebound at rest_speed along gravity, up and down
   double event_free_interval() const override { return g_ > 0 ? 2 * rest_speed_ / g_ : std::numeric_limits<double>::infinity(); }
@@ -135,6 +137,7 @@ class ParticleMesh final : public Model {
   std::vector<Plane> faces_;
   Plane ground_;
   std::vector<Event> events_;
+  SecondOrderView second_order_{3 * n_};  // y = (x, v)
 };
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "particle_system.hpp"
 
+#include "solvers/capabilities/second_order.hpp"
+
 #include "cell_list.hpp"
 #include "particle_common.hpp"
 
@@ -30,7 +32,16 @@ class ParticleSystem final : public Model {
   explicit ParticleSystem(const Params& p)
       : n_(particle_count(p, "count", bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
         speed_(p.at("speed")), k_(p.at("stiffness")), gamma_(p.at("drag")), g_(p.at("g")), s_(p.at("repulsion")),
-        rc_(p.at("radius")) {}
+        rc_(p.at("radius")) {
+    second_order_.positions = 3 * n_;
+    second_order_.acceleration = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
+    // without repulsion each coordinate's acceleration is its own: steppers may sweep in blocks
+    if (s_ == 0)
+      second_order_.local_acceleration = [this](double t, const double* x, const double* v, double* a, Eigen::Index first,
+                                                Eigen::Index count) { local_acceleration(t, x, v, a, first, count); };
+  }
+  ParticleSystem(const ParticleSystem&) = delete;  // its capabilities hold `this`
+  ParticleSystem& operator=(const ParticleSystem&) = delete;
 
   std::string_view name() const override { return "particle-system"; }
   std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
@@ -40,7 +51,7 @@ class ParticleSystem final : public Model {
   }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
-  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
 
   std::vector<std::string> state_names() const override { return particle_state_names(n_); }
   Eigen::VectorXd initial_state() const override {
@@ -57,7 +68,7 @@ class ParticleSystem final : public Model {
   }
 
   // the field, then the pairs the cell list finds
-  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
+  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const {
     const double* x = y.data();
     field(x, x + 3 * n_, a.data(), 0, 3L * n_);
     if (s_ == 0) return;
@@ -71,9 +82,7 @@ class ParticleSystem final : public Model {
       a.segment<3>(3 * j) -= f;
     });
   }
-  // without repulsion each coordinate's acceleration is its own: steppers may sweep in blocks
-  bool has_local_acceleration() const override { return s_ == 0; }
-  void local_acceleration(double, const double* x, const double* v, double* a, Eigen::Index first, Eigen::Index count) const override {
+  void local_acceleration(double, const double* x, const double* v, double* a, Eigen::Index first, Eigen::Index count) const {
     field(x, v, a, first, count);
   }
 
@@ -165,6 +174,7 @@ class ParticleSystem final : public Model {
   int n_;
   unsigned long seed_;
   double spread_, speed_, k_, gamma_, g_, s_, rc_;
+  SecondOrderView second_order_;  // y = (x, v), with the accelerations below
 };
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "particles_in_box.hpp"
 
+#include "solvers/capabilities/second_order.hpp"
+
 #include "particle_common.hpp"
 #include "plane_collision.hpp"
 
@@ -62,7 +64,7 @@ class ParticlesInBox final : public Model {
     for (int k = 0; k < 3 * n_; ++k) y[3 * n_ + k] = speed_ * (2 * uniform01(rng) - 1);
     return y;
   }
-  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{3 * n_}; }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
   std::span<const Event> events() const override { return events_; }
   // the shortest return to one wall: a rebound off the floor at rest_speed, up and down
   double event_free_interval() const override { return g_ > 0 ? 2 * rest_speed_ / g_ : std::numeric_limits<double>::infinity(); }
@@ -98,6 +100,7 @@ class ParticlesInBox final : public Model {
   double rest_speed_;
   std::array<Plane, 6> walls_;
   std::vector<Event> events_;
+  SecondOrderView second_order_{3 * n_};  // y = (x, v)
 };
 
 }  // namespace

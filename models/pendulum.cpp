@@ -1,5 +1,7 @@
 #include "pendulum.hpp"
 
+#include "solvers/capabilities/second_order.hpp"
+
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_sf_ellint.h>
 #include <gsl/gsl_sf_elljac.h>
@@ -50,7 +52,7 @@ class Pendulum final : public Model {
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"theta", "omega"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector2d(theta0_, omega0_); }
-  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{1}; }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
 
   void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     dydt[0] = y[1];
@@ -92,6 +94,7 @@ class Pendulum final : public Model {
   double k_ = 0;       // elliptic modulus: sin of half the turning angle
   double quarter_ = 0; // K(k): a quarter period in units of 1/w
   double u0_ = 0;      // phase of the initial state in units of 1/w
+  SecondOrderView second_order_{1};  // y = (x, v)
 };
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "projectile.hpp"
 
+#include "solvers/capabilities/second_order.hpp"
+
 #include <cmath>
 
 namespace stepwise {
@@ -34,7 +36,7 @@ class Projectile final : public Model {
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"x", "y", "vx", "vy"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector4d(x0_, y0_, vx0_, vy0_); }
-  std::optional<SecondOrderView> second_order() const override { return SecondOrderView{2}; }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
 
   void rhs(double, Eigen::Ref<const Eigen::VectorXd> s, Eigen::Ref<Eigen::VectorXd> dsdt) const override {
     dsdt << s[2], s[3], -k_ * s[2], -g_ - k_ * s[3];
@@ -74,6 +76,7 @@ class Projectile final : public Model {
 
  private:
   double x0_, y0_, vx0_, vy0_, g_, k_, mass_;
+  SecondOrderView second_order_{2};  // y = (x, v)
 };
 
 }  // namespace

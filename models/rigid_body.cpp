@@ -1,5 +1,7 @@
 #include "rigid_body.hpp"
 
+#include "solvers/capabilities/free_rigid_body.hpp"
+
 #include "mass_properties.hpp"
 
 #include <Eigen/Geometry>
@@ -70,6 +72,7 @@ class RigidBody final : public Model {
     y0_ << p.at("x0"), p.at("y0"), p.at("z0"), p.at("vx0"), p.at("vy0"), p.at("vz0"), q.w(), q.x(), q.y(), q.z(), p.at("wx0"), p.at("wy0"),
         p.at("wz0");
     shape_ = shape ? std::move(*shape) : box_mesh(equivalent_box(mass_, inertia_));
+    if (drag_ == 0 && angular_drag_ == 0 && point_.cross(force_).isZero()) free_ = RigidBodyView{inertia_, gravity_ + force_ / mass_};
   }
 
   std::string_view name() const override { return "rigid-body"; }
@@ -100,10 +103,7 @@ class RigidBody final : public Model {
     return true;
   }
 
-  std::optional<RigidBodyView> free_rigid_body() const override {
-    if (drag_ != 0 || angular_drag_ != 0 || !point_.cross(force_).isZero()) return std::nullopt;
-    return RigidBodyView{inertia_, gravity_ + force_ / mass_};
-  }
+  const void* capability(const std::type_info& type) const override { return free_ ? offer(type, *free_) : nullptr; }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
     return body_kinetic_energy(mass_, inertia_, y.segment<3>(3), y.segment<3>(10)) - mass_ * gravity_.dot(y.segment<3>(0));
@@ -127,6 +127,7 @@ class RigidBody final : public Model {
   Eigen::Vector3d force_, point_;
   Eigen::VectorXd y0_;
   TriangleMesh shape_;  // as drawn, body frame
+  std::optional<RigidBodyView> free_;  // torque-free: no drag and the force through the centre of mass
 };
 
 // F(phi, k) for phi in [-pi, pi], through F(pi - phi) = 2K - F(phi) and oddness
@@ -153,10 +154,6 @@ std::vector<std::string> rigid_body_state_names(int bodies) {
   for (int b = 0; b < bodies; ++b)
     for (const char* n : names) out.push_back(bodies == 1 ? std::string(n) : fmt::format("{}[{}]", n, b));
   return out;
-}
-
-double body_kinetic_energy(double mass, const Eigen::Vector3d& inertia, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
-  return mass * v.squaredNorm() / 2 + w.dot(inertia.cwiseProduct(w)) / 2;
 }
 
 Eigen::Vector3d body_angular_momentum(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y) {

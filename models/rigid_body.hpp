@@ -25,6 +25,8 @@
 // period (the tennis-racket flip).
 #pragma once
 
+#include "kernels/rigid_body.hpp"
+
 #include "model.hpp"
 #include "triangle_mesh.hpp"
 
@@ -39,8 +41,7 @@ std::span<const ParamSpec> rigid_body_params();
 Eigen::Quaterniond initial_orientation(const Params& params);
 // x, y, z, vx, ... wz for one body; x[i], ... wz[i] for several
 std::vector<std::string> rigid_body_state_names(int bodies);
-// m |v|^2 / 2 + w . I w / 2 (w in the principal frame)
-double body_kinetic_energy(double mass, const Eigen::Vector3d& inertia, const Eigen::Vector3d& v, const Eigen::Vector3d& w);
+// (its kinetic energy: kernels/rigid_body.hpp's body_kinetic_energy)
 // the world angular momentum about the centre of mass, R I w, of the body state y
 Eigen::Vector3d body_angular_momentum(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y);
 // dq/dt = q (x) (0, w) / 2 and the torque-free Euler equations I dw/dt = (I w) x w, into dydt's entries 6..12

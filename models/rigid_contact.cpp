@@ -58,16 +58,21 @@ class RigidContact final : public Model {
  public:
   RigidContact(std::string_view name, std::vector<Placed> placed, const Params& p)
       : name_(name), ground_(ground(p)), g_(p.at("g")) {
-    material_.restitution = p.at("restitution");
-    material_.friction = p.at("friction");
-    material_.push = p.at("push");
-    warm_start_ = p.at("warm_start") == 1;
     y0_.resize(13 * static_cast<Eigen::Index>(placed.size()));
     for (size_t i = 0; i < placed.size(); ++i) {
       y0_.segment<13>(13 * static_cast<Eigen::Index>(i)) = placed[i].state;
       bodies_.push_back(std::move(placed[i].body));
     }
+    contact_.bodies = body_masses(bodies_);
+    contact_.material.restitution = p.at("restitution");
+    contact_.material.friction = p.at("friction");
+    contact_.material.push = p.at("push");
+    contact_.g = g_;
+    contact_.warm_start = p.at("warm_start") == 1;
+    contact_.find_contacts = [this](const Eigen::VectorXd& y) { return find_contacts(bodies_, ground_ ? &*ground_ : nullptr, y); };
   }
+  RigidContact(const RigidContact&) = delete;  // contact_ holds `this`
+  RigidContact& operator=(const RigidContact&) = delete;
 
   std::string_view name() const override { return name_; }
   std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override {
@@ -99,16 +104,7 @@ class RigidContact final : public Model {
     return true;
   }
 
-  std::optional<ContactBodiesView> contact_bodies() const override { return ContactBodiesView{static_cast<int>(bodies_.size())}; }
-
-  ContactOutcome resolve_contacts(Eigen::Ref<Eigen::VectorXd> y, double dt, ContactMemory& memory) const override {
-    ContactMaterial m = material_;
-    // what one or two steps of gravity make is resting contact, not an impact to bounce from
-    m.resting_speed = 2 * g_ * dt;
-    const std::vector<Contact> contacts = find_contacts(bodies_, ground_ ? &*ground_ : nullptr, y);
-    if (!warm_start_) memory.impulses.clear();
-    return resolve(bodies_, contacts, m, y, memory);
-  }
+  const void* capability(const std::type_info& type) const override { return offer(type, contact_); }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
     double potential = 0;
@@ -139,8 +135,7 @@ class RigidContact final : public Model {
   std::vector<ContactBody> bodies_;
   std::optional<Plane> ground_;
   double g_;
-  ContactMaterial material_;
-  bool warm_start_ = true;
+  ContactBodiesView contact_;  // the bodies' masses, their material, and the model's contact detection
   Eigen::VectorXd y0_;
 };
 

@@ -4,6 +4,8 @@
 #include "models/model.hpp"
 #include "models/pendulum.hpp"
 #include "models/rigid_body.hpp"
+#include "solvers/capabilities/mass_spring.hpp"
+#include "solvers/capabilities/second_order.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/adequacy.hpp"
 #include "verification/contact_checks.hpp"
@@ -537,8 +539,8 @@ StudyOutput cloth_study(const StudyContext& ctx) {
       "methods run at half symplectic Euler's limit ({:.3g} s), the implicit ones at 10 times that.\n\n"
       "| method | dt (s) | momentum error | CPU (s) |\n|---|---|---|---|\n",
       pull_time, 2 * explicit_dt);
-  const int positions = sheet->second_order()->positions;
-  const double node_mass = sheet->mass_spring()->mass[0];
+  const int positions = sheet->as<SecondOrderView>()->positions;
+  const double node_mass = sheet->as<MassSpringView>()->mass[0];
   for (size_t i = 0; i < momentum_runs.size(); ++i) {
     const RunResult& r = pulled[i].result;
     const Eigen::VectorXd v = r.y_stop.tail(positions);

@@ -4,6 +4,7 @@
 #include "studies.hpp"
 
 #include "models/model.hpp"
+#include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/convergence.hpp"
 #include "verification/measure.hpp"
@@ -236,7 +237,7 @@ StudyOutput work_precision(const StudyContext& ctx) {
       WorkPoint point{&scene, method, {}, {}, 0, 0, 0, Status::ok, false};
       if (method->fixed_step())
         for (int k = 0; k <= halvings; ++k) {
-          const bool implicit = method->dense != DenseMatrices::none || method->needs == Capability::mass_spring;
+          const bool implicit = method->dense != DenseMatrices::none || method->needs.type == needs_mass_spring.type;
           const double coarse = implicit && scene.implicit_dt > 0 ? scene.implicit_dt : coarse_dt(*method, scene.time_scale);
           point.control = StepControl::fixed(coarse / std::pow(2.0, k));
           point.coarsest = k == 0;
@@ -353,7 +354,7 @@ StudyOutput stability_regions(const StudyContext& ctx) {
   {
     const auto scene = ode_scenes().back();
     std::shared_ptr<const Model> model = make_model(scene.model, scene.params);
-    const WaveGridView grid = *model->wave_grid();
+    const WaveGridView grid = *model->as<WaveGridView>();
     scenes.push_back({scene.label, model, model->initial_state(), [grid](std::string_view method, double dt) {
                         return wave_stays_bounded(method, grid.points, grid.spacing, grid.c, grid.mu, steps)(dt);
                       }});

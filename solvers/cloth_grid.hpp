@@ -1,4 +1,4 @@
-// The cloth's forces node by node, as ClothGridView (solvers/ode_system.hpp) describes them, in a precision
+// The cloth's forces node by node, as ClothGridView (solvers/capabilities/cloth_grid.hpp) describes them, in a precision
 // of the caller's choosing: what a pass that gives each node to one thread computes (gpu-cloth's fragment
 // shader, solvers/gpu/gpu_cloth.cpp, whose GLSL performs these operations in this order) and its float32
 // CPU reference (verification/gpu_references.hpp). They are models/cloth.cpp's forces, gathered where the
@@ -11,7 +11,7 @@
 // dot(a, b) = (a.x b.x + a.y b.y) + a.z b.z, |a| = sqrt(dot(a, a)).
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include "solvers/capabilities/cloth_grid.hpp"
 
 #include <algorithm>
 #include <array>

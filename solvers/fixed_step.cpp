@@ -11,7 +11,7 @@ namespace stepwise {
 
 RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                                          std::span<const double> t_out) const {
-  if (!offers(system, method_.needs)) throw BadMethod(method_requirement(method_, system));
+  if (!method_.needs.offered_by(system)) throw BadMethod(method_requirement(method_, system));
   RunResult result = begin_run(t0, y0);
   const double start = thread_cpu_seconds();
   CountedSystem counted(system, result.stats);

@@ -7,6 +7,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -54,7 +55,7 @@ struct Stats {
   long factorizations = 0;  // factorisations of a Newton matrix
   long events = 0;          // events handled
   long projections = 0;     // projections onto the system's manifold (OdeSystem::project)
-  long contact_sweeps = 0;  // Gauss-Seidel sweeps over contacts (OdeSystem::resolve_contacts)
+  long contact_sweeps = 0;  // Gauss-Seidel sweeps over contacts (solvers/contact_solve.hpp)
   double cpu_seconds = 0;   // thread CPU time of the integration
 };
 

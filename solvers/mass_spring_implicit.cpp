@@ -11,16 +11,24 @@
 
 namespace stepwise {
 
-BaraffWitkinSystem::BaraffWitkinSystem(const OdeSystem& system, bool definite)
-    : system_(system), definite_(definite), f_(system.size() / 2), b_(system.size() / 2) {
-  const MassSpringView* view = system.mass_spring();
+namespace {
+
+const MassSpringView& mass_spring_of(const OdeSystem& system) {
+  const auto* view = system.as<MassSpringView>();
   if (!view) throw std::invalid_argument("BaraffWitkinSystem: the system has no mass-spring structure");
-  m_.resize(3 * Eigen::Index{view->nodes});
-  for (int i = 0; i < view->nodes; ++i) m_.segment<3>(3 * i).setConstant(view->mass[i]);
+  return *view;
+}
+
+}  // namespace
+
+BaraffWitkinSystem::BaraffWitkinSystem(const CountedSystem& system, bool definite)
+    : system_(system), view_(mass_spring_of(system)), definite_(definite), f_(system.size() / 2), b_(system.size() / 2) {
+  m_.resize(3 * Eigen::Index{view_.nodes});
+  for (int i = 0; i < view_.nodes; ++i) m_.segment<3>(3 * i).setConstant(view_.mass[i]);
 }
 
 void BaraffWitkinSystem::assemble_matrix(double t, const Eigen::VectorXd& y, double h) {
-  system_.force_jacobians(t, y, definite_, k_, d_);
+  force_jacobians(system_, view_, t, y, definite_, k_, d_);
   // force_jacobians keeps its pattern from call to call: whether K, D and A share one is found at the first
   // call, and then A's values come straight from theirs
   if (shared_pattern_) {
@@ -40,7 +48,7 @@ void BaraffWitkinSystem::assemble_matrix(double t, const Eigen::VectorXd& y, dou
                       std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), d_.innerIndexPtr()) &&
                       std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), a_.innerIndexPtr());
   }
-  system_.acceleration(t, y, f_);
+  second_order_acceleration(system_, *system_.as<SecondOrderView>(), t, y, f_);
   f_ = f_.cwiseProduct(m_);
 }
 

@@ -23,6 +23,7 @@
 #pragma once
 
 #include "fixed_step.hpp"
+#include "run_support.hpp"
 #include "sparse_cholesky.hpp"
 
 #include <Eigen/SparseCore>
@@ -49,7 +50,7 @@ struct MassSpringImplicitOptions {
 // system; the pattern of A is the same at every call
 class BaraffWitkinSystem {
  public:
-  BaraffWitkinSystem(const OdeSystem& system, bool definite);
+  BaraffWitkinSystem(const CountedSystem& system, bool definite);
   // the matrix at (t, x, v) and f(t, x, v) there (f = M a)
   void assemble_matrix(double t, const Eigen::VectorXd& y, double h);
   // b = h (f0 + h K v0), with the K and f0 of the last assemble_matrix at y
@@ -60,7 +61,8 @@ class BaraffWitkinSystem {
   const Eigen::VectorXd& mass() const { return m_; }   // per coordinate
 
  private:
-  const OdeSystem& system_;
+  const CountedSystem& system_;
+  const MassSpringView& view_;
   bool definite_;
   Eigen::VectorXd m_, f_, b_;
   Eigen::SparseMatrix<double> k_, d_, a_;

@@ -1,24 +1,14 @@
 #include "method.hpp"
 
+#include "capabilities/contact_bodies.hpp"
+#include "capabilities/mass_spring.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
 #include <stdexcept>
 
 namespace stepwise {
-
-bool offers(const OdeSystem& system, Capability capability) {
-  switch (capability) {
-    case Capability::none: return true;
-    case Capability::second_order: return system.second_order().has_value();
-    case Capability::wave_grid: return system.wave_grid().has_value();
-    case Capability::free_rigid_body: return system.free_rigid_body().has_value();
-    case Capability::contact_bodies: return system.contact_bodies().has_value();
-    case Capability::mass_spring: return system.mass_spring() != nullptr;
-    case Capability::cloth_grid: return system.cloth_grid() != nullptr;
-  }
-  return false;
-}
 
 void MethodTable::add(Method method) {
   if (find(method.name)) throw std::logic_error(fmt::format("method '{}' registered twice", method.name));
@@ -32,25 +22,17 @@ const Method* MethodTable::find(std::string_view name) const {
 }
 
 bool method_applies(const Method& method, const OdeSystem& system) {
-  // bodies in contact and a method that resolves contacts go together, both ways
-  const bool resolves_contacts = method.needs == Capability::contact_bodies;
-  return offers(system, method.needs) && resolves_contacts == system.contact_bodies().has_value();
+  // bodies in contact and a method that resolves contacts go together, both ways: such a system's f holds only
+  // the smooth forces
+  const bool resolves_contacts = method.needs.type == needs_contact_bodies.type;
+  return method.needs.offered_by(system) && resolves_contacts == (system.as<ContactBodiesView>() != nullptr);
 }
 
 std::string method_requirement(const Method& method, const OdeSystem& system) {
-  if (system.contact_bodies() && method.needs != Capability::contact_bodies)
+  if (system.as<ContactBodiesView>() && method.needs.type != needs_contact_bodies.type)
     return fmt::format("{} has no contact response, and these bodies touch: they need a method that resolves contacts (sequential-impulses)", method.name);
-  switch (method.needs) {
-    case Capability::none: return {};
-    case Capability::contact_bodies: return fmt::format("{} needs rigid bodies in contact (a contact scene)", method.name);
-    case Capability::wave_grid: return fmt::format("{} needs a wave equation on a grid (a water scene)", method.name);
-    case Capability::free_rigid_body:
-      return fmt::format("{} needs a torque-free rigid body (a rigid-body scene without drag or torque)", method.name);
-    case Capability::cloth_grid: return fmt::format("{} needs a cloth on a grid (a cloth scene)", method.name);
-    case Capability::mass_spring: return fmt::format("{} needs a mass-spring system (a cloth or chain scene)", method.name);
-    case Capability::second_order: return fmt::format("{} needs a second-order model y = (x, v)", method.name);
-  }
-  return {};
+  if (!method.needs.type) return {};
+  return fmt::format("{} needs {}", method.name, method.needs.what);
 }
 
 void check_step_control(const Method& method, const StepControl& control) {
@@ -70,7 +52,7 @@ double dense_matrix_bytes(const Method& method, const OdeSystem& system) {
       if (system.has_sparse_jacobian()) return 0;
       break;
     case DenseMatrices::unless_mass_spring:
-      if (system.mass_spring()) return 0;
+      if (system.as<MassSpringView>()) return 0;
       break;
     case DenseMatrices::always: break;
   }

@@ -4,6 +4,7 @@
 // place a method's name is looked up.
 #pragma once
 
+#include "capabilities/wave_grid.hpp"
 #include "integrator.hpp"
 
 #include <complex>
@@ -15,20 +16,6 @@
 #include <vector>
 
 namespace stepwise {
-
-// a structure a system offers beyond f, which a method may need (OdeSystem's views)
-enum class Capability {
-  none,
-  second_order,     // y = (x, v): OdeSystem::second_order
-  wave_grid,        // a damped wave equation on a grid: OdeSystem::wave_grid
-  free_rigid_body,  // a torque-free rigid body: OdeSystem::free_rigid_body
-  contact_bodies,   // rigid bodies in contact, resolved by impulses: OdeSystem::contact_bodies
-  mass_spring,      // lumped masses and force Jacobians on a fixed pattern: OdeSystem::mass_spring
-  cloth_grid,       // a cloth on a grid of nodes: OdeSystem::cloth_grid
-};
-
-// whether the system offers it (Capability::none: every system does)
-bool offers(const OdeSystem& system, Capability capability);
 
 // how a method can be stepped
 enum class Stepping { fixed, adaptive, fixed_or_adaptive };
@@ -70,7 +57,7 @@ struct Method {
   std::string_view description;  // one line: what it is
   Order order;
   Stepping stepping = Stepping::fixed;
-  Capability needs = Capability::none;
+  Requirement needs;  // the capability it needs of a system (solvers/capabilities/), if any
   DenseMatrices dense = DenseMatrices::none;
   MakeIntegrator make;
   Stability stability;

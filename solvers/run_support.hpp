@@ -1,6 +1,8 @@
 // Pieces every integrator shares: RHS counting, divergence test, CPU clock, trajectory recording.
 #pragma once
 
+#include "capabilities/mass_spring.hpp"
+#include "capabilities/second_order.hpp"
 #include "integrator.hpp"
 
 #include <fmt/format.h>
@@ -9,8 +11,10 @@
 
 namespace stepwise {
 
-// forwards to a system and counts every call of f in Stats; backends see only this wrapper.
-// Jacobian evaluations are counted by the caller, analytic or finite-difference alike.
+// forwards to a system and counts every call of f in Stats; backends see only this wrapper. Capabilities
+// are passed through untouched (as<T>() reaches the model's): a method that evaluates forces through one
+// counts that call itself, with the helpers below. Jacobian evaluations are counted by the caller, analytic
+// or finite-difference alike.
 class CountedSystem final : public OdeSystem {
  public:
   CountedSystem(const OdeSystem& inner, Stats& stats) : inner_(inner), stats_(stats) {}
@@ -28,30 +32,6 @@ class CountedSystem final : public OdeSystem {
   void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const override {
     inner_.sparse_jacobian(t, y, dfdy);
   }
-  std::optional<SecondOrderView> second_order() const override { return inner_.second_order(); }
-  void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
-    ++stats_.rhs_evals;
-    inner_.acceleration(t, y, a);
-  }
-  // not counted here: a stepper sweeping in blocks counts one evaluation per sweep itself
-  bool has_local_acceleration() const override { return inner_.has_local_acceleration(); }
-  void local_acceleration(double t, const double* x, const double* v, double* a, Eigen::Index first,
-                          Eigen::Index count) const override {
-    inner_.local_acceleration(t, x, v, a, first, count);
-  }
-  std::optional<WaveGridView> wave_grid() const override { return inner_.wave_grid(); }
-  const MassSpringView* mass_spring() const override { return inner_.mass_spring(); }
-  const ClothGridView* cloth_grid() const override { return inner_.cloth_grid(); }
-  void force_jacobians(double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
-                       Eigen::SparseMatrix<double>& dfdv) const override {
-    ++stats_.jac_evals;
-    inner_.force_jacobians(t, y, definite, dfdx, dfdv);
-  }
-  std::optional<RigidBodyView> free_rigid_body() const override { return inner_.free_rigid_body(); }
-  std::optional<ContactBodiesView> contact_bodies() const override { return inner_.contact_bodies(); }
-  ContactOutcome resolve_contacts(Eigen::Ref<Eigen::VectorXd> y, double dt, ContactMemory& memory) const override {
-    return inner_.resolve_contacts(y, dt, memory);
-  }
   std::span<const Event> events() const override { return inner_.events(); }
   bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
     const bool projected = inner_.project(y);
@@ -59,6 +39,7 @@ class CountedSystem final : public OdeSystem {
     return projected;
   }
   double event_free_interval() const override { return inner_.event_free_interval(); }
+  const void* capability(const std::type_info& type) const override { return inner_.capability(type); }
   Stats& stats() const { return stats_; }
   // the wrapped system, for a backend's hot path that counts its calls itself
   const OdeSystem& inner() const { return inner_; }
@@ -67,6 +48,27 @@ class CountedSystem final : public OdeSystem {
   const OdeSystem& inner_;
   Stats& stats_;
 };
+
+// a = dv/dt of a second-order system (n entries), counted as one call of f: the model's own acceleration
+// where it has one, else the second half of f
+inline void second_order_acceleration(const CountedSystem& system, const SecondOrderView& view, double t,
+                                      Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) {
+  if (view.acceleration) {
+    ++system.stats().rhs_evals;
+    view.acceleration(t, y, a);
+    return;
+  }
+  Eigen::VectorXd f(system.size());
+  system.rhs(t, y, f);
+  a = f.tail(view.positions);
+}
+
+// a mass-spring system's force Jacobians (MassSpringView::force_jacobians), counted as one Jacobian evaluation
+inline void force_jacobians(const CountedSystem& system, const MassSpringView& view, double t, Eigen::Ref<const Eigen::VectorXd> y,
+                            bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv) {
+  ++system.stats().jac_evals;
+  view.force_jacobians(t, y, definite, dfdx, dfdv);
+}
 
 // thread CPU time in seconds: sweeps run in parallel, so process time would mix runs
 inline double thread_cpu_seconds() {

@@ -6,7 +6,7 @@
 namespace stepwise {
 
 ThreeLevelWaveStepper::ThreeLevelWaveStepper(const CountedSystem& s)
-    : system_(s), grid_(*s.wave_grid()), n_(grid_.points), cells_(static_cast<Eigen::Index>(n_) * n_), z_prev_(cells_) {}
+    : system_(s), grid_(*s.as<WaveGridView>()), n_(grid_.points), cells_(static_cast<Eigen::Index>(n_) * n_), z_prev_(cells_) {}
 
 bool ThreeLevelWaveStepper::step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) {
   ++system_.stats().rhs_evals;  // one Laplacian per step

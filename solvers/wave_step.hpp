@@ -18,7 +18,7 @@
 // lambda_max = (8/d^2) cos^2(pi / 2N) on N intervals per side: dt <= d / (sqrt(2) c cos(pi / 2N)).
 #pragma once
 
-#include "ode_system.hpp"
+#include "capabilities/wave_grid.hpp"
 
 #include <optional>
 #include <string_view>

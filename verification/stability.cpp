@@ -2,6 +2,7 @@
 
 #include "models/hanging_chain.hpp"
 #include "models/height_field.hpp"
+#include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/fd_jacobian.hpp"
 #include "solvers/stability.hpp"
 #include "solvers/wave_step.hpp"
@@ -56,10 +57,10 @@ WaveStability wave_stability(std::string_view method, int points, double spacing
 }
 
 StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::VectorXd& y) {
-  const MassSpringView* view = system.mass_spring();
+  const MassSpringView* view = system.as<MassSpringView>();
   if (!view) throw std::invalid_argument("stiffest_mode: not a mass-spring system");
   Eigen::SparseMatrix<double> k, d;
-  system.force_jacobians(t, y, false, k, d);
+  view->force_jacobians(t, y, false, k, d);
   const Eigen::Index n = k.rows();
   Eigen::VectorXd root_mass(n);
   for (int i = 0; i < view->nodes; ++i) root_mass.segment<3>(3 * i).setConstant(std::sqrt(view->mass[i]));
@@ -123,7 +124,7 @@ std::unique_ptr<Model> stability_sheet(double stiffness) {
 std::vector<double> implicit_euler_amplitude_ratios(double wh, int steps) {
   const double mass = 0.1, stiffness = 40, g = 9.81, w = std::sqrt(stiffness / mass);
   const auto spring = make_model("hanging-chain", {{"nodes", 1}, {"mass", mass}, {"stiffness", stiffness}, {"damping", 0}, {"g", g}});
-  const double rest = chain_equilibrium(1, mass, stiffness, spring->mass_spring()->springs[0].rest, g)[0];
+  const double rest = chain_equilibrium(1, mass, stiffness, spring->as<MassSpringView>()->springs[0].rest, g)[0];
   const auto amplitude = [&](const Eigen::VectorXd& y) { return std::hypot(w * (y[1] - rest), y[4]); };
   const double h = wh / w;
   std::vector<double> times;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "models/contact.hpp"
+#include "solvers/contact_solve.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -184,7 +184,7 @@ namespace {
 // first step, an obstacle's projection on the CPU changing a node by a rounding, an event)
 class GpuClothStepper final : public FixedStepper {
  public:
-  explicit GpuClothStepper(const CountedSystem& s) : system_(s), view_(*s.cloth_grid()) {}
+  explicit GpuClothStepper(const CountedSystem& s) : system_(s), view_(*s.as<ClothGridView>()) {}
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
     ++system_.stats().rhs_evals;
     try {
@@ -237,7 +237,7 @@ void register_cloth_methods(MethodTable& table) {
                      "as symplectic Euler in a fragment-shader pass on float32 textures (OpenGL), fixed step",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
-      .needs = Capability::cloth_grid,
+      .needs = needs_cloth_grid,
       .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<GpuClothStepper>(system); }),
       .stability = {.oscillator_dt = symplectic_euler_oscillator_dt},
       .device_problem = device_problem,

@@ -145,8 +145,8 @@ std::unique_ptr<Context> make_device_context() {
 
 std::string device_problem(const OdeSystem& system) {
   int width = 0, height = 0;
-  if (const auto grid = system.wave_grid()) width = height = grid->points;
-  else if (const ClothGridView* cloth = system.cloth_grid()) width = cloth->columns, height = cloth->rows;
+  if (const auto* grid = system.as<WaveGridView>()) width = height = grid->points;
+  else if (const auto* cloth = system.as<ClothGridView>()) width = cloth->columns, height = cloth->rows;
   else return "no grid a GPU method steps (a water or cloth scene)";
   try {
     return texture_problem(*make_device_context(), width, height);

@@ -158,7 +158,7 @@ class GpuWaveStepper final : public ThreeLevelWaveStepper {
 class GpuSymplecticStepper final : public FixedStepper {
  public:
   explicit GpuSymplecticStepper(const CountedSystem& s)
-      : system_(s), grid_(*s.wave_grid()), cells_(static_cast<Eigen::Index>(grid_.points) * grid_.points) {}
+      : system_(s), grid_(*s.as<WaveGridView>()), cells_(static_cast<Eigen::Index>(grid_.points) * grid_.points) {}
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
     ++system_.stats().rhs_evals;
     const bool continuing = gpu_ && h == h_ && std::abs(t - t_last_) <= 1e-9 * h && y.data() == last_;
@@ -209,7 +209,7 @@ void register_wave_methods(MethodTable& table) {
                      "through EGL), fixed step",
       .order = {2, 2, "2"},
       .stepping = Stepping::fixed,
-      .needs = Capability::wave_grid,
+      .needs = needs_wave_grid,
       .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<GpuWaveStepper>(system); }),
       .stability = {.wave_dt = wave_stable_dt},
       .device_problem = device_problem,
@@ -222,7 +222,7 @@ void register_wave_methods(MethodTable& table) {
                      "float32 textures (OpenGL), fixed step",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
-      .needs = Capability::wave_grid,
+      .needs = needs_wave_grid,
       .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<GpuSymplecticStepper>(system); }),
       .stability = {.wave_dt = symplectic_euler_wave_dt},
       .device_problem = device_problem,

@@ -1,5 +1,5 @@
 // The prefactored local/global method of Liu, Bargteil, O'Brien & Kavan (SIGGRAPH Asia 2013, "Fast
-// simulation of mass-spring systems"), for a mass-spring system (OdeSystem::mass_spring).
+// simulation of mass-spring systems"), for a mass-spring system (MassSpringView, solvers/capabilities/mass_spring.hpp).
 //
 // Implicit Euler for the elastic springs is the minimisation of
 //   g(x) = 1/(2h^2) (x - y)^T M (x - y) + sum_s c_s/2 |x_b - x_a - d_s|^2 - x . f_ext,   y = x0 + h v0,
@@ -30,7 +30,7 @@ using Nodes = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;  // one
 
 class FastMassSpring final : public FixedStepper {
  public:
-  explicit FastMassSpring(const CountedSystem& s) : system_(s), view_(*s.mass_spring()), n_(view_.nodes) {
+  explicit FastMassSpring(const CountedSystem& s) : system_(s), view_(*s.as<MassSpringView>()), second_order_(*s.as<SecondOrderView>()), n_(view_.nodes) {
     std::vector<Eigen::Triplet<double>> entries;
     for (const Spring& s : view_.springs) {
       entries.emplace_back(s.b, s.b, s.stiffness);
@@ -51,7 +51,7 @@ class FastMassSpring final : public FixedStepper {
     const Eigen::Index m = 3 * Eigen::Index{n_};
     const Eigen::Map<const Nodes> x0(y.data(), n_, 3), v0(y.data() + m, n_, 3);
     // every force but the elastic springs', at the step's start: M a - f_elastic(x0)
-    system_.acceleration(t, y, a_);
+    second_order_acceleration(system_, second_order_, t, y, a_);
     const Eigen::Map<const Nodes> a0(a_.data(), n_, 3);
     elastic(x0, directions(x0), f_el_);
     external_ = mass_.asDiagonal() * a0 - f_el_;
@@ -121,6 +121,7 @@ class FastMassSpring final : public FixedStepper {
 
   const CountedSystem& system_;
   const MassSpringView& view_;
+  const SecondOrderView& second_order_;
   int n_;
   Eigen::SparseMatrix<double> laplacian_;
   Eigen::VectorXd mass_, a_;
@@ -134,7 +135,7 @@ class FastMassSpring final : public FixedStepper {
 }  // namespace
 
 std::unique_ptr<FixedStepper> make_fast_mass_spring(const CountedSystem& system) {
-  if (!system.mass_spring()) throw std::invalid_argument("fast-mass-spring needs a mass-spring system");
+  if (!system.as<MassSpringView>() || !system.as<SecondOrderView>()) throw std::invalid_argument("fast-mass-spring needs a mass-spring system");
   return std::make_unique<FastMassSpring>(system);
 }
 
@@ -147,7 +148,7 @@ void register_fast_mass_spring_methods(MethodTable& table) {
                      "other forces explicit, fixed step",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
-      .needs = Capability::mass_spring,
+      .needs = needs_mass_spring,
       .make = fixed_steps(make_fast_mass_spring),
   });
 }

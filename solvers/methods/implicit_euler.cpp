@@ -54,12 +54,12 @@ std::complex<double> implicit_euler_stability(std::complex<double> z) { return 1
 }  // namespace
 
 std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system) {
-  if (system.mass_spring()) return make_mass_spring_implicit(system, MassSpringImplicitOptions{});
+  if (system.as<MassSpringView>()) return make_mass_spring_implicit(system, MassSpringImplicitOptions{});
   return std::make_unique<ImplicitEuler>(system);
 }
 
 std::unique_ptr<FixedStepper> make_implicit_euler_newton(const CountedSystem& system) {
-  if (system.mass_spring()) {
+  if (system.as<MassSpringView>()) {
     MassSpringImplicitOptions options;
     options.newton = true;
     return make_mass_spring_implicit(system, options);

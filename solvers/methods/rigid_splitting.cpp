@@ -9,6 +9,7 @@
 // molecular dynamics", J. Chem. Phys. 107 (1997) 5840. The centre of mass moves under its constant
 // acceleration exactly.
 #include "solvers/fixed_step.hpp"
+#include "solvers/capabilities/free_rigid_body.hpp"
 #include "solvers/run_support.hpp"
 
 #include <Eigen/Geometry>
@@ -21,7 +22,7 @@ namespace {
 
 class RigidSplitting final : public FixedStepper {
  public:
-  explicit RigidSplitting(const CountedSystem& s) : system_(s), body_(*s.free_rigid_body()) {}
+  explicit RigidSplitting(const CountedSystem& s) : system_(s), body_(*s.as<RigidBodyView>()) {}
 
   bool step(double, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
     ++system_.stats().rhs_evals;  // one evaluation's worth of work: the angular velocities, read from the state
@@ -66,7 +67,7 @@ void register_rigid_splitting_methods(MethodTable& table) {
       .description = "the free rigid body split into exact rotations about its principal axes, Strang-composed (symplectic, fixed step)",
       .order = {2, 2, "2"},
       .stepping = Stepping::fixed,
-      .needs = Capability::free_rigid_body,
+      .needs = needs_free_rigid_body,
       .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<RigidSplitting>(system); }),
   });
 }

@@ -4,9 +4,10 @@
 // sequential impulses as in Catto, "Iterative dynamics with temporal coherence", GDC 2005). One step of h:
 //   kick      v += h dv/dt, w += h dw/dt            (the smooth forces of f: gravity, Euler's equations)
 //   contacts  the system's impulses at the contacts of the step's start positions (restitution at impacts,
-//             Coulomb friction), and its push out of penetration (OdeSystem::resolve_contacts)
+//             Coulomb friction), and its push out of penetration (contact_solve.hpp)
 //   drift     x += h v, q = q (x) exp(h w / 2)       (the rotation at the new body rate, exact for it)
 // Without contacts this is symplectic Euler on the translation; order 1.
+#include "solvers/contact_solve.hpp"
 #include "solvers/fixed_step.hpp"
 #include "solvers/run_support.hpp"
 
@@ -20,7 +21,8 @@ namespace {
 
 class ContactStepping final : public FixedStepper {
  public:
-  explicit ContactStepping(const CountedSystem& s) : system_(s), bodies_(s.contact_bodies()->bodies), f_(s.size()) {}
+  explicit ContactStepping(const CountedSystem& s)
+      : system_(s), view_(*s.as<ContactBodiesView>()), bodies_(static_cast<int>(view_.bodies.size())), f_(s.size()) {}
 
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
     system_.rhs(t, y, f_);
@@ -30,7 +32,7 @@ class ContactStepping final : public FixedStepper {
       y_next.segment<3>(o + 3) += h * f_.segment<3>(o + 3);
       y_next.segment<3>(o + 10) += h * f_.segment<3>(o + 10);
     }
-    const ContactOutcome outcome = system_.resolve_contacts(y_next, h, memory_);
+    const ContactOutcome outcome = resolve_contacts(view_, y_next, h, memory_);
     impacts_ += outcome.impacts;
     system_.stats().contact_sweeps += outcome.sweeps;
     for (int b = 0; b < bodies_; ++b) {
@@ -58,6 +60,7 @@ class ContactStepping final : public FixedStepper {
 
  private:
   const CountedSystem& system_;
+  const ContactBodiesView& view_;
   int bodies_;
   Eigen::VectorXd f_;
   long impacts_ = 0;
@@ -75,7 +78,7 @@ void register_sequential_impulses_methods(MethodTable& table) {
                      "friction), drift (velocity-level time stepping, fixed step)",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
-      .needs = Capability::contact_bodies,
+      .needs = needs_contact_bodies,
       .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<ContactStepping>(system); }),
   });
 }

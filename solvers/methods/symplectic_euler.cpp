@@ -17,21 +17,21 @@ namespace {
 class SymplecticEuler final : public FixedStepper {
  public:
   explicit SymplecticEuler(const CountedSystem& s)
-      : system_(s), n_(s.second_order()->positions), a_(s.has_local_acceleration() ? std::min(block, n_) : n_) {}
+      : system_(s), view_(*s.as<SecondOrderView>()), n_(view_.positions), a_(view_.local_acceleration ? std::min(block, n_) : n_) {}
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
     const double* x0 = y.data();
     const double* v0 = x0 + n_;
     double* x1 = y_next.data();
     double* v1 = x1 + n_;
     Sweep sweep;
-    const bool local = system_.has_local_acceleration();
+    const bool local = static_cast<bool>(view_.local_acceleration);
     if (local) ++system_.stats().rhs_evals;
-    else system_.acceleration(t, y, a_);
+    else second_order_acceleration(system_, view_, t, y, a_);
     for (Eigen::Index first = 0; first < n_; first += block) {
       const Eigen::Index count = std::min(block, n_ - first);
       const double* a = a_.data() + first;
       if (local) {
-        system_.local_acceleration(t, x0 + first, v0 + first, a_.data(), first, count);
+        view_.local_acceleration(t, x0 + first, v0 + first, a_.data(), first, count);
         a = a_.data();
       }
       sweep.update(h, x0 + first, v0 + first, a, x1 + first, v1 + first, count);
@@ -68,6 +68,7 @@ class SymplecticEuler final : public FixedStepper {
   };
 
   const CountedSystem& system_;
+  const SecondOrderView& view_;
   Eigen::Index n_;
   Eigen::VectorXd a_;
   double norm_ = 0;
@@ -83,7 +84,7 @@ void register_symplectic_euler_methods(MethodTable& table) {
       .description = "semi-implicit, fixed step",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
-      .needs = Capability::second_order,
+      .needs = needs_second_order,
       .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<SymplecticEuler>(system); }),
       .stability = {.oscillator_dt = symplectic_euler_oscillator_dt, .wave_dt = symplectic_euler_wave_dt},
   });

@@ -29,7 +29,7 @@ void register_wave_fd_methods(MethodTable& table) {
       .description = "explicit three-level finite differences for the damped wave equation (the seeds' scheme), fixed step",
       .order = {2, 2, "2"},
       .stepping = Stepping::fixed,
-      .needs = Capability::wave_grid,
+      .needs = needs_wave_grid,
       .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<WaveFd>(system); }),
       .stability = {.wave_dt = wave_stable_dt},
   });

@@ -124,17 +124,17 @@ Eigen::VectorXd shaken(const Model& model, double spread, unsigned seed) {
 
 TEST(Cloth, ForceJacobiansMatchCentralDifferences) {
   const auto model = small_cloth();
-  const MassSpringView& view = *model->mass_spring();
+  const MassSpringView& view = *model->as<MassSpringView>();
   const Eigen::Index n = model->size() / 2;
   for (const double spread : {0.02, 0.1}) {  // springs near rest, and some compressed
     const Eigen::VectorXd y = shaken(*model, spread, 3);
     const double t = 0.3;
     Eigen::SparseMatrix<double> k, d;
-    model->force_jacobians(t, y, false, k, d);
+    view.force_jacobians(t, y, false, k, d);
     // f = M a, by Richardson-extrapolated central differences (as for the chain)
     const auto force = [&](const Eigen::VectorXd& at) {
       Eigen::VectorXd a(n);
-      model->acceleration(t, at, a);
+      model->as<SecondOrderView>()->acceleration(t, at, a);
       for (int i = 0; i < view.nodes; ++i) a.segment<3>(3 * i) *= view.mass[i];
       return a;
     };

@@ -129,7 +129,7 @@ TEST(GpuShader, GpuWaveMethodFollowsWaveFdToFloat32RoundOff) {
   // read back): against wave-fd on the standing wave, 400 steps at 0.9 of the limit; the state enters the
   // texture rounded to float (one more rounding, once) and the coefficients too (one more per step)
   const auto model = make_model("standing-wave", {{"size", 33}, {"spacing", 1.0 / 32}, {"mode_m", 2}, {"mode_n", 3}, {"amplitude", 1.0}, {"mu", 0.0}});
-  const WaveGridView grid = *model->wave_grid();
+  const WaveGridView grid = *model->as<WaveGridView>();
   const double dt = 0.9 * wave_stable_dt(grid);
   const long steps = 400;
   const std::vector<double> t_out{steps * dt};
@@ -178,7 +178,7 @@ TEST(GpuShader, ClothPassMatchesTheFloat32CpuStepStepForStep) {
   const bool llvmpipe = context().description().find("llvmpipe") != std::string::npos;
   for (const auto& [name, params] : {std::pair{"flag", flag_params()}, std::pair{"draping sheet", draping_params()}}) {
     const auto model = make_model("cloth", params);
-    const ClothGridView& view = *model->cloth_grid();
+    const ClothGridView& view = *model->as<ClothGridView>();
     const double h = half_limit(*model), nodes = static_cast<double>(view.start.size());
     gpu::GpuCloth stepped(context(), view), running(context(), view);
     cloth_grid::State<float> cpu = cloth_grid::spread<float>(view, model->initial_state()), next, shader;
@@ -235,7 +235,7 @@ TEST(GpuShader, ClothGridStepInFloat64IsTheModelsSymplecticEuler) {
   // under symplectic-euler, both float64: equal to round-off, so the grid form (and the shader's) is the
   // model's physics; the float32 step's distance from it is what precision costs, inside float32's bound
   const auto model = make_model("cloth", flag_params());
-  const ClothGridView& view = *model->cloth_grid();
+  const ClothGridView& view = *model->as<ClothGridView>();
   const double h = half_limit(*model);
   const long steps = 400;
   tolerance::ClothRoundoffScale scale;
@@ -266,7 +266,7 @@ TEST(GpuShader, GpuClothMethodFollowsSymplecticEulerToFloat32RoundOff) {
     const auto run = [&](const char* method) { return make_integrator(method, StepControl::fixed(h))->integrate(*model, 0, model->initial_state(), t_out); };
     const RunResult gpu = run("gpu-cloth"), cpu = run("symplectic-euler");
     ASSERT_EQ(gpu.status, Status::ok) << gpu.message;
-    const ClothGridView& view = *model->cloth_grid();
+    const ClothGridView& view = *model->as<ClothGridView>();
     tolerance::ClothRoundoffScale scale;
     run_cloth_grid<double>(view, model->initial_state(), 0, h, steps, scale);
     const double difference = position_difference(cloth_grid::spread<double>(view, gpu.y_stop), cloth_grid::spread<double>(view, cpu.y_stop));

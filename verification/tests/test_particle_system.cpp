@@ -3,6 +3,7 @@
 // without drag and never drifts under symplectic Euler, and bad counts are refused by key.
 #include "models/cell_list.hpp"
 #include "models/model.hpp"
+#include "solvers/capabilities/second_order.hpp"
 #include "solvers/method_table.hpp"
 #include "verification/measure.hpp"
 #include "verification/tolerances.hpp"
@@ -81,8 +82,8 @@ TEST(ParticleSystem, PairForcesAreThoseOfAllPairsAndCancelInTheTotal) {
   const Eigen::VectorXd y = with->initial_state();
   const int n = with->size() / 2;
   Eigen::VectorXd a(n), a0(n);
-  with->acceleration(0, y, a);
-  without->acceleration(0, y, a0);
+  with->as<SecondOrderView>()->acceleration(0, y, a);
+  without->as<SecondOrderView>()->acceleration(0, y, a0);
   // the same forces summed over all pairs
   Eigen::VectorXd expected = a0;
   long pairs = 0;
@@ -179,22 +180,22 @@ TEST(ParticleSystem, SameSeedSameStateAndBadCountsAreRefusedByKey) {
 // the same system with its local acceleration hidden: steppers take the whole-state path
 class WholeStateOnly final : public OdeSystem {
  public:
-  explicit WholeStateOnly(const OdeSystem& inner) : inner_(inner) {}
+  explicit WholeStateOnly(const OdeSystem& inner) : inner_(inner), view_(*inner.as<SecondOrderView>()) {
+    view_.local_acceleration = nullptr;
+  }
   int size() const override { return inner_.size(); }
   void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> f) const override { inner_.rhs(t, y, f); }
-  void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const override {
-    inner_.acceleration(t, y, a);
-  }
-  std::optional<SecondOrderView> second_order() const override { return inner_.second_order(); }
+  const void* capability(const std::type_info& type) const override { return offer(type, view_); }
 
  private:
   const OdeSystem& inner_;
+  SecondOrderView view_;  // the inner system's, less its local acceleration
 };
 
 TEST(ParticleSystem, SymplecticEulerInCacheBlocksIsBitForBitTheWholeStateStep) {
   // 5000 particles: 15 000 positions, several blocks and a partial one
   const auto model = make_model("particle-system", {{"count", 5000}, {"repulsion", 0}});
-  ASSERT_TRUE(model->has_local_acceleration());
+  ASSERT_TRUE(model->as<SecondOrderView>()->local_acceleration);
   const WholeStateOnly whole(*model);
   const auto integrator = make_integrator("symplectic-euler", StepControl::fixed(1e-2));
   const RunResult blocked = integrator->integrate(*model, 0, model->initial_state(), std::vector{1.0});

@@ -26,7 +26,7 @@ class SelfCounting final : public OdeSystem {
   void jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::MatrixXd> J) const override {
     model_.jacobian(t, y, J);
   }
-  std::optional<SecondOrderView> second_order() const override { return model_.second_order(); }
+  const void* capability(const std::type_info& type) const override { return model_.capability(type); }
   mutable long calls = 0;
 
  private:

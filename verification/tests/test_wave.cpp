@@ -41,7 +41,7 @@ TEST(Wave, SchemeMatchesTheExactDiscreteModeToRoundOff) {
     p["mode_n"] = n;
     p["amplitude"] = 0.01;
     const auto model = make_model("standing-wave", p);
-    const WaveGridView grid = *model->wave_grid();
+    const WaveGridView grid = *model->as<WaveGridView>();
     const double dt = 0.9 * wave_stable_dt(grid);
     const long steps = 1000;
     // through `wave-fd` as `run` steps it: z^1 by Taylor from the mode at rest, then the three-level update

@@ -1,0 +1,42 @@
+// Capability: a mass-spring network, y = (x, v) of `nodes` points in 3-D (x = y[0..3 nodes), node-major,
+// then v), each with a lumped mass, so that M dv/dt = f(t, x, v) with M diagonal: the structure Baraff &
+// Witkin's linearised implicit Euler on a sparse Cholesky factor (implicit-euler, implicit-euler-newton),
+// and the prefactored local/global method of Liu et al. 2013 (fast-mass-spring), need.
+#pragma once
+
+#include "solvers/ode_system.hpp"
+
+#include <Eigen/SparseCore>
+
+#include <functional>
+#include <vector>
+
+namespace stepwise {
+
+// a spring of the network (seeds: Hooke's law with Voigt damping) between nodes a and b, or from the fixed
+// point `anchor` to node b (a = -1: a pin); models/springs.hpp has its forces and derivatives
+struct Spring {
+  int a = -1, b = 0;                                 // node indices; a = -1: the fixed point `anchor`
+  double rest = 1;                                   // l (m)
+  double stiffness = 0;                              // c (N/m)
+  double damping = 0;                                // gamma (N s/m)
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // where a pinned spring hangs from (m)
+};
+
+struct MassSpringView {
+  int nodes = 0;
+  std::vector<double> mass;     // kg per node
+  std::vector<Spring> springs;  // the elastic springs f holds, which the prefactored method treats implicitly
+                                // (every other force, their damping included, it holds at the step's start)
+  // the force Jacobians K = df/dx and D = df/dv at (t, y) (f = M dv/dt, 3 nodes x 3 nodes, CSC, the same
+  // pattern at every call); definite: K replaced by a symmetric negative semidefinite approximation and D
+  // by its symmetric part (the model says which), so that M - h D - h^2 K is symmetric positive definite for
+  // a Cholesky factor; exact otherwise. A method counts each call (run_support.hpp's force_jacobians)
+  std::function<void(double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                     Eigen::SparseMatrix<double>& dfdv)>
+      force_jacobians;
+};
+
+inline const Requirement needs_mass_spring = needs<MassSpringView>("a mass-spring system (a cloth or chain scene)");
+
+}  // namespace stepwise
