@@ -1,5 +1,7 @@
 #include "cloth.hpp"
 
+#include "kernels/wind.hpp"
+
 #include "solvers/capabilities/second_order.hpp"
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/capabilities/cloth_grid.hpp"
@@ -240,7 +242,7 @@ class Cloth final : public Model {
     if (wind_k_ > 0) {
       const Eigen::Vector3d w = wind_at(t);
       for (const auto& tri : triangles_) {
-        const Eigen::Vector3d n = area_vector(tri, x), share = wind_k_ * (w - mean_velocity(tri, v)).dot(n) * n / (3 * n.norm());
+        const Eigen::Vector3d share = wind_share(area_vector(tri, x), mean_velocity(tri, v), w, wind_k_);
         for (const int k : tri)
           if (free_index_[k] >= 0) a.segment<3>(3 * free_index_[k]) += share;
       }
@@ -352,14 +354,15 @@ class Cloth final : public Model {
     return i < 0 ? rest_[k] : Eigen::Vector3d(Eigen::Map<const Eigen::Vector3d>(x + 3 * i));
   }
   Eigen::Vector3d area_vector(const std::array<int, 3>& tri, const double* x) const {
-    const Eigen::Vector3d x0 = corner(tri[0], x);
-    return (corner(tri[1], x) - x0).cross(corner(tri[2], x) - x0) / 2;
+    return stepwise::area_vector(corner(tri[0], x), corner(tri[1], x), corner(tri[2], x));
+  }
+  // a pinned corner is at rest
+  Eigen::Vector3d corner_velocity(int k, const double* v) const {
+    const int i = free_index_[k];
+    return i < 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(Eigen::Map<const Eigen::Vector3d>(v + 3 * i));
   }
   Eigen::Vector3d mean_velocity(const std::array<int, 3>& tri, const double* v) const {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const int k : tri)
-      if (free_index_[k] >= 0) sum += Eigen::Map<const Eigen::Vector3d>(v + 3 * free_index_[k]);
-    return sum / 3;
+    return stepwise::mean_velocity(corner_velocity(tri[0], v), corner_velocity(tri[1], v), corner_velocity(tri[2], v));
   }
 
   int rows_, columns_;

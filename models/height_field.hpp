@@ -29,6 +29,7 @@
 // standing-wave (one mode, exact), pool (drops at random places and seeded random times, each an event).
 #pragma once
 
+#include "kernels/wave_acceleration.hpp"
 #include "model.hpp"
 
 namespace stepwise {
@@ -53,14 +54,6 @@ void check_water_grid(const Params& p, int points, double spacing, bool drop);
 // z += h (1 + cos(pi r / R)) / 2 within radius R of (x, y) on the interior of a points^2 grid of spacing d
 // (the water-drop's shape, shared with the shallow water model)
 void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z);
-
-// dv/dt at a cell, c^2 Lap z - mu v, from the sum of its four neighbours: the one formula of the model's
-// acceleration (double) and the float32 symplectic Euler of the GPU's shader and its CPU reference, c2 =
-// c^2 / d^2
-template <class T>
-inline T wave_acceleration(T c2, T mu, T neighbours, T z, T v) {
-  return c2 * (neighbours - 4 * z) - mu * v;
-}
 
 // amplitude and rate (a, a') at time t of a'' + mu a' + w2 a = 0 from a(0) = a0, a'(0) = 0
 std::pair<double, double> mode_amplitude(double w2, double mu, double a0, double t);

@@ -1,5 +1,7 @@
 #include "plane_collision.hpp"
 
+#include "kernels/collision_response.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -29,14 +31,7 @@ std::optional<double> segment_crossing(const Plane& plane, const Eigen::Vector3d
 }
 
 Eigen::Vector3d collision_response(const Plane& plane, const Eigen::Vector3d& v, double restitution, double friction) {
-  const Eigen::Vector3d& n = plane.normal;
-  const double vn = v.dot(n);
-  const Eigen::Vector3d tangential = v - vn * n;
-  const double impulse = (1 + restitution) * std::abs(vn);
-  const double speed = tangential.norm();
-  // Coulomb: the tangential speed falls by mu times the normal impulse, and stops at zero
-  const double kept = speed > 0 ? std::max(0.0, speed - friction * impulse) / speed : 0.0;
-  return -restitution * vn * n + kept * tangential;
+  return collision_response(v, plane.normal, restitution, friction);
 }
 
 std::string plane_contact(const Plane& plane, Eigen::Ref<Eigen::Vector3d> p, Eigen::Ref<Eigen::Vector3d> v, double restitution,

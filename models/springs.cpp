@@ -1,5 +1,7 @@
 #include "springs.hpp"
 
+#include "kernels/spring_force.hpp"
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -22,10 +24,7 @@ Eigen::Vector3d closing_of(const Spring& s, const double* v) {
 
 void add_spring_forces(std::span<const Spring> springs, const double* x, const double* v, double* f) {
   for (const Spring& s : springs) {
-    const Eigen::Vector3d r = span_of(s, x), w = closing_of(s, v);
-    const double length = r.norm();
-    const Eigen::Vector3d u = r / length;
-    const Eigen::Vector3d force = (s.stiffness * (length - s.rest) + s.damping * u.dot(w)) * u;
+    const Eigen::Vector3d force = spring_force(span_of(s, x), closing_of(s, v), s.rest, s.stiffness, s.damping);
     Eigen::Map<Eigen::Vector3d>(f + 3 * s.b) -= force;
     if (s.a >= 0) Eigen::Map<Eigen::Vector3d>(f + 3 * s.a) += force;
   }

@@ -7,10 +7,14 @@
 // values, so it is the scatter's to the bit; only the order of a node's sum differs (in float64, round-off:
 // test_gpu_shader holds the two to it).
 //
-// Every operation is written out (no library dot products or norms) so that its order is fixed:
-// dot(a, b) = (a.x b.x + a.y b.y) + a.z b.z, |a| = sqrt(dot(a, a)).
+// The formulas are kernels/'s (spring_force, wind_share, collision_response), on Vec3<T>, whose every
+// operation is written out so that its order is fixed.
 #pragma once
 
+#include "kernels/collision_response.hpp"
+#include "kernels/spring_force.hpp"
+#include "kernels/vec3.hpp"
+#include "kernels/wind.hpp"
 #include "solvers/capabilities/cloth_grid.hpp"
 
 #include <algorithm>
@@ -21,27 +25,6 @@
 #include <vector>
 
 namespace stepwise::cloth_grid {
-
-template <class T>
-struct Vec3 {
-  T x = 0, y = 0, z = 0;
-};
-template <class T>
-Vec3<T> operator+(Vec3<T> a, Vec3<T> b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-template <class T>
-Vec3<T> operator-(Vec3<T> a, Vec3<T> b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-template <class T>
-Vec3<T> operator*(T s, Vec3<T> a) { return {s * a.x, s * a.y, s * a.z}; }
-template <class T>
-Vec3<T> operator/(Vec3<T> a, T s) { return {a.x / s, a.y / s, a.z / s}; }
-template <class T>
-T dot(Vec3<T> a, Vec3<T> b) { return (a.x * b.x + a.y * b.y) + a.z * b.z; }
-template <class T>
-T norm(Vec3<T> a) { return std::sqrt(dot(a, a)); }
-template <class T>
-Vec3<T> cross(Vec3<T> a, Vec3<T> b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-template <class T>
-Vec3<T> vec3(const Eigen::Vector3d& v) { return {static_cast<T>(v.x()), static_cast<T>(v.y()), static_cast<T>(v.z())}; }
 
 // the twelve springs of a node in the order it sums them: (row offset, column offset, family, rest length:
 // 0 across, 1 down, 2 diagonal, 3 two across, 4 two down)
@@ -92,25 +75,6 @@ Constants<T> constants(const ClothGridView& view, double t, double h) {
           vec3<T>(view.sphere_centre), view.ground, f(view.ground_y), f(view.friction), f(h)};
 }
 
-// the force on a node at x, v of the spring to one at xq, vq: (c e + gamma de/dt) u, u toward the other
-template <class T>
-Vec3<T> spring_force(Vec3<T> x, Vec3<T> v, Vec3<T> xq, Vec3<T> vq, T rest, T c, T gamma) {
-  const Vec3<T> r = xq - x;
-  const T length = norm(r);
-  const Vec3<T> u = r / length;
-  const T magnitude = c * (length - rest) + gamma * dot(u, vq - v);
-  return magnitude * u;
-}
-
-// a third of the wind's force on triangle (corners a, b, c in its order): k_w ((w - vbar) . N) N / (3 |N|)
-template <class T>
-Vec3<T> wind_share(const Constants<T>& k, Vec3<T> xa, Vec3<T> xb, Vec3<T> xc, Vec3<T> va, Vec3<T> vb, Vec3<T> vc) {
-  const Vec3<T> n = T(0.5) * cross(xb - xa, xc - xa);
-  const Vec3<T> mean = ((va + vb) + vc) / T(3);
-  const T flow = k.wind_coefficient * dot(k.wind - mean, n);
-  return (flow * n) / (T(3) * norm(n));
-}
-
 // the acceleration of free node (r, c) of grid-ordered positions x and velocities v (a pinned node's
 // velocity 0)
 template <class T>
@@ -121,7 +85,7 @@ Vec3<T> acceleration(const Constants<T>& k, const Vec3<T>* x, const Vec3<T>* v, 
     const int rq = r + n.dr, cq = c + n.dc;
     if (!k.on[n.family] || rq < 0 || rq >= k.rows || cq < 0 || cq >= k.columns) continue;
     const int q = rq * k.columns + cq;
-    f = f + spring_force(x[p], v[p], x[q], v[q], k.rest[n.rest], k.stiffness[n.family], k.damping);
+    f = f + spring_force(x[q] - x[p], v[q] - v[p], k.rest[n.rest], k.stiffness[n.family], k.damping);
   }
   if (k.wind_coefficient != 0)
     for (const Triangle& t : triangles) {
@@ -129,23 +93,13 @@ Vec3<T> acceleration(const Constants<T>& k, const Vec3<T>* x, const Vec3<T>* v, 
       if (rc < 0 || rc + 1 >= k.rows || cc < 0 || cc + 1 >= k.columns) continue;
       const int a = rc * k.columns + cc;
       const std::array<int, 3> corner = t.which == 0 ? std::array{a, a + k.columns, a + 1} : std::array{a + k.columns, a + k.columns + 1, a + 1};
-      f = f + wind_share(k, x[corner[0]], x[corner[1]], x[corner[2]], v[corner[0]], v[corner[1]], v[corner[2]]);
+      f = f + wind_share(area_vector(x[corner[0]], x[corner[1]], x[corner[2]]), mean_velocity(v[corner[0]], v[corner[1]], v[corner[2]]),
+                         k.wind, k.wind_coefficient);
     }
   if (p == k.picked) f = f + k.pick_force;
   Vec3<T> a = f / k.node_mass - k.drag * v[p];
   a.y = a.y - k.g;
   return a;
-}
-
-// the velocity after meeting a surface with unit normal n without restitution, with Coulomb friction
-// (models/plane_collision.hpp's collision_response at restitution 0)
-template <class T>
-Vec3<T> stop_approach(Vec3<T> v, Vec3<T> n, T friction) {
-  const T vn = dot(v, n);
-  const Vec3<T> tangential = v - vn * n;
-  const T speed = norm(tangential);
-  const T kept = speed > 0 ? std::max(T(0), speed - friction * std::abs(vn)) / speed : T(0);
-  return kept * tangential;
 }
 
 // a node inside the sphere or below the ground put back on its surface, its approach stopped (the model's
@@ -158,12 +112,12 @@ void collide(const Constants<T>& k, Vec3<T>& x, Vec3<T>& v) {
     if (distance < k.sphere_radius && distance > 0) {
       const Vec3<T> n = offset / distance;
       x = k.sphere_centre + k.sphere_radius * n;
-      if (dot(v, n) < 0) v = stop_approach(v, n, k.friction);
+      if (dot(v, n) < 0) v = collision_response(v, n, T(0), k.friction);
     }
   }
   if (k.ground && x.y < k.ground_y) {
     x.y = k.ground_y;
-    if (v.y < 0) v = stop_approach(v, Vec3<T>{0, 1, 0}, k.friction);
+    if (v.y < 0) v = collision_response(v, Vec3<T>{0, 1, 0}, T(0), k.friction);
   }
 }
 

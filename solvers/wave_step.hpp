@@ -19,6 +19,7 @@
 #pragma once
 
 #include "capabilities/wave_grid.hpp"
+#include "kernels/wave_acceleration.hpp"
 
 #include <optional>
 #include <string_view>

@@ -28,7 +28,7 @@ void widen_roundoff_scale(const ClothGridView& view, const cloth_grid::State<T>&
       for (const auto& n : cloth_grid::neighbours) {
         const int rq = r + n.dr, cq = c + n.dc;
         if (rq < 0 || rq >= view.rows || cq < 0 || cq >= view.columns) continue;
-        spring_length = std::max(spring_length, double(cloth_grid::norm(s.x[static_cast<size_t>(rq * view.columns + cq)] - x)));
+        spring_length = std::max(spring_length, double(norm(s.x[static_cast<size_t>(rq * view.columns + cq)] - x)));
       }
     }
   const double rest = 2 * std::max(view.across, view.down);

@@ -6,8 +6,6 @@
 
 #include "solvers/ode_system.hpp"
 
-#include <cstddef>
-
 namespace stepwise {
 
 struct WaveGridView {
@@ -16,15 +14,6 @@ struct WaveGridView {
   double c = 0;         // wave speed (m/s)
   double mu = 0;        // damping (1/s)
 };
-
-// the four neighbours of cell j of such a row-major grid with rows `n` apart, summed in one fixed order: the
-// order every wave stencil keeps (the model's acceleration, the schemes' kernels, their float32 references),
-// so that they agree to the bit where they compute the same thing
-template <class T>
-inline T neighbour_sum(const T* u, std::ptrdiff_t j, std::ptrdiff_t n) {
-  return (u[j - n] + u[j + n]) + (u[j - 1] + u[j + 1]);
-}
-
 
 inline const Requirement needs_wave_grid = needs<WaveGridView>("a wave equation on a grid (a water scene)");
 

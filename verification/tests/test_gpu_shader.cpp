@@ -194,7 +194,7 @@ TEST(GpuShader, ClothPassMatchesTheFloat32CpuStepStepForStep) {
       stepped.step(1);
       running.set_constants(k);
       running.step(1);
-      cloth_grid::State<double> wide{std::vector<cloth_grid::Vec3<double>>(cpu.x.size()), std::vector<cloth_grid::Vec3<double>>(cpu.v.size())}, wide_next;
+      cloth_grid::State<double> wide{std::vector<Vec3<double>>(cpu.x.size()), std::vector<Vec3<double>>(cpu.v.size())}, wide_next;
       for (size_t n = 0; n < cpu.x.size(); ++n) {
         wide.x[n] = {cpu.x[n].x, cpu.x[n].y, cpu.x[n].z};
         wide.v[n] = {cpu.v[n].x, cpu.v[n].y, cpu.v[n].z};
@@ -223,7 +223,7 @@ TEST(GpuShader, ClothPassMatchesTheFloat32CpuStepStepForStep) {
     if (name == std::string("draping sheet")) {
       // the sheet met the sphere: some node lies on it (to float rounding), none inside
       double closest = 1e9;
-      for (const auto& x : shader.x) closest = std::min(closest, double(cloth_grid::norm(x)));
+      for (const auto& x : shader.x) closest = std::min(closest, double(norm(x)));
       std::cout << "  closest node to the sphere's centre: " << closest << " m (radius 0.5)\n";
       EXPECT_NEAR(closest, 0.5, 1e-6);
     }
