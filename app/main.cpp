@@ -1,7 +1,7 @@
 // The stepwise command line: methods, scenes, run, study, report (DESIGN.md's contract).
 #include "render_command.hpp"
 #include "run_command.hpp"
-#include "scene.hpp"
+#include "run/scene.hpp"
 
 #include "models/model.hpp"
 #include "report/report.hpp"

@@ -12,7 +12,7 @@
 // One core: CHOLMOD's BLAS is kept on the calling thread (sparse_cholesky.cpp). The BLAS is Debian's
 // alternative (OpenBLAS when installed); LD_LIBRARY_PATH=/usr/lib/x86_64-linux-gnu/blas runs the reference
 // BLAS instead. The program prints the library its dgemm_ comes from.
-#include "app/scene.hpp"
+#include "run/scene.hpp"
 #include "models/model.hpp"
 #include "solvers/method_table.hpp"
 #include "solvers/mass_spring_implicit.hpp"

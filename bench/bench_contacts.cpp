@@ -4,7 +4,7 @@
 // the Gauss-Seidel sweeps each step took on average.
 #include "models/model.hpp"
 #include "solvers/method_table.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 
 #include "ratio_reporter.hpp"
 

@@ -7,7 +7,7 @@
 #include "models/model.hpp"
 #include "render/caustics.hpp"
 #include "render/renderer.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 
 #include <benchmark/benchmark.h>
 

@@ -14,7 +14,7 @@
 #include "ratio_reporter.hpp"
 #include "solvers/gpu/gpu_wave.hpp"
 #include "solvers/wave_step.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/wave_modes.hpp"
 
 #include <fmt/format.h>

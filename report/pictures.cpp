@@ -1,8 +1,8 @@
 #include "pictures.hpp"
 
-#include "atomic_write.hpp"
-#include "csv.hpp"
-#include "process.hpp"
+#include "run/atomic_write.hpp"
+#include "run/csv.hpp"
+#include "run/render_scene.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -23,10 +23,10 @@ namespace {
 // as they are
 struct QuickChange {
   const char* scene;
-  std::vector<std::string> arguments;
+  std::vector<std::string> sets;  // key=value, as --set takes them
 };
 const QuickChange quick_changes[] = {
-    {"particle-system", {"--set", "count=10000"}},  // 100 000 particles take 16 s to simulate
+    {"particle-system", {"count=10000"}},  // 100 000 particles take 16 s to simulate
 };
 
 // the quick report's change to a scene's render, if any
@@ -69,14 +69,20 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
   const auto drawn = ctx.sweep<Drawn>(scenes, [&](size_t i) {
     const std::string& scene = scenes[i];
     const fs::path out = dir / "pictures" / scene;
-    std::vector<std::string> args{"/proc/self/exe", "render", (scenes_dir / (scene + ".toml")).string(), "--frames", std::to_string(frames),
-                                  "--size",         size,     "--out",                                   out.string()};
-    if (const QuickChange* change = quick_change(scene, ctx.quick)) args.insert(args.end(), change->arguments.begin(), change->arguments.end());
-    std::string why;
-    const auto status = run_process(args, &why);
-    if (!status || *status != 0)
-      throw std::runtime_error(fmt::format("stepwise render {} failed ({}): the pictures were not drawn", scene,
-                                           status ? fmt::format("exit status {}", *status) : why));
+    // drawn here, in this sweep thread's own GL context: a scene that fails to draw fails the report, as it
+    // would a `stepwise render` of it
+    RenderOptions options;
+    options.run.scene_file = (scenes_dir / (scene + ".toml")).string();
+    options.frames = frames;
+    options.size = size;
+    options.out = out.string();
+    if (const QuickChange* change = quick_change(scene, ctx.quick)) options.run.sets = change->sets;
+    try {
+      if (const RenderedRun drawn = render_scene(options); drawn.status != Status::ok)
+        throw std::runtime_error(fmt::format("{} (frames drawn up to t = {} s)", drawn.message, drawn.t_last));
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(fmt::format("stepwise render {} failed ({}): the pictures were not drawn", scene, e.what()));
+    }
     std::ifstream in(out / "render.json");
     return Drawn{scene, nlohmann::json::parse(in)};
   });
@@ -90,7 +96,10 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
     table.rows.push_back({scene, j["model"].get<std::string>(), j["method"].get<std::string>(), static_cast<double>(j["frames"].size()),
                           shown["t"].get<double>(), per_frame, j["status"].get<std::string>(), j["renderer"].get<std::string>()});
     const QuickChange* change = quick_change(scene, ctx.quick);
-    const std::string changed = change ? fmt::format(" (quick report: `{}`)", fmt::join(change->arguments, " ")) : "";
+    std::string arguments;
+    if (change)
+      for (const auto& set : change->sets) arguments += fmt::format("{}--set {}", arguments.empty() ? "" : " ", set);
+    const std::string changed = change ? fmt::format(" (quick report: `{}`)", arguments) : "";
     const std::string still = fmt::format("pictures/{}/{}", scene, shown["file"].get<std::string>());
     body += fmt::format("### {}\n\n{}{} Drawn with {}; the last frame, t = {:.3g} s:\n\n![{}]({})\n\n", scene,
                         scene_description(scenes_dir / (scene + ".toml")), changed, j["method"].get<std::string>(), shown["t"].get<double>(),

@@ -1,8 +1,8 @@
 #include "report.hpp"
 
-#include "atomic_write.hpp"
+#include "run/atomic_write.hpp"
 #include "pictures.hpp"
-#include "process.hpp"
+#include "run/process.hpp"
 #include "studies.hpp"
 #include "solvers/method_table.hpp"
 

@@ -11,7 +11,7 @@
 #include "verification/contact_checks.hpp"
 #include "verification/convergence.hpp"
 #include "verification/invariants.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/stability.hpp"
 
 #include <fmt/format.h>

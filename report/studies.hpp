@@ -1,7 +1,7 @@
 // The studies of the report: each a sweep over methods and step sizes that writes its tables.
 #pragma once
 
-#include "csv.hpp"
+#include "run/csv.hpp"
 #include "sweep.hpp"
 
 #include <filesystem>

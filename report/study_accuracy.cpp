@@ -7,7 +7,7 @@
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/convergence.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
 

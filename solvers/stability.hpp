@@ -2,6 +2,8 @@
 // spectrum from R(z), and the closed forms on a damped oscillator mode that more than one method shares.
 #pragma once
 
+#include "ode_system.hpp"
+
 #include <Eigen/Dense>
 
 #include <complex>
@@ -23,5 +25,15 @@ Eigen::Vector2cd oscillator_eigenvalues(double omega, double damping);
 // h < 2 (sqrt(a^2 + w^2) - a) / w^2 (h w < 2 undamped; the damping, explicit, shrinks it). The CPU and the GPU
 // symplectic Euler share it.
 double symplectic_euler_oscillator_dt(double omega, double damping);
+
+// The stiffest mode of a mass-spring system (OdeSystem::mass_spring) linearised at (t, y): omega^2, the
+// largest eigenvalue of M^-1 (-K) with the exact K = df/dx (of the symmetric M^-1/2 (-K) M^-1/2: Eigen's
+// self-adjoint eigensolver up to 3000 unknowns, else 400 power iterations, whose Rayleigh quotient then sits
+// within the top cluster of eigenvalues), and its damping rate a = v^T (-D) v / (2 v^T M v).
+struct StiffestMode {
+  double omega = 0;    // rad/s
+  double damping = 0;  // 1/s
+};
+StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::VectorXd& y);
 
 }  // namespace stepwise

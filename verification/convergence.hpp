@@ -1,7 +1,7 @@
 // Convergence sweep of a fixed-step method: error at t_end against dt over successive halvings.
 #pragma once
 
-#include "measure.hpp"
+#include "run/measure.hpp"
 
 #include <vector>
 

@@ -56,35 +56,6 @@ WaveStability wave_stability(std::string_view method, int points, double spacing
   return {measured, derived, seeds_wave_condition(grid)};
 }
 
-StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::VectorXd& y) {
-  const MassSpringView* view = system.as<MassSpringView>();
-  if (!view) throw std::invalid_argument("stiffest_mode: not a mass-spring system");
-  Eigen::SparseMatrix<double> k, d;
-  view->force_jacobians(t, y, false, k, d);
-  const Eigen::Index n = k.rows();
-  Eigen::VectorXd root_mass(n);
-  for (int i = 0; i < view->nodes; ++i) root_mass.segment<3>(3 * i).setConstant(std::sqrt(view->mass[i]));
-  const Eigen::VectorXd inverse = root_mass.cwiseInverse();
-  // S = M^-1/2 (-K) M^-1/2, symmetric for the springs' K (the wind's position part, not symmetric, is taken
-  // symmetrised)
-  Eigen::SparseMatrix<double> s = -(inverse.asDiagonal() * k * inverse.asDiagonal());
-  s = (Eigen::SparseMatrix<double>(s.transpose()) + s) / 2;
-  Eigen::VectorXd mode(n);
-  double lambda = 0;
-  if (n <= 3000) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen{Eigen::MatrixXd(s)};
-    lambda = eigen.eigenvalues()[n - 1];
-    mode = eigen.eigenvectors().col(n - 1);
-  } else {
-    mode = Eigen::VectorXd::LinSpaced(n, 1, 2);
-    for (int k = 0; k < 400; ++k) mode = (s * mode).normalized();
-    lambda = mode.dot(s * mode);
-  }
-  const Eigen::VectorXd v = inverse.cwiseProduct(mode);  // the mode in coordinates: M^-1/2 times S's eigenvector
-  const double a = -v.dot(d * v) / (2 * v.dot(root_mass.cwiseAbs2().cwiseProduct(v)));
-  return {std::sqrt(std::max(lambda, 0.0)), a};
-}
-
 std::optional<double> mass_spring_stable_dt(std::string_view method, const StiffestMode& mode) {
   const Method* m = find_method(method);
   if (!m || !m->stability.oscillator_dt) return std::nullopt;

@@ -4,6 +4,7 @@
 
 #include "models/model.hpp"
 #include "solvers/method_table.hpp"
+#include "solvers/stability.hpp"
 
 #include <complex>
 #include <functional>
@@ -39,16 +40,6 @@ struct WaveStability {
   double measured = 0, derived = 0, seeds = 0;
 };
 WaveStability wave_stability(std::string_view method, int points, double spacing, double c, double mu, long steps);
-
-// The stiffest mode of a mass-spring system (OdeSystem::mass_spring) linearised at (t, y): omega^2, the
-// largest eigenvalue of M^-1 (-K) with the exact K = df/dx (of the symmetric M^-1/2 (-K) M^-1/2: Eigen's
-// self-adjoint eigensolver up to 3000 unknowns, else 400 power iterations, whose Rayleigh quotient then sits
-// within the top cluster of eigenvalues), and its damping rate a = v^T (-D) v / (2 v^T M v).
-struct StiffestMode {
-  double omega = 0;    // rad/s
-  double damping = 0;  // 1/s
-};
-StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::VectorXd& y);
 
 // The largest step each explicit method survives on that mode, the linear oscillator x'' = -omega^2 x - 2 a x'
 // with eigenvalues lambda = -a +- i sqrt(omega^2 - a^2): symplectic Euler h < 2 (sqrt(a^2 + omega^2) - a) /

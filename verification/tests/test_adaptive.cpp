@@ -1,7 +1,7 @@
 // Adaptive methods against the exact pendulum: error falls as rtol tightens, the high-order codes reach
 // 1e-6 at 170 degrees, and independent implementations agree within their error bounds.
 #include "models/model.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/tolerances.hpp"
 

@@ -7,7 +7,7 @@
 #include "solvers/method_table.hpp"
 #include "solvers/mass_spring_implicit.hpp"
 #include "solvers/run_support.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"

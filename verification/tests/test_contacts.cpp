@@ -8,7 +8,7 @@
 #include "solvers/contact_solve.hpp"
 #include "solvers/integrator.hpp"
 #include "verification/contact_checks.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/tolerances.hpp"
 
 #include <Eigen/Geometry>

@@ -2,7 +2,7 @@
 // implicit Euler's decays (seeds: energy behaviour of the Euler family).
 #include "models/model.hpp"
 #include "models/pendulum.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/tolerances.hpp"
 
 #include <gtest/gtest.h>

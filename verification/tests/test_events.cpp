@@ -2,7 +2,7 @@
 // heights eps^(2n) h0, resting contact instead of the Zeno point, and no energy gained at eps = 1.
 #include "models/bouncing_ball.hpp"
 #include "solvers/method_table.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/tolerances.hpp"
 

@@ -5,7 +5,7 @@
 #include "models/model.hpp"
 #include "solvers/capabilities/second_order.hpp"
 #include "solvers/method_table.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/tolerances.hpp"
 
 #include <gtest/gtest.h>

@@ -4,7 +4,7 @@
 #include "models/particle_mesh.hpp"
 #include "models/plane_collision.hpp"
 #include "solvers/method_table.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/tolerances.hpp"
 
 #include <gtest/gtest.h>

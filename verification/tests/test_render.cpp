@@ -9,7 +9,7 @@
 #include "verification/tolerances.hpp"
 #include "models/model.hpp"
 #include "app/run_command.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

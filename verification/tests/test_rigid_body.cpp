@@ -6,7 +6,7 @@
 #include "models/rigid_body.hpp"
 #include "solvers/method_table.hpp"
 #include "verification/invariants.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/tolerances.hpp"
 

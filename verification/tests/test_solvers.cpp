@@ -2,7 +2,7 @@
 // claim about explicit and implicit Euler in a position-independent force field.
 #include "models/model.hpp"
 #include "solvers/method_table.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/tolerances.hpp"
 
 #include <gtest/gtest.h>

@@ -6,7 +6,7 @@
 #include "solvers/fd_jacobian.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/adequacy.hpp"
-#include "verification/measure.hpp"
+#include "run/measure.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"

@@ -1,0 +1,134 @@
+#include "prepare.hpp"
+
+#include "solvers/capabilities/mass_spring.hpp"
+#include "solvers/method_table.hpp"
+#include "solvers/stability.hpp"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+
+namespace stepwise {
+namespace {
+
+// a whole string as a finite double, or nothing
+std::optional<double> parse_number(std::string_view text) {
+  double value = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
+void require_positive(std::optional<double> value, const std::string& where) {
+  if (value && !(std::isfinite(*value) && *value > 0))
+    throw InputError(fmt::format("{}: must be a positive finite number, got {}", where, *value));
+}
+
+}  // namespace
+
+PreparedRun prepare_run(const RunOptions& o) {
+  PreparedRun p;
+  p.scene = load_scene(o.scene_file);
+  Scene& s = p.scene;
+
+  // parameters: the scene's, then --set overrides
+  Params values = s.parameters;
+  std::map<std::string, std::string, std::less<>> set_origin;
+  for (const auto& set : o.sets) {
+    const auto eq = set.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError(fmt::format("--set {}: expected key=value", set));
+    const std::string key = set.substr(0, eq);
+    const auto value = parse_number(set.substr(eq + 1));
+    if (!value) throw InputError(fmt::format("--set {}: value '{}' is not a number", key, set.substr(eq + 1)));
+    values[key] = *value;
+    set_origin[key] = "--set " + key;
+  }
+  const ModelInfo* info = find_model(s.model);
+  if (!info) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
+  if (s.mesh && !info->make_with_mesh) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
+  if (s.pins && !info->make_with_pins) throw InputError(fmt::format("{}: model {} takes no pins", s.where("pins"), s.model));
+  try {
+    p.params = resolve_params(*info, values);
+    p.model = s.mesh ? info->make_with_mesh(p.params, *s.mesh) : s.pins ? info->make_with_pins(p.params, *s.pins) : info->make(p.params);
+  } catch (const BadParameter& e) {
+    const auto origin = set_origin.find(e.key);
+    throw InputError(fmt::format("{}: {}", origin != set_origin.end() ? origin->second
+                                           : e.key == "mesh"             ? s.where("mesh")
+                                           : e.key == "pins"             ? s.where("pins")
+                                                                         : s.where("parameters." + e.key),
+                                 e.what()));
+  }
+
+  // method and step control: the command line wins over the scene; --dt and --rtol exclude each other
+  p.method = o.method.value_or(s.method.value_or("rk4"));
+  const Method* method = find_method(p.method);
+  if (!method) throw InputError(fmt::format("{}: unknown method '{}' (see `stepwise methods`)", o.method ? "--method" : s.where("run.method"), p.method));
+  if (o.dt && (o.rtol || o.atol)) throw InputError("--dt: give either --dt or --rtol/--atol, not both");
+  require_positive(o.dt, "--dt");
+  require_positive(o.rtol, "--rtol");
+  require_positive(o.atol, "--atol");
+  require_positive(o.t_end, "--t-end");
+  require_positive(o.output_dt, "--output-dt");
+  require_positive(s.dt, s.where("run.dt"));
+  require_positive(s.rtol, s.where("run.rtol"));
+  require_positive(s.atol, s.where("run.atol"));
+  require_positive(s.t_end, s.where("run.t_end"));
+  require_positive(s.output_dt, s.where("run.output_dt"));
+
+  const bool adaptive = o.rtol || o.atol || (!o.dt && (!s.dt || !method->fixed_step()) && method->adaptive());
+  if (adaptive) {
+    if (!method->adaptive()) throw InputError(fmt::format("--rtol: {} is a fixed-step method: give --dt", p.method));
+    p.control.rtol = o.rtol.value_or(s.rtol.value_or(p.control.rtol));
+    p.control.atol = o.atol.value_or(s.atol.value_or(p.control.atol));
+  } else {
+    p.control.dt = o.dt ? o.dt : s.dt;
+    if (!p.control.dt) throw InputError(fmt::format("{}: {} is a fixed-step method and neither --dt nor run.dt is given", s.file, p.method));
+    if (!method->fixed_step()) throw InputError(fmt::format("--dt: {} is adaptive only: give --rtol/--atol", p.method));
+  }
+  if (const double bytes = dense_matrix_bytes(*method, *p.model); bytes > 0.5 * physical_memory_bytes())
+    throw InputError(fmt::format("{}: {} keeps dense {} x {} matrices ({:.3g} GiB) for this {}-entry state, more than half this "
+                                 "machine's memory: use an explicit method{}",
+                                 o.method ? "--method" : s.where("run.method"), p.method, p.model->size(), p.model->size(),
+                                 bytes / 0x1p30, p.model->size(),
+                                 p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
+  if (!method_applies(*method, *p.model))
+    throw InputError(fmt::format("{}: {} (model {})", o.method ? "--method" : s.where("run.method"), method_requirement(*method, *p.model), s.model));
+  // a method with a device of its own (a GPU method: its grid must be a texture the device renders to) is asked
+  if (method->device_problem)
+    if (const std::string problem = method->device_problem(*p.model); !problem.empty())
+      throw InputError(fmt::format("{}: {}: {}", o.method ? "--method" : s.where("run.method"), p.method, problem));
+
+  const std::string location = o.event_location.value_or(s.event_location.value_or("linear"));
+  if (location == "restep") p.control.event_location = EventLocation::restep;
+  else if (location != "linear")
+    throw InputError(fmt::format("{}: event location '{}' is neither linear nor restep",
+                                 o.event_location ? "--event-location" : s.where("run.event_location"), location));
+
+  p.t_end = o.t_end.value_or(s.t_end.value_or(10.0));
+  if (p.control.dt && *p.control.dt > p.t_end)
+    throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.t_end));
+  // a step past the method's stability limit is the user's to try: said, then run, and reported diverged
+  if (const auto* grid = p.model->as<WaveGridView>(); grid && p.control.dt && method->stability.wave_dt)
+    if (const double limit = method->stability.wave_dt(*grid); *p.control.dt > limit)
+      fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s on this grid (d = {} m, c = {} m/s, "
+                 "mu = {} 1/s); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method, limit,
+                 grid->spacing, grid->c, grid->mu);
+  // and on a mass-spring system, the limit its stiffest mode sets at the start (verification/stability.hpp), for
+  // the methods that have one (asked first with any mode, so the eigenproblem is solved only for those)
+  if (p.model->as<MassSpringView>() && p.control.dt && method->stability.oscillator_dt) {
+    const StiffestMode mode = stiffest_mode(*p.model, 0, p.model->initial_state());
+    if (const double limit = method->stability.oscillator_dt(mode.omega, mode.damping); *p.control.dt > limit)
+      fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s for this system's stiffest mode (omega = {:.6g} "
+                 "rad/s, damping {:.3g} 1/s at the start); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method,
+                 limit, mode.omega, mode.damping);
+  }
+  p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
+  // a fixed-step run samples on its own step grid: an output time between grid points would shorten a step
+  // and change the very run being sampled (a dt beyond the stability limit would be hidden by short steps)
+  if (p.control.dt) p.output_dt = std::max(1.0, std::round(p.output_dt / *p.control.dt)) * *p.control.dt;
+  return p;
+}
+
+}  // namespace stepwise
