@@ -34,13 +34,36 @@ struct Study {
 // every study, in the report's order
 const std::vector<Study>& studies();
 
-// the studies of accuracy against step and cost (study_accuracy.cpp)
-std::vector<Study> accuracy_studies();
+// each study, from its own file in report/studies/ (one per study, named after it)
+Study work_precision_study();
+Study convergence_study();
+Study stability_regions_study();
+Study energy_study();
+Study adequacy_study();
+Study wave_adequacy_study();
+Study bouncing_ball_curve_study();
+Study event_times_study();
+Study wave_stability_study();
+Study rigid_body_invariants_study();
+Study contacts_study();
+Study cloth_study();
 
 // adds the figure to the list; returns its Markdown (an image line and a blank line) for the section
 std::string add_figure(std::vector<Figure>& figures, const std::string& kind, const std::string& subject, const std::string& caption);
 
 // a number in scientific notation with 3 digits, or a dash for nan and inf
 std::string sci(double v);
+
+// a column of a study's Markdown table: the Table's column it shows (by name), its heading, and how a cell is
+// shown (empty: as {} shows it); the table and its CSV are then one Table, and every number shown is the CSV's
+struct Shown {
+  std::string column;
+  std::string heading;
+  std::function<std::string(const Cell& cell)> format;
+};
+// a number cell with fmt's format `spec` ("{:.3g}"), `sci` for sci(), a text or integer cell as it is
+std::function<std::string(const Cell&)> shown_as(std::string spec);
+// the Markdown table of `table`'s rows, showing `columns` (std::invalid_argument for a column it lacks)
+std::string markdown_table(const Table& table, const std::vector<Shown>& columns);
 
 }  // namespace stepwise

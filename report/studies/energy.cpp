@@ -1,0 +1,76 @@
+// The report's study: energy: the pendulum over many periods.
+#include "report/studies.hpp"
+
+#include "models/bouncing_ball.hpp"
+#include "models/model.hpp"
+#include "models/pendulum.hpp"
+#include "models/rigid_body.hpp"
+#include "solvers/capabilities/mass_spring.hpp"
+#include "solvers/capabilities/second_order.hpp"
+#include "solvers/wave_step.hpp"
+#include "verification/adequacy.hpp"
+#include "verification/contact_checks.hpp"
+#include "verification/convergence.hpp"
+#include "verification/invariants.hpp"
+#include "run/measure.hpp"
+#include "verification/stability.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+
+namespace stepwise {
+namespace {
+
+
+StudyOutput energy(const StudyContext& ctx) {
+  const bool quick = ctx.quick;
+  const int periods = quick ? 100 : 1000;
+  const int samples = 20;  // per period: the error oscillates within a period, so one sample a period would alias it
+  const double theta0 = 0.5;
+  const auto model = make_model("pendulum", {{"theta0", theta0}});
+  const double period = pendulum_period(theta0, 9.81, 1.0);
+  const double e0 = *model->energy(model->initial_state());
+  Table table{{"method", "t", "relative_energy_error"}, {}};
+  Table summary{{"method", "max_first_tenth", "max_last_tenth", "at_end"}, {}};
+  std::string md = fmt::format("Pendulum at theta0 = {} rad over {} periods, dt = T/100: the largest relative energy error "
+                               "|E - E0|/E0 over the first and the last tenth of the run ({} samples a period), and the "
+                               "error at the end. A symplectic method keeps it bounded; explicit Euler's grows and "
+                               "implicit Euler's decays towards the bottom of the well (-1).\n\n"
+                               "| method | max over first tenth | max over last tenth | at the end |\n|---|---|---|---|\n",
+                               theta0, periods, samples);
+  for (const std::string method : {"euler", "symplectic-euler", "implicit-euler", "rk4"}) {
+    StepControl control;
+    control.dt = period / 100;
+    const Measured m = run_and_measure(*model, method, control, periods * period, period / samples);
+    const auto& ys = m.result.trajectory.y;
+    std::vector<double> errors;
+    for (size_t i = 0; i < ys.size(); ++i) {
+      errors.push_back((*model->energy(ys[i]) - e0) / e0);
+      table.rows.push_back({method, m.result.trajectory.t[i], errors.back()});
+    }
+    auto max_abs = [&](size_t begin, size_t end) {
+      double v = 0;
+      for (size_t i = begin; i < end; ++i) v = std::max(v, std::abs(errors[i]));
+      return v;
+    };
+    const size_t n = errors.size(), tenth = n / 10;
+    const double first = max_abs(0, tenth), last = max_abs(n - tenth, n), end = errors.empty() ? NAN : errors.back();
+    summary.rows.push_back({method, first, last, end});
+    md += fmt::format("| {} | {:.3e} | {:.3e} | {:+.3e} |\n", method, first, last, end);
+  }
+  std::vector<Figure> figures;
+  md += "\n";
+  md += add_figure(figures, "energy", "", "Relative energy error of the pendulum over time, per method");
+  return {{{"energy", std::move(table)}, {"energy_summary", std::move(summary)}}, md, figures};
+}
+
+}  // namespace
+
+Study energy_study() { return {"energy", "Energy over long runs", energy}; }
+
+}  // namespace stepwise

@@ -1,0 +1,91 @@
+// The report's study: stability regions: each method's region in the complex plane against the scenes' spectra.
+#include "report/studies/study_scenes.hpp"
+
+namespace stepwise {
+namespace {
+
+StudyOutput stability_regions(const StudyContext& ctx) {
+  const long steps = 2000;
+  struct SpectrumScene {
+    std::string label;
+    std::shared_ptr<const Model> model;
+    Eigen::VectorXd y0;
+    std::function<bool(std::string_view method, double dt)> bounded;  // the measured side
+  };
+  // the standing wave's grid from a random field (every mode excited) and the cloth's stability sheet from rest
+  std::vector<SpectrumScene> scenes;
+  {
+    const auto scene = ode_scenes().back();
+    std::shared_ptr<const Model> model = make_model(scene.model, scene.params);
+    const WaveGridView grid = *model->as<WaveGridView>();
+    scenes.push_back({scene.label, model, model->initial_state(), [grid](std::string_view method, double dt) {
+                        return wave_stays_bounded(method, grid.points, grid.spacing, grid.c, grid.mu, steps)(dt);
+                      }});
+    std::shared_ptr<const Model> sheet = stability_sheet(1000);
+    scenes.push_back({"cloth-sheet", sheet, sheet->initial_state(), [sheet](std::string_view method, double dt) {
+                        return stays_bounded(*sheet, method, sheet->initial_state(), dt, steps);
+                      }});
+  }
+  const std::vector<std::string> region_methods{"euler", "rk4", "implicit-euler"};
+
+  std::vector<std::string> labels;
+  for (const auto& s : scenes) labels.push_back(s.label + " spectrum");
+  const auto spectra = ctx.sweep<Eigen::VectorXcd>(labels, [&](size_t i) { return jacobian_spectrum(*scenes[i].model, 0, scenes[i].y0); });
+
+  struct Limit {
+    size_t scene;
+    std::string method;
+    double predicted = NAN, measured = NAN;
+  };
+  std::vector<Limit> limits;
+  labels.clear();
+  for (size_t i = 0; i < scenes.size(); ++i)
+    for (const auto& method : region_methods) {
+      limits.push_back({i, method, *spectrum_stable_dt(method, spectra[i])});
+      labels.push_back(fmt::format("{} {}", scenes[i].label, method));
+    }
+  const auto measured = ctx.sweep<double>(labels, [&](size_t k) {
+    const Limit& l = limits[k];
+    // implicit Euler is not probed: its Newton solves on 578 unknowns would cost more than the rest of the study
+    if (l.method == "implicit-euler" || !std::isfinite(l.predicted) || l.predicted <= 0) return std::numeric_limits<double>::quiet_NaN();
+    const auto& s = scenes[l.scene];
+    return bisect_stability([&](double dt) { return s.bounded(l.method, dt); }, l.predicted / 4, l.predicted * 16,
+                            tolerance::stability_bisection_width);
+  });
+
+  Table spectrum{{"scene", "re", "im"}, {}};
+  for (size_t i = 0; i < scenes.size(); ++i)
+    for (const auto& lambda : spectra[i]) spectrum.rows.push_back({scenes[i].label, lambda.real(), lambda.imag()});
+  Table table{{"scene", "method", "spectrum_dt", "measured_dt", "measured_over_spectrum"}, {}};
+  StudyOutput out;
+  out.markdown = fmt::format(
+      "Why a step fails: a one-step method multiplies each eigen-component of a linear(ised) system by R(h lambda) per step, so it is "
+      "stable while every h lambda of the Jacobian's spectrum lies in its region |R(z)| <= 1. The spectra of the standing wave's 17^2 "
+      "grid (578 unknowns, mu = 0.5) and of the cloth's 8 x 8 stability sheet (c = 1000 N/m) are drawn times rk4's largest stable "
+      "step predicted from them, over the regions of explicit Euler, rk4 and implicit Euler (the whole plane outside the disc about 1). "
+      "Predicted: the largest h keeping every h lambda in the region; measured: bisection to 0.1% on {} steps (from a random field for "
+      "the wave, from rest for the sheet) staying within 1e6 of the start.\n\n{}"
+      "| scene | method | predicted from the spectrum (s) | measured (s) | measured / predicted |\n|---|---|---|---|---|\n",
+      steps, add_figure(out.figures, "stability_regions", "", "Stability regions and the scenes' spectra"));
+  for (size_t k = 0; k < limits.size(); ++k) {
+    const Limit& l = limits[k];
+    const double ratio = measured[k] / l.predicted;
+    table.rows.push_back({scenes[l.scene].label, l.method, l.predicted, measured[k], ratio});
+    out.markdown += fmt::format("| {} | {} | {} | {} | {} |\n", scenes[l.scene].label, l.method,
+                                std::isinf(l.predicted) ? std::string("any (A-stable)") : fmt::format("{:.4g}", l.predicted),
+                                std::isnan(measured[k]) ? std::string("—") : fmt::format("{:.4g}", measured[k]),
+                                std::isnan(ratio) ? std::string("—") : fmt::format("{:.3f}", ratio));
+  }
+  out.markdown += "\nrk4's measured limits match the spectrum's; explicit Euler's probe finds several times its prediction (up to the "
+                  "bracket's 16): near its limit its growth per step, |1 + h lambda| - 1, is so small on the weakly damped modes that "
+                  "2000 steps do not show it, the cloth study's finding. Symplectic Euler has no R(z): it maps (x, v) pairs, and on an undamped oscillator it is stable for h omega < 2, "
+                  "the segment of the imaginary axis |z| < 2 (the cloth study's table).\n\n";
+  out.tables = {{"stability_spectrum", std::move(spectrum)}, {"stability_limits", std::move(table)}};
+  return out;
+}
+
+}  // namespace
+
+Study stability_regions_study() { return {"stability-regions", "Stability: the methods' regions against the scenes' spectra", stability_regions}; }
+
+}  // namespace stepwise
