@@ -1,5 +1,7 @@
 #include "pictures.hpp"
 
+#include "studies.hpp"
+
 #include "run/atomic_write.hpp"
 #include "run/csv.hpp"
 #include "run/render_scene.hpp"
@@ -109,13 +111,13 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
   }
   write_file_atomic(dir / "pictures.csv", to_csv(table));
   std::string md = "## Pictures\n\n";
-  md += fmt::format("Every scene run through its own method and drawn headlessly by `stepwise render` ({} frames at {}, OpenGL on {}). "
+  md += fmt::format("Every scene run through its own method and drawn headlessly as `stepwise render` draws it ({} frames at {}, OpenGL on {}). "
                     "Data: [pictures.csv](pictures.csv).\n\n",
                     frames, size, std::get<std::string>(table.rows.front().back()));
-  md += "| scene | method | frames | draw ms per frame |\n|---|---|---|---|\n";
-  for (const auto& row : table.rows)
-    md += fmt::format("| {} | {} | {:.0f} | {:.1f} |\n", std::get<std::string>(row[0]), std::get<std::string>(row[2]), std::get<double>(row[3]),
-                      std::get<double>(row[5]));
+  md += markdown_table(table, {{"scene", "scene"},
+                               {"method", "method"},
+                               {"frames", "frames", shown_as("{:.0f}")},
+                               {"draw_ms_per_frame", "draw ms per frame", shown_as("{:.1f}")}});
   return md + "\n" + body;
 }
 

@@ -17,28 +17,37 @@ std::string add_figure(std::vector<Figure>& figures, const std::string& kind, co
 
 std::function<std::string(const Cell&)> shown_as(std::string spec) {
   return [spec = std::move(spec)](const Cell& cell) -> std::string {
-    if (const double* v = std::get_if<double>(&cell)) return spec == "sci" ? sci(*v) : fmt::format(fmt::runtime(spec), *v);
+    if (const double* v = std::get_if<double>(&cell)) return !std::isfinite(*v) || spec == "sci" ? sci(*v) : fmt::format(fmt::runtime(spec), *v);
     if (const long* n = std::get_if<long>(&cell)) return std::to_string(*n);
     return std::get<std::string>(cell);
   };
 }
 
-std::string markdown_table(const Table& table, const std::vector<Shown>& columns) {
+const Cell& cell_of(const Table& table, const std::vector<Cell>& row, std::string_view column) {
+  const auto it = std::find(table.columns.begin(), table.columns.end(), column);
+  if (it == table.columns.end()) throw std::invalid_argument(fmt::format("cell_of: no column '{}'", column));
+  return row[static_cast<size_t>(it - table.columns.begin())];
+}
+
+std::string markdown_table(const Table& table, const std::vector<Shown>& columns, const std::function<bool(size_t row)>& keep) {
   std::vector<size_t> at;
   std::string heading = "|", rule = "|";
   for (const auto& c : columns) {
     const auto it = std::find(table.columns.begin(), table.columns.end(), c.column);
-    if (it == table.columns.end()) throw std::invalid_argument(fmt::format("markdown_table: no column '{}'", c.column));
-    at.push_back(static_cast<size_t>(it - table.columns.begin()));
+    if (c.column.empty()) at.push_back(0);
+    else if (it == table.columns.end()) throw std::invalid_argument(fmt::format("markdown_table: no column '{}'", c.column));
+    else at.push_back(static_cast<size_t>(it - table.columns.begin()));
     heading += fmt::format(" {} |", c.heading);
     rule += "---|";
   }
   std::string md = fmt::format("{}\n{}\n", heading, rule);
-  for (const auto& row : table.rows) {
+  for (size_t r = 0; r < table.rows.size(); ++r) {
+    if (keep && !keep(r)) continue;
+    const auto& row = table.rows[r];
     md += "|";
     for (size_t k = 0; k < columns.size(); ++k) {
       const Cell& cell = row[at[k]];
-      md += fmt::format(" {} |", columns[k].format ? columns[k].format(cell) : shown_as("{}")(cell));
+      md += fmt::format(" {} |", columns[k].of_row ? columns[k].of_row(row) : columns[k].format ? columns[k].format(cell) : shown_as("{}")(cell));
     }
     md += "\n";
   }

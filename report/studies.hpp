@@ -57,13 +57,18 @@ std::string sci(double v);
 // a column of a study's Markdown table: the Table's column it shows (by name), its heading, and how a cell is
 // shown (empty: as {} shows it); the table and its CSV are then one Table, and every number shown is the CSV's
 struct Shown {
-  std::string column;
+  std::string column;  // empty: the column is shown from the whole row by `of_row`
   std::string heading;
   std::function<std::string(const Cell& cell)> format;
+  std::function<std::string(const std::vector<Cell>& row)> of_row;  // a column showing several of the Table's
 };
-// a number cell with fmt's format `spec` ("{:.3g}"), `sci` for sci(), a text or integer cell as it is
+// the cell of `row` in `table`'s column `column` (std::invalid_argument if it has none)
+const Cell& cell_of(const Table& table, const std::vector<Cell>& row, std::string_view column);
+// a number cell with fmt's format `spec` ("{:.3g}"), `sci` for sci(), a dash where it is not finite; a text or
+// integer cell as it is
 std::function<std::string(const Cell&)> shown_as(std::string spec);
-// the Markdown table of `table`'s rows, showing `columns` (std::invalid_argument for a column it lacks)
-std::string markdown_table(const Table& table, const std::vector<Shown>& columns);
+// the Markdown table of `table`'s rows (those `keep` keeps, by index, where given), showing `columns`
+// (std::invalid_argument for a column it lacks)
+std::string markdown_table(const Table& table, const std::vector<Shown>& columns, const std::function<bool(size_t row)>& keep = {});
 
 }  // namespace stepwise

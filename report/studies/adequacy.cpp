@@ -26,19 +26,19 @@
 namespace stepwise {
 namespace {
 
-
 StudyOutput adequacy(const StudyContext&) {
   Table table{{"phase_tolerance_rad", "periods", "max_amplitude_rad", "max_amplitude_deg"}, {}};
   std::string md = "Largest amplitude at which the small-angle pendulum (theta'' = -(g/L) theta) stays within a phase "
                    "error of the exact (elliptic) solution after N periods. Below it the linear model, which costs one "
-                   "cosine per sample and no integration at all, is all a scene needs.\n\n"
-                   "| phase tolerance (rad) | periods | max amplitude (deg) |\n|---|---|---|\n";
+                   "cosine per sample and no integration at all, is all a scene needs.\n\n";
   for (const double tolerance : {0.01, 0.1, 1.0})
     for (const double periods : {1.0, 10.0, 100.0}) {
       const double amplitude = small_angle_max_amplitude(tolerance, periods);
       table.rows.push_back({tolerance, periods, amplitude, amplitude * 180 / std::numbers::pi});
-      md += fmt::format("| {} | {:.0f} | {:.2f} |\n", tolerance, periods, amplitude * 180 / std::numbers::pi);
     }
+  md += markdown_table(table, {{"phase_tolerance_rad", "phase tolerance (rad)", shown_as("{:g}")},
+                               {"periods", "periods", shown_as("{:.0f}")},
+                               {"max_amplitude_deg", "max amplitude (deg)", shown_as("{:.2f}")}});
   std::vector<Figure> figures;
   md += "\n";
   md += add_figure(figures, "adequacy", "", "Largest amplitude the small-angle pendulum serves, against the periods shown");

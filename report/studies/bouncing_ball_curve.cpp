@@ -26,7 +26,6 @@
 namespace stepwise {
 namespace {
 
-
 StudyOutput bouncing_ball_curve(const StudyContext&) {
   // the seeds' OpenGL example animates y(p) = A |cos(w p)| e^(-k p): its bounces (zeros of cos) are equally
   // spaced, pi / w apart, and its apexes fall by e^(-k pi / w) per bounce. Matched to the physical ball of
@@ -43,16 +42,21 @@ StudyOutput bouncing_ball_curve(const StudyContext&) {
                                "Matched to the physical ball (h0 = 1 m, eps = {}) on the first rebound's flight ({:.3f} s) and "
                                "on the apex ratio eps^2 per bounce (k = {:.3f} 1/s), its apexes agree bounce for bounce, "
                                "but its flights never shorten: the ball's shrink by eps each bounce and stop after {} impacts "
-                               "at {:.3f} s, while the curve bounces on forever at a constant rhythm.\n\n"
-                               "| bounce | physical flight (s) | curve flight (s) | curve / physical |\n|---|---|---|---|\n",
+                               "at {:.3f} s, while the curve bounces on forever at a constant rhythm.\n\n",
                                eps, spacing, k, impacts.size(), impacts.back().t);
   for (size_t n = 0; n + 1 < impacts.size(); ++n) {
     const double flight = impacts[n + 1].t - impacts[n].t;
     const double apex = impacts[n].apex;
     const double curve_apex = ball.at("height") * std::exp(-k * spacing * static_cast<double>(n + 1));
     table.rows.push_back({static_cast<long>(n + 1), flight, spacing, spacing / flight, apex, curve_apex});
-    if (n < 5 || n + 2 == impacts.size()) md += fmt::format("| {} | {:.4f} | {:.4f} | {:.2f} |\n", n + 1, flight, spacing, spacing / flight);
   }
+  // the first five bounces and the last
+  md += markdown_table(table,
+                       {{"bounce", "bounce"},
+                        {"physical_flight_s", "physical flight (s)", shown_as("{:.4f}")},
+                        {"curve_flight_s", "curve flight (s)", shown_as("{:.4f}")},
+                        {"curve_over_physical_flight", "curve / physical", shown_as("{:.2f}")}},
+                       [&](size_t row) { return row < 5 || row + 1 == table.rows.size(); });
   std::vector<Figure> figures;
   md += "\n";
   md += add_figure(figures, "bouncing_ball_curve", "", "The seeds' animation curve against the physical ball, bounce by bounce");

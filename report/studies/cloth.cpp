@@ -26,7 +26,6 @@
 namespace stepwise {
 namespace {
 
-
 StudyOutput cloth(const StudyContext& ctx) {
   const bool quick = ctx.quick;
   const long steps = 2000;
@@ -38,9 +37,7 @@ StudyOutput cloth(const StudyContext& ctx) {
       "predicted from the stiffest mode of M^-1 K at the start (omega_max, and its damping rate a from the springs' Voigt "
       "damping and the drag) and each method's stability region on x'' = -omega^2 x - 2 a x': symplectic Euler "
       "2 (sqrt(a^2 + omega^2) - a) / omega^2, rk4 where |R(h lambda)| = 1 (2 sqrt 2 / omega undamped), explicit Euler "
-      "2 a / omega^2 (stable only through damping). Implicit Euler is run at 100 times symplectic Euler's limit.\n\n"
-      "| c (N/m) | omega_max (rad/s) | a (1/s) | method | predicted dt (s) | measured dt (s) | measured / predicted |\n"
-      "|---|---|---|---|---|---|---|\n",
+      "2 a / omega^2 (stable only through damping). Implicit Euler is run at 100 times symplectic Euler's limit.\n\n",
       steps);
   double worst_symplectic = 0, rk4_low = 10, rk4_high = 0, euler_low = 1e9, euler_high = 0;
   bool implicit_all_ok = true;
@@ -76,11 +73,20 @@ StudyOutput cloth(const StudyContext& ctx) {
     const std::string& method = explicit_methods[k];
     const double predicted = *mass_spring_stable_dt(method, mode), measured = value, ratio = measured / predicted;
     limits.rows.push_back({c, method, mode.omega, mode.damping, predicted, measured, ratio});
-    md += fmt::format("| {} | {:.1f} | {:.3g} | {} | {:.4g} | {:.4g} | {:.3f} |\n", c, mode.omega, mode.damping, method, predicted, measured, ratio);
     if (method == "symplectic-euler") worst_symplectic = std::max(worst_symplectic, std::abs(ratio - 1));
     if (method == "rk4") rk4_low = std::min(rk4_low, ratio), rk4_high = std::max(rk4_high, ratio);
     if (method == "euler") euler_low = std::min(euler_low, ratio), euler_high = std::max(euler_high, ratio);
   }
+  // the explicit methods' rows (implicit Euler's say only where it was run)
+  md += markdown_table(limits,
+                       {{"stiffness", "c (N/m)", shown_as("{}")},
+                        {"omega_max", "omega_max (rad/s)", shown_as("{:.1f}")},
+                        {"mode_damping", "a (1/s)", shown_as("{:.3g}")},
+                        {"method", "method"},
+                        {"predicted_dt", "predicted dt (s)", shown_as("{:.4g}")},
+                        {"measured_dt", "measured dt (s)", shown_as("{:.4g}")},
+                        {"measured_over_predicted", "measured / predicted", shown_as("{:.3f}")}},
+                       [&](size_t row) { return std::get<std::string>(limits.rows[row][1]) != "implicit-euler"; });
   std::vector<Figure> figures;
   md += "\n";
   md += add_figure(figures, "cloth_stability", "", "Largest stable step against the sheet's stiffness: measured points, predicted lines");
@@ -97,7 +103,7 @@ StudyOutput cloth(const StudyContext& ctx) {
   // implicit Euler's numerical damping on one linear spring: amplitude per step against 1 / sqrt(1 + w^2 h^2)
   Table damping{{"omega_h", "measured_ratio", "predicted_ratio", "periods_to_halve"}, {}};
   md += "Implicit Euler's numerical damping: one mass on one undamped spring (w = 20 rad/s), the amplitude sqrt(w^2 u^2 + v^2) "
-        "kept per step against 1 / sqrt(1 + w^2 h^2).\n\n| w h | measured | 1 / sqrt(1 + w^2 h^2) | periods to halve |\n|---|---|---|---|\n";
+        "kept per step against 1 / sqrt(1 + w^2 h^2).\n\n";
   std::map<double, double> halving;
   double worst_damping = 0;
   for (const double wh : {0.01, 0.1, 0.5, 1.0, 3.0}) {
@@ -107,8 +113,11 @@ StudyOutput cloth(const StudyContext& ctx) {
     damping.rows.push_back({wh, ratio, predicted, halve});
     halving[wh] = halve;
     worst_damping = std::max(worst_damping, std::abs(ratio / predicted - 1));
-    md += fmt::format("| {} | {:.12f} | {:.12f} | {:.3g} |\n", wh, ratio, predicted, halve);
   }
+  md += markdown_table(damping, {{"omega_h", "w h", shown_as("{}")},
+                                 {"measured_ratio", "measured", shown_as("{:.12f}")},
+                                 {"predicted_ratio", "1 / sqrt(1 + w^2 h^2)", shown_as("{:.12f}")},
+                                 {"periods_to_halve", "periods to halve", shown_as("{:.3g}")}});
   md += "\n";
   md += add_figure(figures, "cloth_implicit_damping", "", "Implicit Euler's amplitude kept per step against w h");
   md += fmt::format(

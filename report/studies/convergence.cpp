@@ -38,17 +38,11 @@ StudyOutput convergence(const StudyContext& ctx) {
     return convergence_sweep(*model, *plan[i].method, plan[i].scene->t_end, halvings, coarse_dt(*plan[i].method, plan[i].scene->time_scale));
   });
 
-  const StudyScene* current = nullptr;
+  std::vector<const StudyScene*> shown;  // the scenes in the plan's order
   for (size_t i = 0; i < plan.size(); ++i) {
     const auto& [scene, method] = plan[i];
     const ConvergenceSweep& sweep = sweeps[i];
-    if (scene != current) {
-      if (current) out.markdown += "\n";
-      current = scene;
-      out.markdown += fmt::format("### {}\n\n{}| method | order (method table) | observed order | error at coarsest dt | error at finest dt |\n"
-                                  "|---|---|---|---|---|\n",
-                                  scene->label, add_figure(out.figures, "convergence", scene->label, "Error at t_end against dt, " + scene->label));
-    }
+    if (shown.empty() || shown.back() != scene) shown.push_back(scene);
     for (size_t k = 0; k < sweep.runs.size(); ++k) {
       const Measured& m = sweep.runs[k];
       points.rows.push_back({scene->label, std::string(method->name), sweep.dt[k], m.result.stats.steps, m.result.stats.rhs_evals,
@@ -60,7 +54,19 @@ StudyOutput convergence(const StudyContext& ctx) {
       if (m.error) errors.push_back(*m.error);
     const double coarsest = errors.empty() ? NAN : errors.front(), finest = errors.empty() ? NAN : errors.back();
     orders.rows.push_back({scene->label, std::string(method->name), std::string(method->order.text), sweep.observed_order, coarsest, finest});
-    out.markdown += fmt::format("| {} | {} | {:.2f} | {} | {} |\n", method->name, method->order.text, sweep.observed_order, sci(coarsest), sci(finest));
+  }
+  // a section per scene: its figure, and its rows of the orders' table
+  for (size_t s = 0; s < shown.size(); ++s) {
+    const std::string& label = shown[s]->label;
+    if (s > 0) out.markdown += "\n";
+    out.markdown += fmt::format("### {}\n\n{}", label, add_figure(out.figures, "convergence", label, "Error at t_end against dt, " + label));
+    out.markdown += markdown_table(orders,
+                                   {{"method", "method"},
+                                    {"documented_order", "order (method table)"},
+                                    {"observed_order", "observed order", shown_as("{:.2f}")},
+                                    {"coarsest_error", "error at coarsest dt", shown_as("sci")},
+                                    {"finest_error", "error at finest dt", shown_as("sci")}},
+                                   [&](size_t row) { return std::get<std::string>(orders.rows[row][0]) == label; });
   }
   out.markdown += "\n";
   out.tables = {{"convergence", std::move(points)}, {"convergence_orders", std::move(orders)}};

@@ -26,7 +26,6 @@
 namespace stepwise {
 namespace {
 
-
 StudyOutput energy(const StudyContext& ctx) {
   const bool quick = ctx.quick;
   const int periods = quick ? 100 : 1000;
@@ -40,8 +39,7 @@ StudyOutput energy(const StudyContext& ctx) {
   std::string md = fmt::format("Pendulum at theta0 = {} rad over {} periods, dt = T/100: the largest relative energy error "
                                "|E - E0|/E0 over the first and the last tenth of the run ({} samples a period), and the "
                                "error at the end. A symplectic method keeps it bounded; explicit Euler's grows and "
-                               "implicit Euler's decays towards the bottom of the well (-1).\n\n"
-                               "| method | max over first tenth | max over last tenth | at the end |\n|---|---|---|---|\n",
+                               "implicit Euler's decays towards the bottom of the well (-1).\n\n",
                                theta0, periods, samples);
   for (const std::string method : {"euler", "symplectic-euler", "implicit-euler", "rk4"}) {
     StepControl control;
@@ -61,8 +59,11 @@ StudyOutput energy(const StudyContext& ctx) {
     const size_t n = errors.size(), tenth = n / 10;
     const double first = max_abs(0, tenth), last = max_abs(n - tenth, n), end = errors.empty() ? NAN : errors.back();
     summary.rows.push_back({method, first, last, end});
-    md += fmt::format("| {} | {:.3e} | {:.3e} | {:+.3e} |\n", method, first, last, end);
   }
+  md += markdown_table(summary, {{"method", "method"},
+                                 {"max_first_tenth", "max over first tenth", shown_as("{:.3e}")},
+                                 {"max_last_tenth", "max over last tenth", shown_as("{:.3e}")},
+                                 {"at_end", "at the end", shown_as("{:+.3e}")}});
   std::vector<Figure> figures;
   md += "\n";
   md += add_figure(figures, "energy", "", "Relative energy error of the pendulum over time, per method");

@@ -26,7 +26,6 @@
 namespace stepwise {
 namespace {
 
-
 StudyOutput event_times(const StudyContext& ctx) {
   const bool quick = ctx.quick;
   const Params ball{{"height", 1.0}, {"restitution", 0.8}, {"g", 9.81}, {"rest_speed", 0.01}};
@@ -44,7 +43,7 @@ StudyOutput event_times(const StudyContext& ctx) {
                                "impact times against the closed form (the n-th found against the n-th exact, over those both have), "
                                "and its heights at the exact apex times against eps^(2n) h0. Fixed steps locate an impact on the "
                                "segment between the step's ends (the seeds' method) or by re-stepping to the root; CVODE finds "
-                               "roots itself.\n\n| method | location | dt or rtol | impacts | max time error (s) | max height error (m) |\n|---|---|---|---|---|---|\n",
+                               "roots itself.\n\n",
                                eps, exact.size(), exact.back().t);
   auto record = [&](const std::string& method, const std::string& location, std::optional<double> dt, std::optional<double> rtol,
                     const StepControl& control) {
@@ -57,8 +56,6 @@ StudyOutput event_times(const StudyContext& ctx) {
     table.rows.push_back({method, location, dt ? Cell(*dt) : Cell(std::string()), rtol ? Cell(*rtol) : Cell(std::string()),
                           static_cast<long>(r.events.size()), static_cast<long>(exact.size()), time_error, height_error,
                           r.stats.rhs_evals, std::string(to_string(r.status))});
-    md += fmt::format("| {} | {} | {} | {} | {} | {} |\n", method, location, dt ? fmt::format("dt {:g}", *dt) : fmt::format("rtol {:g}", *rtol),
-                      r.events.size(), sci(time_error), sci(height_error));
   };
   const std::vector<double> dts = quick ? std::vector<double>{1e-3} : std::vector<double>{1e-2, 1e-3, 1e-4};
   const std::vector<double> rtols = quick ? std::vector<double>{1e-8} : std::vector<double>{1e-4, 1e-6, 1e-8, 1e-10};
@@ -75,6 +72,17 @@ StudyOutput event_times(const StudyContext& ctx) {
       control.event_location = EventLocation::restep;
       record(method, method.starts_with("cvode") ? "rootfinding" : "restep", std::nullopt, rtol, control);
     }
+  const auto setting = [&](const std::vector<Cell>& row) {
+    const Cell& dt = cell_of(table, row, "dt");
+    return std::holds_alternative<double>(dt) ? fmt::format("dt {:g}", std::get<double>(dt))
+                                              : fmt::format("rtol {:g}", std::get<double>(cell_of(table, row, "rtol")));
+  };
+  md += markdown_table(table, {{"method", "method"},
+                               {"location", "location"},
+                               {"", "dt or rtol", {}, setting},
+                               {"impacts", "impacts"},
+                               {"max_time_error_s", "max time error (s)", shown_as("sci")},
+                               {"max_height_error_m", "max height error (m)", shown_as("sci")}});
   std::vector<Figure> figures;
   md += "\n";
   md += add_figure(figures, "event_times", "", "Largest impact-time error of the bouncing ball against the step or tolerance, per method and root location");

@@ -26,7 +26,6 @@
 namespace stepwise {
 namespace {
 
-
 StudyOutput wave_adequacy(const StudyContext& context) {
   const std::vector<double> ratios{1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3};
   std::vector<std::string> labels;
@@ -42,13 +41,15 @@ StudyOutput wave_adequacy(const StudyContext& context) {
                    "in proportion to A / H (the ratio in the last column holds), so the wave equation is within 1% of "
                    "shallow water below A / H = " + fmt::format("{:.3f}", 0.01 * ratios[0] / departures[0].relative) +
                    " and within 10% below " + fmt::format("{:.2f}", 0.1 * ratios[0] / departures[0].relative) +
-                   ": ripples on a pond, not waves on a beach.\n\n"
-                   "| A / H | \\|eta - z\\| / \\|z\\| | max \\|eta - z\\| / max \\|z\\| | departure / (A / H) |\n|---|---|---|---|\n";
+                   ": ripples on a pond, not waves on a beach.\n\n";
   for (size_t k = 0; k < ratios.size(); ++k) {
     const auto& d = departures[k];
     table.rows.push_back({ratios[k], d.relative, d.relative_max, d.relative / ratios[k]});
-    md += fmt::format("| {:g} | {:.3e} | {:.3e} | {:.3f} |\n", ratios[k], d.relative, d.relative_max, d.relative / ratios[k]);
   }
+  md += markdown_table(table, {{"amplitude_over_depth", "A / H", shown_as("{:g}")},
+                               {"relative_departure", "\\|eta - z\\| / \\|z\\|", shown_as("{:.3e}")},
+                               {"relative_max_departure", "max \\|eta - z\\| / max \\|z\\|", shown_as("{:.3e}")},
+                               {"departure_per_amplitude", "departure / (A / H)", shown_as("{:.3f}")}});
   std::vector<Figure> figures;
   md += "\n";
   md += add_figure(figures, "wave_adequacy", "", "The linear wave equation's departure from shallow water against the drop's depth over the water's");

@@ -26,7 +26,6 @@
 namespace stepwise {
 namespace {
 
-
 StudyOutput wave_stability_limits(const StudyContext& ctx) {
   const bool quick = ctx.quick;
   const int points = 32;
@@ -36,9 +35,7 @@ StudyOutput wave_stability_limits(const StudyContext& ctx) {
   std::string md = fmt::format(
       "The largest stable dt found by bisection (to 0.1%: {} steps from a random field on {}^2 points stay within 1e6 of "
       "the start), beside the limit derived from each scheme's amplification of its highest mode (solvers/wave_step.hpp) "
-      "and the seeds' condition dt < (mu + sqrt(mu^2 + 32 c^2/d^2)) / (8 c^2/d^2).\n\n"
-      "| method | c (m/s) | d (m) | mu (1/s) | measured dt (s) | derived (s) | seeds' (s) | measured / derived | seeds' / measured |\n"
-      "|---|---|---|---|---|---|---|---|---|\n",
+      "and the seeds' condition dt < (mu + sqrt(mu^2 + 32 c^2/d^2)) / (8 c^2/d^2).\n\n",
       steps, points);
   double worst_derived = 0, seeds_at_rest = 0, seeds_damped = 0;
   struct Point {
@@ -61,12 +58,19 @@ StudyOutput wave_stability_limits(const StudyContext& ctx) {
     const auto& [method, c, d, mu] = plan[i];
     const WaveStability& w = found[i];
     table.rows.push_back({method, c, d, mu, w.measured, w.derived, w.seeds, w.measured / w.derived, w.seeds / w.measured});
-    md += fmt::format("| {} | {} | {} | {} | {:.5g} | {:.5g} | {:.5g} | {:.4f} | {:.4f} |\n", method, c, d, mu, w.measured, w.derived,
-                      w.seeds, w.measured / w.derived, w.seeds / w.measured);
     worst_derived = std::max(worst_derived, std::abs(w.measured / w.derived - 1));
     if (mu == 0) seeds_at_rest = std::max(seeds_at_rest, 1 - w.seeds / w.derived);
     else seeds_damped = std::max(seeds_damped, w.seeds / w.measured - 1);
   }
+  md += markdown_table(table, {{"method", "method"},
+                               {"c", "c (m/s)", shown_as("{}")},
+                               {"d", "d (m)", shown_as("{}")},
+                               {"mu", "mu (1/s)", shown_as("{}")},
+                               {"measured_dt", "measured dt (s)", shown_as("{:.5g}")},
+                               {"derived_dt", "derived (s)", shown_as("{:.5g}")},
+                               {"seeds_dt", "seeds' (s)", shown_as("{:.5g}")},
+                               {"measured_over_derived", "measured / derived", shown_as("{:.4f}")},
+                               {"seeds_over_measured", "seeds' / measured", shown_as("{:.4f}")}});
   md += fmt::format(
       "\nThe derived limits hold to {:.2f}% everywhere. The seeds' condition is right without damping (its 8 c^2/d^2 "
       "bounds the grid's highest eigenvalue from above, so it errs safe, by {:.2f}%), and wrong with damping: it grows with "

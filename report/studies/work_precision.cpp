@@ -118,8 +118,7 @@ StudyOutput work_precision(const StudyContext& ctx) {
                   "below: for animation, half a pixel of a {:.0f}-pixel-high frame showing the scene (the frame's height in metres is given; "
                   "the target applies to the state's max-norm error, velocities included, so it errs strict), and for verification "
                   "{:.0e}. The runner-up is the cheapest other method meeting the same target, with its cost as a ratio. A setting marked * is "
-                  "the coarsest its method was swept at: a coarser one might meet the target for less.\n\n"
-                  "| scene | purpose | target | method | setting | error | CPU (s) | runner-up | its CPU / the best's |\n|---|---|---|---|---|---|---|---|---|\n",
+                  "the coarsest its method was swept at: a coarser one might meet the target for less.\n\n",
                   frame_pixels, verification_target);
   std::string sections;
   for (const auto& scene : scenes) {
@@ -136,7 +135,6 @@ StudyOutput work_precision(const StudyContext& ctx) {
       const WorkPoint* best = cheapest_reaching(by_cpu, target);
       if (!best) {
         advice.rows.push_back({scene.label, scene.frame_extent, purpose, target, std::string("none"), std::string(), 0L, NAN, NAN, NAN, std::string("none"), NAN, NAN});
-        recommendations += fmt::format("| {} | {} | {:.1e} | none reached it | | | | | |\n", scene.label, purpose, target);
         continue;
       }
       // the runner-up: the cheapest point of any other method that meets the target
@@ -147,17 +145,44 @@ StudyOutput work_precision(const StudyContext& ctx) {
       const double runner_cpu = runner ? runner->cpu_seconds : NAN;
       advice.rows.push_back({scene.label, scene.frame_extent, purpose, target, std::string(best->method->name), best->setting(),
                              static_cast<long>(best->coarsest), *best->error, best->cpu_seconds, best->rhs_evals, runner_name, runner_cpu, runner_cpu / best->cpu_seconds});
-      recommendations += fmt::format("| {} ({:g} m frame) | {} | {:.1e} | {} | {}{} | {:.1e} | {:.1e} | {} | {:.1f} |\n", scene.label, scene.frame_extent,
-                                     purpose, target, best->method->name, best->setting(), best->coarsest ? " *" : "", *best->error, best->cpu_seconds, runner_name,
-                                     runner_cpu / best->cpu_seconds);
     }
 
-    sections += fmt::format("### {}\n\n{}Pareto front in CPU time (no other point is both cheaper and more accurate):\n\n"
-                            "| CPU (s) | error | method | setting |\n|---|---|---|---|\n",
-                            scene.label, add_figure(out.figures, "work_precision", scene.label, "Work-precision diagram, " + scene.label));
-    for (const WorkPoint* p : by_cpu) sections += fmt::format("| {:.2e} | {:.2e} | {} | {} |\n", p->cpu_seconds, *p->error, p->method->name, p->setting());
+    sections += fmt::format("### {}\n\n{}Pareto front in CPU time (no other point is both cheaper and more accurate):\n\n", scene.label,
+                            add_figure(out.figures, "work_precision", scene.label, "Work-precision diagram, " + scene.label));
+    sections += markdown_table(fronts,
+                               {{"cpu_seconds", "CPU (s)", shown_as("{:.2e}")},
+                                {"error", "error", shown_as("{:.2e}")},
+                                {"method", "method"},
+                                {"setting", "setting"}},
+                               [&](size_t row) {
+                                 return std::get<std::string>(cell_of(fronts, fronts.rows[row], "scene")) == scene.label &&
+                                        std::get<std::string>(cell_of(fronts, fronts.rows[row], "cost")) == "cpu_seconds";
+                               });
     sections += "\n";
   }
+  // a target no method reached leaves the row's other cells empty
+  const auto reached = [&](const std::vector<Cell>& row) { return std::get<std::string>(cell_of(advice, row, "method")) != "none"; };
+  const auto if_reached = [&](std::string column, std::string spec) {
+    return [&, column, spec](const std::vector<Cell>& row) { return reached(row) ? shown_as(spec)(cell_of(advice, row, column)) : std::string(); };
+  };
+  recommendations += markdown_table(
+      advice, {{"", "scene", {},
+                [&](const std::vector<Cell>& row) {
+                  const std::string& label = std::get<std::string>(cell_of(advice, row, "scene"));
+                  return reached(row) ? fmt::format("{} ({:g} m frame)", label, std::get<double>(cell_of(advice, row, "frame_m"))) : label;
+                }},
+               {"purpose", "purpose"},
+               {"target", "target", shown_as("{:.1e}")},
+               {"", "method", {}, [&](const std::vector<Cell>& row) { return reached(row) ? std::get<std::string>(cell_of(advice, row, "method")) : "none reached it"; }},
+               {"", "setting", {},
+                [&](const std::vector<Cell>& row) {
+                  if (!reached(row)) return std::string();
+                  return std::get<std::string>(cell_of(advice, row, "setting")) + (std::get<long>(cell_of(advice, row, "coarsest_swept")) ? " *" : "");
+                }},
+               {"", "error", {}, if_reached("error", "{:.1e}")},
+               {"", "CPU (s)", {}, if_reached("cpu_seconds", "{:.1e}")},
+               {"", "runner-up", {}, if_reached("runner_up", "{}")},
+               {"", "its CPU / the best's", {}, if_reached("runner_up_over_best", "{:.1f}")}});
   out.markdown = recommendations + "\n" +
                  fmt::format("Error at t_end (max norm against the exact solution; for the cloth, against {} at rtol {:.0e}) against cost.", reference_method, reference_rtol) +
                  " Fixed-step methods are swept over dt halvings, "
