@@ -79,13 +79,17 @@ PreparedRun prepare_run(const RunOptions& o) {
 
   const bool adaptive = o.rtol || o.atol || (!o.dt && (!s.dt || !method->fixed_step()) && method->adaptive());
   if (adaptive) {
-    if (!method->adaptive()) throw InputError(fmt::format("--rtol: {} is a fixed-step method: give --dt", p.method));
     p.control.rtol = o.rtol.value_or(s.rtol.value_or(p.control.rtol));
     p.control.atol = o.atol.value_or(s.atol.value_or(p.control.atol));
   } else {
     p.control.dt = o.dt ? o.dt : s.dt;
     if (!p.control.dt) throw InputError(fmt::format("{}: {} is a fixed-step method and neither --dt nor run.dt is given", s.file, p.method));
-    if (!method->fixed_step()) throw InputError(fmt::format("--dt: {} is adaptive only: give --rtol/--atol", p.method));
+  }
+  // the method's own check, the one every way into a method goes through
+  try {
+    check_step_control(*method, p.control);
+  } catch (const BadMethod& e) {
+    throw InputError(fmt::format("{}: {}", adaptive ? "--rtol" : "--dt", e.what()));
   }
   if (const double bytes = dense_matrix_bytes(*method, *p.model); bytes > 0.5 * physical_memory_bytes())
     throw InputError(fmt::format("{}: {} keeps dense {} x {} matrices ({:.3g} GiB) for this {}-entry state, more than half this "

@@ -1,4 +1,4 @@
-// Implicit Euler for mass-spring systems (OdeSystem::mass_spring) in Baraff & Witkin's form (SIGGRAPH 1998,
+// Implicit Euler for mass-spring systems (MassSpringView, solvers/capabilities/mass_spring.hpp) in Baraff & Witkin's form (SIGGRAPH 1998,
 // "Large steps in cloth simulation", eq. 15-16): with K = df/dx and D = df/dv at the step's start (the
 // symmetric definite approximation the system gives), one linear solve per step,
 //   (M - h D - h^2 K) dv = h (f0 + h K v0),   v1 = v0 + dv,   x1 = x0 + h v1,

@@ -26,7 +26,7 @@ Eigen::Vector2cd oscillator_eigenvalues(double omega, double damping);
 // symplectic Euler share it.
 double symplectic_euler_oscillator_dt(double omega, double damping);
 
-// The stiffest mode of a mass-spring system (OdeSystem::mass_spring) linearised at (t, y): omega^2, the
+// The stiffest mode of a mass-spring system (MassSpringView, solvers/capabilities/mass_spring.hpp) linearised at (t, y): omega^2, the
 // largest eigenvalue of M^-1 (-K) with the exact K = df/dx (of the symmetric M^-1/2 (-K) M^-1/2: Eigen's
 // self-adjoint eigensolver up to 3000 unknowns, else 400 power iterations, whose Rayleigh quotient then sits
 // within the top cluster of eigenvalues), and its damping rate a = v^T (-D) v / (2 v^T M v).

@@ -3,8 +3,8 @@
 // dynamics with inelastic collisions and Coulomb friction", IJNME 39, 1996, set it up; solved by
 // sequential impulses as in Catto, "Iterative dynamics with temporal coherence", GDC 2005). One step of h:
 //   kick      v += h dv/dt, w += h dw/dt            (the smooth forces of f: gravity, Euler's equations)
-//   contacts  the system's impulses at the contacts of the step's start positions (restitution at impacts,
-//             Coulomb friction), and its push out of penetration (contact_solve.hpp)
+//   contacts  the impulses at the contacts the model finds at the step's start positions (restitution at
+//             impacts, Coulomb friction), then the push out of penetration (contact_solve.hpp)
 //   drift     x += h v, q = q (x) exp(h w / 2)       (the rotation at the new body rate, exact for it)
 // Without contacts this is symplectic Euler on the translation; order 1.
 #include "solvers/contact_solve.hpp"
