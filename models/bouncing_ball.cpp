@@ -56,14 +56,14 @@ class BouncingBall final : public Model {
   // the shortest flight: a rebound at rest_speed, up and down
   double event_free_interval() const override { return 2 * rest_speed_ / g_; }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     // resting contact, set exactly by the event handler: the normal force cancels gravity
     const bool resting = y[0] == 0 && y[1] == 0;
     dydt[0] = y[1];
     dydt[1] = resting ? 0 : -g_;
   }
   bool has_jacobian() const override { return true; }
-  void jacobian(double, Eigen::Ref<const Eigen::VectorXd>, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+  void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
     dfdy << 0, 1, 0, 0;
   }
 

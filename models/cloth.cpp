@@ -193,8 +193,8 @@ class Cloth final : public Model {
         triangle_slots_.push_back(slots);
       }
     second_order_.positions = 3 * free_;
-    second_order_.acceleration = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
-    view_.force_jacobians = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+    second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
+    view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                                    Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
   }
   Cloth(const Cloth&) = delete;  // its capabilities hold `this`
@@ -230,11 +230,11 @@ class Cloth final : public Model {
     return y;
   }
 
-  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     dydt.head(3 * free_) = y.tail(3 * free_);
     acceleration(t, y, dydt.tail(3 * free_));
   }
-  void acceleration(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const {
+  void acceleration(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) const {
     const double* x = y.data();
     const double* v = y.data() + 3 * free_;
     a.setZero();
@@ -253,7 +253,7 @@ class Cloth final : public Model {
     for (int i = 0; i < free_; ++i) a[3 * i + 1] -= g_;
   }
 
-  void force_jacobians(double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+  void force_jacobians(double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                        Eigen::SparseMatrix<double>& dfdv) const {
     const double* x = y.data();
     const double* v = y.data() + 3 * free_;
@@ -290,7 +290,7 @@ class Cloth final : public Model {
   }
 
   bool has_sparse_jacobian() const override { return true; }
-  void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const override {
+  void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
     Eigen::SparseMatrix<double> dfdx, dfdv;
     force_jacobians(t, y, false, dfdx, dfdv);
     mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
@@ -299,12 +299,10 @@ class Cloth final : public Model {
   // nodes inside the sphere or below the ground back onto its surface, their approach stopped
   bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
     if (sphere_radius_ == 0 && !ground_) return false;
-    bool moved = false;
     const auto contact = [&](int i, const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
       y.segment<3>(3 * i) = surface;
       auto v = y.segment<3>(3 * (free_ + i));
       if (v.dot(normal) < 0) v = collision_response(Plane{surface, normal}, v, 0, friction_);
-      moved = true;
     };
     for (int i = 0; i < free_; ++i) {
       const Eigen::Vector3d offset = y.segment<3>(3 * i) - sphere_centre_;
@@ -319,7 +317,7 @@ class Cloth final : public Model {
         contact(i, surface, Eigen::Vector3d::UnitY());
       }
     }
-    return moved;
+    return true;
   }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {

@@ -34,12 +34,12 @@ class FlowParticle final : public Model {
   std::vector<std::string> state_names() const override { return {"x", "y"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector2d(x0_, y0_); }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> p, Eigen::Ref<Eigen::VectorXd> dpdt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::VectorXd> dpdt) const override {
     dpdt[0] = p[0];
     dpdt[1] = std::sin(p[1]);
   }
   bool has_jacobian() const override { return true; }
-  void jacobian(double, Eigen::Ref<const Eigen::VectorXd> p, Eigen::Ref<Eigen::MatrixXd> dfdp) const override {
+  void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::MatrixXd> dfdp) const override {
     dfdp << 1, 0, 0, std::cos(p[1]);
   }
 
@@ -70,13 +70,13 @@ class FlowParticle3d final : public Model {
   std::vector<std::string> state_names() const override { return {"x", "y", "z"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector3d(x0_, y0_, z0_); }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> p, Eigen::Ref<Eigen::VectorXd> dpdt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::VectorXd> dpdt) const override {
     dpdt[0] = p[0];
     dpdt[1] = p[1];
     dpdt[2] = std::sin(p[0]);
   }
   bool has_jacobian() const override { return true; }
-  void jacobian(double, Eigen::Ref<const Eigen::VectorXd> p, Eigen::Ref<Eigen::MatrixXd> dfdp) const override {
+  void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::MatrixXd> dfdp) const override {
     dfdp << 1, 0, 0, 0, 1, 0, std::cos(p[0]), 0, 0;
   }
 

@@ -42,8 +42,8 @@ class HangingChain final : public Model {
     y0_ = Eigen::VectorXd::Zero(6 * n_);
     for (int k = 0; k < n_; ++k) y0_[3 * k + 1] = -(k + 1) * p.at("rest_length");
     second_order_.positions = 3 * n_;
-    second_order_.acceleration = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
-    view_.force_jacobians = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+    second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
+    view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                                    Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
   }
   HangingChain(const HangingChain&) = delete;  // its capabilities hold `this`
@@ -71,11 +71,11 @@ class HangingChain final : public Model {
   }
   Eigen::VectorXd initial_state() const override { return y0_; }
 
-  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     dydt.head(3 * n_) = y.tail(3 * n_);
     acceleration(t, y, dydt.tail(3 * n_));
   }
-  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const {
+  void acceleration(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) const {
     a.setZero();
     add_spring_forces(view_.springs, y.data(), y.data() + 3 * n_, a.data());
     a /= mass_;
@@ -84,13 +84,13 @@ class HangingChain final : public Model {
   }
 
   bool has_sparse_jacobian() const override { return true; }
-  void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const override {
+  void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
     Eigen::SparseMatrix<double> dfdx, dfdv;
     force_jacobians(t, y, false, dfdx, dfdv);
     mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
   }
 
-  void force_jacobians(double, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+  void force_jacobians(double, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                        Eigen::SparseMatrix<double>& dfdv) const {
     pattern_.zero(dfdx);
     pattern_.zero(dfdv);

@@ -129,7 +129,7 @@ class HeightField final : public Model {
                                 }});
     }
     second_order_.positions = static_cast<int>(cells_);
-    second_order_.acceleration = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
+    second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
   }
   HeightField(const HeightField&) = delete;  // its capabilities hold `this`
   HeightField& operator=(const HeightField&) = delete;
@@ -163,14 +163,14 @@ class HeightField final : public Model {
     return y;
   }
 
-  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     // the boundary's v is 0 and its acceleration 0, so it holds still
     dydt.head(cells_) = y.tail(cells_);
     acceleration(t, y, dydt.tail(cells_));
   }
 
   // c^2 Lap z - mu v on the interior, 0 on the boundary
-  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const {
+  void acceleration(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) const {
     const double* z = y.data();
     const double* v = z + cells_;
     const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
@@ -182,7 +182,7 @@ class HeightField final : public Model {
 
   // dz'/dv = I; dv'/dz = c^2 Lap (boundary neighbours included) and dv'/dv = -mu I on the interior rows
   bool has_sparse_jacobian() const override { return true; }
-  void sparse_jacobian(double, Eigen::Ref<const Eigen::VectorXd>, Eigen::SparseMatrix<double>& dfdy) const override {
+  void sparse_jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::SparseMatrix<double>& dfdy) const override {
     const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
     std::vector<Eigen::Triplet<double>> entries;
     entries.reserve(7 * static_cast<size_t>(cells_));

@@ -84,7 +84,7 @@ class ParticleMesh final : public Model {
     return y;
   }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     dydt.head(3 * n_) = y.tail(3 * n_);
     for (int i = 0; i < n_; ++i) {
       Eigen::Vector3d a(0, 0, -g_);

@@ -34,7 +34,7 @@ class ParticleSystem final : public Model {
         speed_(p.at("speed")), k_(p.at("stiffness")), gamma_(p.at("drag")), g_(p.at("g")), s_(p.at("repulsion")),
         rc_(p.at("radius")) {
     second_order_.positions = 3 * n_;
-    second_order_.acceleration = [this](double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
+    second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
     // without repulsion each coordinate's acceleration is its own: steppers may sweep in blocks
     if (s_ == 0)
       second_order_.local_acceleration = [this](double t, const double* x, const double* v, double* a, Eigen::Index first,
@@ -62,13 +62,13 @@ class ParticleSystem final : public Model {
     return y;
   }
 
-  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     dydt.head(3 * n_) = y.segment(3 * n_, 3 * n_);
     acceleration(t, y, dydt.segment(3 * n_, 3 * n_));
   }
 
   // the field, then the pairs the cell list finds
-  void acceleration(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) const {
+  void acceleration(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) const {
     const double* x = y.data();
     field(x, x + 3 * n_, a.data(), 0, 3L * n_);
     if (s_ == 0) return;
@@ -88,7 +88,7 @@ class ParticleSystem final : public Model {
 
   // without repulsion df/dy has a fixed pattern: dx'/dv = I, dv'/dx = -k I, dv'/dv = -gamma I
   bool has_sparse_jacobian() const override { return s_ == 0; }
-  void sparse_jacobian(double, Eigen::Ref<const Eigen::VectorXd>, Eigen::SparseMatrix<double>& dfdy) const override {
+  void sparse_jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::SparseMatrix<double>& dfdy) const override {
     const int m = 3 * n_;
     std::vector<Eigen::Triplet<double>> entries;
     entries.reserve(3 * static_cast<size_t>(m));

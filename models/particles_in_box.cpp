@@ -69,7 +69,7 @@ class ParticlesInBox final : public Model {
   // the shortest return to one wall: a rebound off the floor at rest_speed, up and down
   double event_free_interval() const override { return g_ > 0 ? 2 * rest_speed_ / g_ : std::numeric_limits<double>::infinity(); }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     dydt.head(3 * n_) = y.tail(3 * n_);
     dydt.tail(3 * n_).setZero();
     for (int i = 0; i < n_; ++i) {
@@ -79,7 +79,7 @@ class ParticlesInBox final : public Model {
     }
   }
   bool has_jacobian() const override { return true; }
-  void jacobian(double, Eigen::Ref<const Eigen::VectorXd>, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+  void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
     dfdy.setZero();
     dfdy.topRightCorner(3 * n_, 3 * n_).setIdentity();
   }

@@ -54,13 +54,13 @@ class Pendulum final : public Model {
   Eigen::VectorXd initial_state() const override { return Eigen::Vector2d(theta0_, omega0_); }
   const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     dydt[0] = y[1];
     dydt[1] = -w_ * w_ * (small_angle_ ? y[0] : std::sin(y[0]));
   }
 
   bool has_jacobian() const override { return true; }
-  void jacobian(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+  void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
     dfdy << 0, 1, -w_ * w_ * (small_angle_ ? 1.0 : std::cos(y[0])), 0;
   }
 

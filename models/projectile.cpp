@@ -38,11 +38,11 @@ class Projectile final : public Model {
   Eigen::VectorXd initial_state() const override { return Eigen::Vector4d(x0_, y0_, vx0_, vy0_); }
   const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> s, Eigen::Ref<Eigen::VectorXd> dsdt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& s, Eigen::Ref<Eigen::VectorXd> dsdt) const override {
     dsdt << s[2], s[3], -k_ * s[2], -g_ - k_ * s[3];
   }
   bool has_jacobian() const override { return true; }
-  void jacobian(double, Eigen::Ref<const Eigen::VectorXd>, Eigen::Ref<Eigen::MatrixXd> dfds) const override {
+  void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::MatrixXd> dfds) const override {
     dfds << 0, 0, 1, 0,
             0, 0, 0, 1,
             0, 0, -k_, 0,

@@ -87,7 +87,7 @@ class RigidBody final : public Model {
   std::vector<std::string> state_names() const override { return rigid_body_state_names(1); }
   Eigen::VectorXd initial_state() const override { return y0_; }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     const Eigen::Vector3d v = y.segment<3>(3);
     dydt.segment<3>(0) = v;
     dydt.segment<3>(3) = gravity_ - drag_ * v + force_ / mass_;
@@ -156,11 +156,11 @@ std::vector<std::string> rigid_body_state_names(int bodies) {
   return out;
 }
 
-Eigen::Vector3d body_angular_momentum(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y) {
+Eigen::Vector3d body_angular_momentum(const Eigen::Vector3d& inertia, const Eigen::Ref<const Eigen::VectorXd>& y) {
   return Eigen::Quaterniond(y[6], y[7], y[8], y[9]).normalized() * inertia.cwiseProduct(y.segment<3>(10));
 }
 
-void free_rotation_rates(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) {
+void free_rotation_rates(const Eigen::Vector3d& inertia, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) {
   const Eigen::Vector3d w = y.segment<3>(10);
   const Eigen::Quaterniond dq = Eigen::Quaterniond(y[6], y[7], y[8], y[9]) * Eigen::Quaterniond(0, w.x(), w.y(), w.z());
   dydt.segment<4>(6) << dq.w() / 2, dq.x() / 2, dq.y() / 2, dq.z() / 2;

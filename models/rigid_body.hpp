@@ -43,9 +43,9 @@ Eigen::Quaterniond initial_orientation(const Params& params);
 std::vector<std::string> rigid_body_state_names(int bodies);
 // (its kinetic energy: kernels/rigid_body.hpp's body_kinetic_energy)
 // the world angular momentum about the centre of mass, R I w, of the body state y
-Eigen::Vector3d body_angular_momentum(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y);
+Eigen::Vector3d body_angular_momentum(const Eigen::Vector3d& inertia, const Eigen::Ref<const Eigen::VectorXd>& y);
 // dq/dt = q (x) (0, w) / 2 and the torque-free Euler equations I dw/dt = (I w) x w, into dydt's entries 6..12
-void free_rotation_rates(const Eigen::Vector3d& inertia, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt);
+void free_rotation_rates(const Eigen::Vector3d& inertia, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt);
 std::unique_ptr<Model> make_rigid_body(const Params& params);
 // the body bounded by a closed mesh of uniform `density`: mass and principal moments from it (polyhedral
 // mass properties), the orientation given taken as the mesh's and turned onto its principal axes (w0 and

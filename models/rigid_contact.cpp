@@ -90,7 +90,7 @@ class RigidContact final : public Model {
   std::vector<std::string> state_names() const override { return rigid_body_state_names(static_cast<int>(bodies_.size())); }
   Eigen::VectorXd initial_state() const override { return y0_; }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     for (size_t b = 0; b < bodies_.size(); ++b) {
       const Eigen::Index o = 13 * static_cast<Eigen::Index>(b);
       dydt.segment<3>(o) = y.segment<3>(o + 3);

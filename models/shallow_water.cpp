@@ -56,7 +56,7 @@ class ShallowWater final : public Model {
     return s;
   }
 
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     const double* eta = y.data();
     const double* u = eta + cells_;
     const double* w = u + cells_;

@@ -5,7 +5,7 @@
 
 namespace stepwise {
 
-void fd_jacobian(const OdeSystem& system, double t, Eigen::Ref<const Eigen::VectorXd> y,
+void fd_jacobian(const OdeSystem& system, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                  Eigen::Ref<Eigen::MatrixXd> dfdy) {
   const int n = system.size();
   const double cbrt_eps = std::cbrt(std::numeric_limits<double>::epsilon());
@@ -21,7 +21,7 @@ void fd_jacobian(const OdeSystem& system, double t, Eigen::Ref<const Eigen::Vect
   }
 }
 
-void jacobian_or_fd(const OdeSystem& system, double t, Eigen::Ref<const Eigen::VectorXd> y,
+void jacobian_or_fd(const OdeSystem& system, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                     Eigen::Ref<Eigen::MatrixXd> dfdy) {
   if (system.has_jacobian()) system.jacobian(t, y, dfdy);
   else fd_jacobian(system, t, y, dfdy);

@@ -28,6 +28,13 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
   std::string failure;
   const auto events = system.events();
   std::vector<std::string> handled;
+  // what this system and method have, asked once: nothing is done per step for what they lack
+  const bool watch_events = !events.empty();
+  const bool method_events = stepper->handles_events();
+  const bool projects = [&] {
+    Eigen::VectorXd probe = y0;
+    return system.project(probe);
+  }();
   Eigen::VectorXd g_start = event_values(events, t, y);
   // re-steps from the step's start to a fraction of it, for locating an event
   const Restep restep = [&](double s, Eigen::VectorXd& ys) {
@@ -38,25 +45,29 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
     while (t < target) {
       double t_next = (target - (t + dt) <= snap) ? target : t + dt;
       h = t_next - t;
-      if (!stepper->step(t, h, y, y_next, failure)) {
+      if (!stepper->step(t, h, y, y_next, failure)) [[unlikely]] {
         mark_failed(result, t, failure);
         break;
       }
       ++result.stats.steps;
-      stepper->take_events(handled);
-      for (auto& kind : handled) record_event(result, t_next, std::move(kind), EventRecord::by_method);
+      if (method_events) {
+        stepper->take_events(handled);
+        for (auto& kind : handled) record_event(result, t_next, std::move(kind), EventRecord::by_method);
+      }
       // back onto the manifold; a multistep history is kept (the correction is of the order of the local
       // error: restarting would drop GSL's multistep methods to order 1 for good, measured)
-      counted.project(y_next);
-      const auto norm = stepper->last_norm();
-      if (norm ? !(*norm <= bound) : has_diverged(y_next, bound)) {
+      if (projects) counted.project(y_next);
+      const auto norm = projects ? std::nullopt : stepper->last_norm();
+      if (norm ? !(*norm <= bound) : has_diverged(y_next, bound)) [[unlikely]] {
         mark_diverged(result, t_next);
         break;
       }
       // an event inside the step: move to it, apply its handler, and go on from there afresh
-      if (const auto t_event = settle_step_events(events, g_start, t, h, y, y_next, control_.event_location, restep, result)) {
-        stepper->reset();
-        t_next = *t_event;
+      if (watch_events) {
+        if (const auto t_event = settle_step_events(events, g_start, t, h, y, y_next, control_.event_location, restep, result)) {
+          stepper->reset();
+          t_next = *t_event;
+        }
       }
       t = t_next;
       y.swap(y_next);

@@ -3,7 +3,10 @@
 
 #include "method.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -21,13 +24,52 @@ class FixedStepper {
   // failure return false and say which call failed in `failure`
   virtual bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) = 0;
   // |y_next|inf of the last step, +inf if any entry is not finite, when the stepper measured it on its way
-  // through the state: the loop's divergence test then needs no pass of its own
-  virtual std::optional<double> last_norm() const { return std::nullopt; }
+  // through the state (set by step(), read without a virtual call): the loop's divergence test then needs
+  // no pass of its own
+  std::optional<double> last_norm() const { return norm_ >= 0 ? std::optional(norm_) : std::nullopt; }
   // events the step handled itself (a contact method's impacts), as summary.json writes them ("impact"),
   // since the last call: the loop records them at the step's end
   virtual void take_events(std::vector<std::string>& kinds) { kinds.clear(); }
+  // whether take_events can ever report any: the loop asks once, and not at every step when not
+  virtual bool handles_events() const { return false; }
   // forget any history: the next step starts afresh (after an event changed the state, or to re-step)
   virtual void reset() {}
+
+ protected:
+  double norm_ = -1;  // step()'s measure of |y_next|inf; negative: not measured
+};
+
+// on a stepper's step(): no pairing of a small state's scalar stores into vector stores. Measured on this
+// machine (AMD EPYC): f reading y[1] right after a stage wrote y[0..1] as one 16-byte store misses
+// store-to-load forwarding, and a pendulum's rk4 step took 1.5x as long. Loops over large states are still
+// vectorised (that is the loop vectoriser, not this one)
+#define STEPWISE_SCALAR_STORES __attribute__((optimize("no-tree-slp-vectorize")))
+
+// the same stepper built for a state of N entries known at compile time (its loops unrolled: on a pendulum
+// the loop bookkeeping would otherwise cost as much as the method's arithmetic), or for any size (N = 0)
+template <template <int> class Stepper, class... Args>
+std::unique_ptr<FixedStepper> make_sized(Eigen::Index n, Args&&... args) {
+  switch (n) {
+    case 2: return std::make_unique<Stepper<2>>(std::forward<Args>(args)...);
+    case 3: return std::make_unique<Stepper<3>>(std::forward<Args>(args)...);
+    case 4: return std::make_unique<Stepper<4>>(std::forward<Args>(args)...);
+    case 6: return std::make_unique<Stepper<6>>(std::forward<Args>(args)...);
+    default: return std::make_unique<Stepper<0>>(std::forward<Args>(args)...);
+  }
+}
+
+// |y|inf of the entries a stepper writes, folded in as it writes them (the loop's divergence test then needs
+// no pass of its own); +inf once any entry is inf or NaN (v - v is 0 exactly for a finite v)
+class RunningNorm {
+ public:
+  void add(double v) {
+    largest_ = std::max(largest_, std::abs(v));
+    nonfinite_ += v - v;
+  }
+  double value() const { return nonfinite_ == 0 ? largest_ : std::numeric_limits<double>::infinity(); }
+
+ private:
+  double largest_ = 0, nonfinite_ = 0;
 };
 
 using FixedStepperFactory = std::function<std::unique_ptr<FixedStepper>(const CountedSystem& system)>;

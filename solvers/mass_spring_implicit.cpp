@@ -48,7 +48,7 @@ void BaraffWitkinSystem::assemble_matrix(double t, const Eigen::VectorXd& y, dou
                       std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), d_.innerIndexPtr()) &&
                       std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), a_.innerIndexPtr());
   }
-  second_order_acceleration(system_, *system_.as<SecondOrderView>(), t, y, f_);
+  second_order_acceleration(system_, *system_.as<SecondOrderView>(), t, y, f_, scratch_);
   f_ = f_.cwiseProduct(m_);
 }
 

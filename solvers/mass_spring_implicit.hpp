@@ -65,6 +65,7 @@ class BaraffWitkinSystem {
   const MassSpringView& view_;
   bool definite_;
   Eigen::VectorXd m_, f_, b_;
+  Eigen::VectorXd scratch_;  // f where the model has no acceleration of its own
   Eigen::SparseMatrix<double> k_, d_, a_;
   bool shared_pattern_ = false;  // K, D and A have one pattern (found at the first assembly)
 };

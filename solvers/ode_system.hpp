@@ -38,23 +38,24 @@ class OdeSystem {
   virtual int size() const = 0;
 
   // dydt = f(t, y); y and dydt have size() entries
-  virtual void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const = 0;
+  virtual void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const = 0;
 
   // true when f does not depend on t (then df/dt = 0)
   virtual bool autonomous() const { return false; }
 
   // optional analytic Jacobian df/dy, dense (size() x size())
   virtual bool has_jacobian() const { return false; }
-  virtual void jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::MatrixXd> dfdy) const;
+  virtual void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const;
 
   // optional sparse Jacobian with a pattern that never changes (CSC); CVODE uses KLU with it
   virtual bool has_sparse_jacobian() const { return false; }
-  virtual void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const;
+  virtual void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const;
 
   // optional projection onto the manifold the exact flow keeps (a rigid body's unit quaternion): the
   // integrators apply it after every accepted step (hand-written and GSL steppers; CVODE BDF through
   // CVodeSetProjFn; CVODE Adams has no projection) and count it, keeping any multistep history (the
-  // correction is of the order of the local error); returns false for a system without one
+  // correction is of the order of the local error); returns whether the system has one (true even where
+  // nothing moved), so an integrator can ask once, on a copy of the initial state, and skip it for good
   virtual bool project(Eigen::Ref<Eigen::VectorXd> y) const { (void)y; return false; }
 
   // optional events; an empty span means none

@@ -19,17 +19,17 @@ class CountedSystem final : public OdeSystem {
  public:
   CountedSystem(const OdeSystem& inner, Stats& stats) : inner_(inner), stats_(stats) {}
   int size() const override { return inner_.size(); }
-  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     ++stats_.rhs_evals;
     inner_.rhs(t, y, dydt);
   }
   bool autonomous() const override { return inner_.autonomous(); }
   bool has_jacobian() const override { return inner_.has_jacobian(); }
-  void jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+  void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
     inner_.jacobian(t, y, dfdy);
   }
   bool has_sparse_jacobian() const override { return inner_.has_sparse_jacobian(); }
-  void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& dfdy) const override {
+  void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
     inner_.sparse_jacobian(t, y, dfdy);
   }
   std::span<const Event> events() const override { return inner_.events(); }
@@ -50,21 +50,21 @@ class CountedSystem final : public OdeSystem {
 };
 
 // a = dv/dt of a second-order system (n entries), counted as one call of f: the model's own acceleration
-// where it has one, else the second half of f
+// where it has one, else the second half of f, evaluated into `f` (the caller's buffer, kept between steps)
 inline void second_order_acceleration(const CountedSystem& system, const SecondOrderView& view, double t,
-                                      Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a) {
+                                      const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a, Eigen::VectorXd& f) {
   if (view.acceleration) {
     ++system.stats().rhs_evals;
     view.acceleration(t, y, a);
     return;
   }
-  Eigen::VectorXd f(system.size());
+  f.resize(system.size());
   system.rhs(t, y, f);
   a = f.tail(view.positions);
 }
 
 // a mass-spring system's force Jacobians (MassSpringView::force_jacobians), counted as one Jacobian evaluation
-inline void force_jacobians(const CountedSystem& system, const MassSpringView& view, double t, Eigen::Ref<const Eigen::VectorXd> y,
+inline void force_jacobians(const CountedSystem& system, const MassSpringView& view, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                             bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv) {
   ++system.stats().jac_evals;
   view.force_jacobians(t, y, definite, dfdx, dfdv);

@@ -32,7 +32,7 @@ struct MassSpringView {
   // pattern at every call); definite: K replaced by a symmetric negative semidefinite approximation and D
   // by its symmetric part (the model says which), so that M - h D - h^2 K is symmetric positive definite for
   // a Cholesky factor; exact otherwise. A method counts each call (run_support.hpp's force_jacobians)
-  std::function<void(double t, Eigen::Ref<const Eigen::VectorXd> y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+  std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                      Eigen::SparseMatrix<double>& dfdv)>
       force_jacobians;
 };

@@ -13,7 +13,7 @@ struct SecondOrderView {
   int positions = 0;  // number of position coordinates n; y has 2n entries, x = y[0..n), v = y[n..2n)
   // a = dv/dt alone (n entries) where the model computes it cheaper than f (a particle system, a cloth);
   // empty: the second half of f (solvers/run_support.hpp's second_order_acceleration, which counts it)
-  std::function<void(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> a)> acceleration;
+  std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a)> acceleration;
   // where each acceleration entry depends only on the same entries of x and v (a force field without
   // interactions): a[0, count) for entries [first, first + count) from x and v over the same range, so a
   // stepper can sweep a large state once, in blocks that stay in cache, rather than in three passes; empty

@@ -51,7 +51,7 @@ class FastMassSpring final : public FixedStepper {
     const Eigen::Index m = 3 * Eigen::Index{n_};
     const Eigen::Map<const Nodes> x0(y.data(), n_, 3), v0(y.data() + m, n_, 3);
     // every force but the elastic springs', at the step's start: M a - f_elastic(x0)
-    second_order_acceleration(system_, second_order_, t, y, a_);
+    second_order_acceleration(system_, second_order_, t, y, a_, f_);
     const Eigen::Map<const Nodes> a0(a_.data(), n_, 3);
     elastic(x0, directions(x0), f_el_);
     external_ = mass_.asDiagonal() * a0 - f_el_;
@@ -124,7 +124,7 @@ class FastMassSpring final : public FixedStepper {
   const SecondOrderView& second_order_;
   int n_;
   Eigen::SparseMatrix<double> laplacian_;
-  Eigen::VectorXd mass_, a_;
+  Eigen::VectorXd mass_, a_, f_;  // f_: f where the model has no acceleration of its own
   SparseCholesky cholesky_;
   bool analysed_ = false;
   double factored_h_ = 0;

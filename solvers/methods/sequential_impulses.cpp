@@ -53,6 +53,7 @@ class ContactStepping final : public FixedStepper {
 
   void reset() override { memory_.impulses.clear(); }
 
+  bool handles_events() const override { return true; }
   void take_events(std::vector<std::string>& kinds) override {
     kinds.assign(static_cast<size_t>(impacts_), "impact");
     impacts_ = 0;

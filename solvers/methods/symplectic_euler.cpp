@@ -26,7 +26,7 @@ class SymplecticEuler final : public FixedStepper {
     Sweep sweep;
     const bool local = static_cast<bool>(view_.local_acceleration);
     if (local) ++system_.stats().rhs_evals;
-    else second_order_acceleration(system_, view_, t, y, a_);
+    else second_order_acceleration(system_, view_, t, y, a_, f_);
     for (Eigen::Index first = 0; first < n_; first += block) {
       const Eigen::Index count = std::min(block, n_ - first);
       const double* a = a_.data() + first;
@@ -39,7 +39,6 @@ class SymplecticEuler final : public FixedStepper {
     norm_ = sweep.bad ? std::numeric_limits<double>::infinity() : sweep.largest;
     return true;
   }
-  std::optional<double> last_norm() const override { return norm_; }
 
  private:
   // entries per block: 3 x 8 KiB of x, v and a, well inside L1 and L2
@@ -70,8 +69,7 @@ class SymplecticEuler final : public FixedStepper {
   const CountedSystem& system_;
   const SecondOrderView& view_;
   Eigen::Index n_;
-  Eigen::VectorXd a_;
-  double norm_ = 0;
+  Eigen::VectorXd a_, f_;  // f_: f where the model has no acceleration of its own
 };
 
 }  // namespace

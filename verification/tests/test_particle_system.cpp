@@ -184,7 +184,7 @@ class WholeStateOnly final : public OdeSystem {
     view_.local_acceleration = nullptr;
   }
   int size() const override { return inner_.size(); }
-  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> f) const override { inner_.rhs(t, y, f); }
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) const override { inner_.rhs(t, y, f); }
   const void* capability(const std::type_info& type) const override { return offer(type, view_); }
 
  private:

@@ -195,7 +195,7 @@ class Unprojected final : public OdeSystem {
  public:
   explicit Unprojected(const OdeSystem& inner) : inner_(inner) {}
   int size() const override { return inner_.size(); }
-  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> dydt) const override { inner_.rhs(t, y, dydt); }
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override { inner_.rhs(t, y, dydt); }
   bool autonomous() const override { return true; }
 
  private:

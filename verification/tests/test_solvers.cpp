@@ -18,12 +18,12 @@ class SelfCounting final : public OdeSystem {
  public:
   SelfCounting(const Model& m, bool hide_jacobian) : model_(m), hide_(hide_jacobian) {}
   int size() const override { return model_.size(); }
-  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> f) const override {
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) const override {
     ++calls;
     model_.rhs(t, y, f);
   }
   bool has_jacobian() const override { return !hide_ && model_.has_jacobian(); }
-  void jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::MatrixXd> J) const override {
+  void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> J) const override {
     model_.jacobian(t, y, J);
   }
   const void* capability(const std::type_info& type) const override { return model_.capability(type); }
@@ -56,9 +56,9 @@ class SparseFlow final : public OdeSystem {
  public:
   explicit SparseFlow(const Model& m) : model_(m) {}
   int size() const override { return model_.size(); }
-  void rhs(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> f) const override { model_.rhs(t, y, f); }
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) const override { model_.rhs(t, y, f); }
   bool has_sparse_jacobian() const override { return true; }
-  void sparse_jacobian(double t, Eigen::Ref<const Eigen::VectorXd> y, Eigen::SparseMatrix<double>& J) const override {
+  void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& J) const override {
     Eigen::MatrixXd dense(size(), size());
     model_.jacobian(t, y, dense);
     J = dense.sparseView();
@@ -147,7 +147,7 @@ TEST(Solvers, FixedStepGslRunsAreNeverRejectedByErrorControl) {
 class BlowUp final : public OdeSystem {
  public:
   int size() const override { return 1; }
-  void rhs(double, Eigen::Ref<const Eigen::VectorXd> y, Eigen::Ref<Eigen::VectorXd> f) const override { f[0] = y[0] * y[0]; }
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) const override { f[0] = y[0] * y[0]; }
 };
 
 TEST(Solvers, ABlowUpIsReportedAsDivergedAtTheTimeItHappened) {
