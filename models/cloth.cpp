@@ -5,6 +5,7 @@
 #include "solvers/capabilities/second_order.hpp"
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/capabilities/cloth_grid.hpp"
+#include "solvers/capabilities/imex_split.hpp"
 
 #include "particle_common.hpp"
 #include "plane_collision.hpp"
@@ -196,6 +197,21 @@ class Cloth final : public Model {
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
     view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                                    Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
+    // IMEX: x' = v and the springs' forces implicit, the rest explicit
+    split_.stiff = "the springs and their damping";
+    split_.implicit_part = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+      f.head(3 * free_) = y.tail(3 * free_);
+      acceleration(t, y, f.tail(3 * free_), Forces::stiff);
+    };
+    split_.explicit_part = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+      f.head(3 * free_).setZero();
+      acceleration(t, y, f.tail(3 * free_), Forces::nonstiff);
+    };
+    split_.implicit_jacobian = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) {
+      Eigen::SparseMatrix<double> dfdx, dfdv;
+      force_jacobians(t, y, false, dfdx, dfdv, Forces::stiff);
+      mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
+    };
   }
   Cloth(const Cloth&) = delete;  // its capabilities hold `this`
   Cloth& operator=(const Cloth&) = delete;
@@ -222,7 +238,7 @@ class Cloth final : public Model {
   }
   int size() const override { return 6 * free_; }
   bool autonomous() const override { return gust_ == 0 || wind_k_ == 0; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, grid_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, grid_, split_); }
   std::vector<std::string> state_names() const override { return particle_state_names(free_); }
   Eigen::VectorXd initial_state() const override {
     Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
@@ -234,11 +250,19 @@ class Cloth final : public Model {
     dydt.head(3 * free_) = y.tail(3 * free_);
     acceleration(t, y, dydt.tail(3 * free_));
   }
-  void acceleration(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) const {
+  // which forces an acceleration or Jacobian includes: all of them, or one side of the IMEX split (the
+  // springs and their damping, stiff; wind, the picked node's pull, drag and gravity, not)
+  enum class Forces { all, stiff, nonstiff };
+
+  void acceleration(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a, Forces forces = Forces::all) const {
     const double* x = y.data();
     const double* v = y.data() + 3 * free_;
     a.setZero();
-    add_spring_forces(view_.springs, x, v, a.data());
+    if (forces != Forces::nonstiff) add_spring_forces(view_.springs, x, v, a.data());
+    if (forces == Forces::stiff) {
+      a /= node_mass_;
+      return;
+    }
     if (wind_k_ > 0) {
       const Eigen::Vector3d w = wind_at(t);
       for (const auto& tri : triangles_) {
@@ -253,16 +277,19 @@ class Cloth final : public Model {
     for (int i = 0; i < free_; ++i) a[3 * i + 1] -= g_;
   }
 
+  // the force Jacobians of all forces or of the stiff ones (Forces::nonstiff is not asked for), on one pattern
   void force_jacobians(double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
-                       Eigen::SparseMatrix<double>& dfdv) const {
+                       Eigen::SparseMatrix<double>& dfdv, Forces forces = Forces::all) const {
     const double* x = y.data();
     const double* v = y.data() + 3 * free_;
     pattern_->zero(dfdx);
     pattern_->zero(dfdv);
-    const Eigen::Matrix3d drag = -node_mass_ * drag_ * Eigen::Matrix3d::Identity();
-    for (const auto& slot : diagonal_slots_) BlockPattern::add(dfdv, slot, drag);
+    if (forces != Forces::stiff) {
+      const Eigen::Matrix3d drag = -node_mass_ * drag_ * Eigen::Matrix3d::Identity();
+      for (const auto& slot : diagonal_slots_) BlockPattern::add(dfdv, slot, drag);
+    }
     add_spring_force_jacobians(view_.springs, spring_slots_, x, v, definite, dfdx, dfdv);
-    if (wind_k_ == 0) return;
+    if (forces == Forces::stiff || wind_k_ == 0) return;
     const Eigen::Vector3d w = wind_at(t);
     for (size_t k = 0; k < triangles_.size(); ++k) {
       const auto& tri = triangles_[k];
@@ -382,6 +409,7 @@ class Cloth final : public Model {
   SecondOrderView second_order_;  // y = (x, v), with the acceleration below
   MassSpringView view_;
   ClothGridView grid_;
+  ImexSplit split_;
   std::unique_ptr<BlockPattern> pattern_;
   std::vector<std::array<BlockPattern::Slot, 4>> spring_slots_;
   std::vector<BlockPattern::Slot> diagonal_slots_;

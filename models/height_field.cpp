@@ -1,6 +1,7 @@
 #include "height_field.hpp"
 
 #include "solvers/capabilities/second_order.hpp"
+#include "solvers/capabilities/imex_split.hpp"
 #include "solvers/capabilities/wave_grid.hpp"
 
 #include "particle_common.hpp"
@@ -130,6 +131,18 @@ class HeightField final : public Model {
     }
     second_order_.positions = static_cast<int>(cells_);
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
+    // IMEX: z' = v and the Laplacian implicit (linear, constant), the damping explicit
+    split_.stiff = "z' = v and the Laplacian";
+    split_.linear = true;
+    split_.implicit_part = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+      f.head(cells_) = y.tail(cells_);
+      acceleration(t, y, f.tail(cells_), true, false);
+    };
+    split_.explicit_part = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+      f.head(cells_).setZero();
+      acceleration(t, y, f.tail(cells_), false, true);
+    };
+    split_.implicit_jacobian = [this](double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::SparseMatrix<double>& dfdy) { jacobian_of(0.0, dfdy); };
   }
   HeightField(const HeightField&) = delete;  // its capabilities hold `this`
   HeightField& operator=(const HeightField&) = delete;
@@ -144,7 +157,7 @@ class HeightField final : public Model {
   }
   int size() const override { return static_cast<int>(2 * cells_); }
   bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, grid_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, grid_, split_); }
   std::span<const Event> events() const override { return events_; }
 
   std::vector<std::string> state_names() const override {
@@ -169,20 +182,26 @@ class HeightField final : public Model {
     acceleration(t, y, dydt.tail(cells_));
   }
 
-  // c^2 Lap z - mu v on the interior, 0 on the boundary
-  void acceleration(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) const {
+  // c^2 Lap z - mu v on the interior, 0 on the boundary; the IMEX split's parts are the two terms (mu = 0
+  // drops the damping, c = 0 the Laplacian: the stiff part and the rest, which add up to f exactly)
+  void acceleration(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a, bool laplacian = true, bool damping = true) const {
     const double* z = y.data();
     const double* v = z + cells_;
-    const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
+    const double c2 = laplacian ? grid_.c * grid_.c / (grid_.spacing * grid_.spacing) : 0.0;
+    const double mu = damping ? grid_.mu : 0.0;
     a.setZero();
     for (int i = 1; i < n_ - 1; ++i)
       for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j)
-        a[j] = wave_acceleration(c2, grid_.mu, neighbour_sum(z, j, n_), z[j], v[j]);
+        a[j] = wave_acceleration(c2, mu, neighbour_sum(z, j, n_), z[j], v[j]);
   }
 
   // dz'/dv = I; dv'/dz = c^2 Lap (boundary neighbours included) and dv'/dv = -mu I on the interior rows
   bool has_sparse_jacobian() const override { return true; }
   void sparse_jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::SparseMatrix<double>& dfdy) const override {
+    jacobian_of(grid_.mu, dfdy);
+  }
+  // the same with damping mu (0: the IMEX split's stiff part)
+  void jacobian_of(double mu, Eigen::SparseMatrix<double>& dfdy) const {
     const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
     std::vector<Eigen::Triplet<double>> entries;
     entries.reserve(7 * static_cast<size_t>(cells_));
@@ -192,7 +211,7 @@ class HeightField final : public Model {
         const Eigen::Index row = cells_ + j;
         entries.emplace_back(row, j, -4 * c2);
         for (const int nb : {j - n_, j + n_, j - 1, j + 1}) entries.emplace_back(row, nb, c2);
-        entries.emplace_back(row, cells_ + j, -grid_.mu);
+        entries.emplace_back(row, cells_ + j, -mu);
       }
     dfdy.resize(size(), size());
     dfdy.setFromTriplets(entries.begin(), entries.end());
@@ -241,6 +260,7 @@ class HeightField final : public Model {
   Eigen::Index cells_;          // n^2
   WaveGridView grid_;
   SecondOrderView second_order_;  // y = (z, v), with the acceleration below
+  ImexSplit split_;
   std::vector<Drop> drops_;     // the drop (water-drop) or the drops in time order (pool)
   double radius_ = 0, height_ = 0;
   int m_ = 0, mode_n_ = 0;      // standing wave's mode

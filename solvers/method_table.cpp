@@ -11,6 +11,7 @@ void register_symplectic_euler_methods(MethodTable& table);
 void register_rk4_methods(MethodTable& table);
 void register_implicit_euler_methods(MethodTable& table);
 void register_cvode_methods(MethodTable& table);
+void register_arkode_methods(MethodTable& table);
 void register_gsl_methods(MethodTable& table);
 void register_wave_fd_methods(MethodTable& table);
 void register_rigid_splitting_methods(MethodTable& table);
@@ -30,6 +31,7 @@ const MethodTable& table() {
     register_rk4_methods(t);
     register_implicit_euler_methods(t);
     register_cvode_methods(t);
+    register_arkode_methods(t);
     register_gsl_methods(t);
     register_wave_fd_methods(t);
     gpu::register_gpu_methods(t);

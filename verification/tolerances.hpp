@@ -30,6 +30,15 @@ inline constexpr double tight_adaptive_error = 1e-6;
 // with p the lowest order the method uses, by at most order_band.
 inline constexpr double min_tolerance_slope(int p) { return static_cast<double>(p) / (p + 1) - order_band; }
 
+// errors measured against a reference run of CVODE BDF at rtol 1e-12 (not an exact solution): below this
+// the reference's own error (a small multiple of its tolerance) is part of what is measured
+inline constexpr double reference_floor = 1e-10;
+
+// an IMEX split's two parts against f: each entry of f is the same few terms (a few spring forces, the
+// wind's share, drag and gravity; or the Laplacian and the damping) grouped otherwise, so they differ by a
+// few roundings of the terms' size: 16 eps of the larger part's magnitude
+inline constexpr double split_roundoff = 16 * 2.220446049250313e-16;
+
 // GSL rk4 estimates its error by step doubling and returns the two-half-step result: its error at h is
 // that of classical RK4 at h/2, i.e. 2^4 = 16 times smaller. The ratio measured in the asymptotic range
 // is within this relative band of 16 (the next error term is O(h) relative: at h = T/400 a few percent).

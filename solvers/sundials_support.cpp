@@ -1,0 +1,150 @@
+#include "sundials_support.hpp"
+
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <algorithm>
+
+namespace stepwise::sundials {
+namespace {
+
+Eigen::Map<const Eigen::VectorXd> view(N_Vector v) {
+  return {N_VGetArrayPointer(v), static_cast<Eigen::Index>(N_VGetLength(v))};
+}
+Eigen::Map<Eigen::VectorXd> view_mut(N_Vector v) {
+  return {N_VGetArrayPointer(v), static_cast<Eigen::Index>(N_VGetLength(v))};
+}
+
+// 0 when the call's result is finite, else 1 (recoverable: the solver cuts the step) and the run is marked
+int finite_or_retry(Callbacks& c, const Eigen::Map<Eigen::VectorXd>& out) {
+  if (out.allFinite()) return 0;
+  c.non_finite = true;
+  return 1;
+}
+
+void with_diagonal(Eigen::SparseMatrix<double>& J) {
+  Eigen::SparseMatrix<double> zero(J.rows(), J.cols());
+  zero.setIdentity();
+  zero.coeffs().setZero();
+  J = J + zero;
+  J.makeCompressed();
+}
+
+void evaluate_sparse(const Callbacks& c, double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& J) {
+  if (c.split) c.split->implicit_jacobian(t, y, J);
+  else c.system->sparse_jacobian(t, y, J);
+}
+
+}  // namespace
+
+int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
+  auto& c = *static_cast<Callbacks*>(user_data);
+  auto out = view_mut(ydot);
+  c.system->rhs(t, view(y), out);
+  return finite_or_retry(c, out);
+}
+
+int explicit_part(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
+  auto& c = *static_cast<Callbacks*>(user_data);
+  auto out = view_mut(ydot);
+  ++c.system->stats().rhs_evals;
+  c.split->explicit_part(t, view(y), out);
+  return finite_or_retry(c, out);
+}
+
+int implicit_part(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
+  auto& c = *static_cast<Callbacks*>(user_data);
+  auto out = view_mut(ydot);
+  ++c.system->stats().rhs_evals;
+  c.split->implicit_part(t, view(y), out);
+  return finite_or_retry(c, out);
+}
+
+int dense_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user_data, N_Vector, N_Vector, N_Vector) {
+  auto& c = *static_cast<Callbacks*>(user_data);
+  const auto n = static_cast<Eigen::Index>(N_VGetLength(y));
+  c.jac.resize(n, n);
+  c.system->jacobian(t, view(y), c.jac);
+  ++c.system->stats().jac_evals;
+  // SUNDIALS dense matrices are column-major, like Eigen's default
+  Eigen::Map<Eigen::MatrixXd>(SUNDenseMatrix_Data(J), n, n) = c.jac;
+  return c.jac.allFinite() ? 0 : 1;
+}
+
+int sparse_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user_data, N_Vector, N_Vector, N_Vector) {
+  auto& c = *static_cast<Callbacks*>(user_data);
+  const auto n = static_cast<Eigen::Index>(N_VGetLength(y));
+  evaluate_sparse(c, t, view(y), c.sparse_jac);
+  ++c.system->stats().jac_evals;
+  with_diagonal(c.sparse_jac);
+  const auto nnz = c.sparse_jac.nonZeros();
+  if (nnz > SUNSparseMatrix_NNZ(J)) SUNSparseMatrix_Reallocate(J, nnz);
+  std::copy_n(c.sparse_jac.outerIndexPtr(), n + 1, SUNSparseMatrix_IndexPointers(J));
+  std::copy_n(c.sparse_jac.innerIndexPtr(), nnz, SUNSparseMatrix_IndexValues(J));
+  std::copy_n(c.sparse_jac.valuePtr(), nnz, SUNSparseMatrix_Data(J));
+  return 0;
+}
+
+int roots(sunrealtype t, N_Vector y, sunrealtype* gout, void* user_data) {
+  const auto& c = *static_cast<Callbacks*>(user_data);
+  const Eigen::VectorXd state = view(y);
+  const auto events = c.system->events();
+  for (size_t i = 0; i < events.size(); ++i) gout[i] = events[i].g(t, state);
+  return 0;
+}
+
+void error_handler(int, const char* module, const char* function, char* msg, void* user_data) {
+  static_cast<Callbacks*>(user_data)->last_error = fmt::format("{}:{}: {}", module, function, msg);
+}
+
+void initial_pattern(Callbacks& c, double t0, const Eigen::VectorXd& y0) {
+  evaluate_sparse(c, t0, y0, c.sparse_jac);
+  with_diagonal(c.sparse_jac);
+}
+
+SUNMatrix sparse_matrix(const Callbacks& c, SUNContext context) {
+  const auto n = c.sparse_jac.rows();
+  return SUNSparseMatrix(n, n, std::max<sunindextype>(1, c.sparse_jac.nonZeros()), CSC_MAT, context);
+}
+
+void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double t0, std::span<const double> t_out,
+                 const StepControl& control, RunResult& result) {
+  const auto events = callbacks.system->events();
+  std::vector<int> found(events.size());
+  const auto n = static_cast<Eigen::Index>(N_VGetLength(y));
+  Eigen::Map<Eigen::VectorXd> ym(N_VGetArrayPointer(y), n);
+  const double bound = divergence_bound(control, ym);
+  double t = t0;
+  for (const double target : t_out) {
+    int code = 0;
+    while (true) {
+      code = driver.evolve(target, y, t);
+      if (code != driver.root_return) break;
+      driver.root_info(found.data());
+      const auto hit = std::find_if(found.begin(), found.end(), [](int r) { return r != 0; });
+      Eigen::VectorXd y_event = ym;
+      handle_event(result, events, static_cast<size_t>(hit - found.begin()), t, y_event);
+      ym = y_event;
+      driver.add_counters();
+      if (const int re = driver.reinit(t, y)) {
+        code = re;
+        break;
+      }
+      if (t >= target) break;
+    }
+    if (code < 0) {
+      if (callbacks.non_finite || has_diverged(ym, bound)) mark_diverged(result, t);
+      else mark_failed(result, t, fmt::format("{}: {} returned {} ({}) at t = {:.9g}: {}", driver.method, driver.evolve_call, code,
+                                              driver.flag_name(code), t, callbacks.last_error));
+      break;
+    }
+    if (has_diverged(ym, bound)) {
+      mark_diverged(result, t);
+      break;
+    }
+    record_output(result, control, t, ym);
+  }
+  driver.add_counters();
+}
+
+}  // namespace stepwise::sundials
