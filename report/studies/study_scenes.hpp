@@ -5,6 +5,7 @@
 #include "report/studies.hpp"
 
 #include "models/model.hpp"
+#include "solvers/capabilities/imex_split.hpp"
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/convergence.hpp"
