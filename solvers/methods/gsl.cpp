@@ -9,6 +9,7 @@
 // - GSL's default error handler aborts the process: it is switched off once, and return codes are reported.
 #include "solvers/events.hpp"
 #include "solvers/fd_jacobian.hpp"
+#include "solvers/adaptive_step.hpp"
 #include "solvers/fixed_step.hpp"
 #include "solvers/run_support.hpp"
 
@@ -124,90 +125,46 @@ class GslFixedStepper final : public FixedStepper {
   std::string method_;
 };
 
-// gsl_odeiv2_evolve_apply step by step, so every accepted step is counted and checked for divergence
-class GslAdaptiveIntegrator final : public Integrator {
+// gsl_odeiv2_evolve_apply, one accepted step a call, in the shared adaptive loop (adaptive_step.hpp)
+class GslAdaptiveStepper final : public AdaptiveStepper {
  public:
-  GslAdaptiveIntegrator(std::string method, const gsl_odeiv2_step_type* type, StepControl control)
-      : method_(std::move(method)), type_(type), control_(control) {}
-
-  RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
-                      std::span<const double> t_out) const override {
-    RunResult result = begin_run(t0, y0);
-    const double start = thread_cpu_seconds();
-    CountedSystem counted(system, result.stats);
-    // first trial step: a small fraction of the first output interval; the control adapts it
-    const double max_step = max_adaptive_step(control_, system);
-    double h = std::min(max_step, 1e-3 * (t_out.front() - t0));
-    GslSession session(counted, type_, h, control_);
-    gsl_odeiv2_driver* d = session.driver();
-    const double bound = divergence_bound(control_, y0);
-
-    Eigen::VectorXd y = y0, y_start;  // y_start: the step's start, for events and a failing step
-    double t = t0;
-    const auto events = system.events();
-    Eigen::VectorXd g_start = event_values(events, t, y);
-    double t_start = t, taken = 0;
-    // re-steps from the step's start to a fraction of it, for locating an event
-    const Restep restep = [&](double s, Eigen::VectorXd& ys) {
-      gsl_odeiv2_step_reset(d->s);
-      ys = y_start;
-      return gsl_odeiv2_step_apply(d->s, t_start, s * taken, ys.data(), session.yerr(), nullptr, nullptr, session.sys()) == GSL_SUCCESS;
-    };
-    for (const double target : t_out) {
-      while (t < target) {
-        y_start = y;
-        t_start = t;
-        if (result.stats.steps >= control_.max_steps) {
-          mark_failed(result, t, fmt::format("{}: more than {} steps before t = {:.9g}", method_, control_.max_steps, target));
-          break;
-        }
-        const unsigned long failed_before = d->e->failed_steps;
-        const int code = gsl_odeiv2_evolve_apply(d->e, d->c, d->s, session.sys(), &t, target, &h, y.data());
-        result.stats.rejected += static_cast<long>(d->e->failed_steps - failed_before);
-        if (code != GSL_SUCCESS) {
-          if (has_diverged(y, bound) || code == GSL_EBADFUNC) mark_diverged(result, t);
-          else mark_failed(result, t, fmt::format("{}: gsl_odeiv2_evolve_apply returned {} ({}) at t = {:.9g}", method_,
-                                                  code, gsl_strerror(code), t));
-          break;
-        }
-        ++result.stats.steps;
-        // back onto the manifold, keeping GSL's state: the correction is of the order of the local error, and
-        // resetting the stepper after it dropped msadams/msbdf to order 1 (491 457 steps for 946, measured)
-        counted.project(y);
-        if (has_diverged(y, bound)) {
-          mark_diverged(result, t);
-          break;
-        }
-        h = std::min(h, max_step);
-        // an event inside the accepted step: locate it, apply its handler, restart the stepper there
-        taken = t - t_start;
-        if (const auto t_event = settle_step_events(events, g_start, t_start, taken, y_start, y, control_.event_location, restep, result)) {
-          t = *t_event;
-          gsl_odeiv2_evolve_reset(d->e);
-          gsl_odeiv2_step_reset(d->s);
-        }
-      }
-      if (result.status != Status::ok) {
-        result.y_stop = y_start;  // the last finite state: the start of the step that failed
-        break;
-      }
-      record_output(result, control_, t, y);
-    }
-    result.stats.cpu_seconds = thread_cpu_seconds() - start;
-    return result;
+  GslAdaptiveStepper(const CountedSystem& system, std::string method, const gsl_odeiv2_step_type* type, const StepControl& control, double h0)
+      : session_(system, type, h0, control), method_(std::move(method)) {}
+  bool step(double& t, double t_limit, double& h, Eigen::VectorXd& y, long& rejected, std::string& failure) override {
+    gsl_odeiv2_driver* d = session_.driver();
+    const unsigned long failed_before = d->e->failed_steps;
+    const int code = gsl_odeiv2_evolve_apply(d->e, d->c, d->s, session_.sys(), &t, t_limit, &h, y.data());
+    rejected += static_cast<long>(d->e->failed_steps - failed_before);
+    if (code == GSL_SUCCESS) return true;
+    // f produced a non-finite value: the run has blown up, which the loop reports as diverged
+    if (code != GSL_EBADFUNC) failure = fmt::format("{}: gsl_odeiv2_evolve_apply returned {} ({}) at t = {:.9g}", method_, code, gsl_strerror(code), t);
+    return false;
+  }
+  bool restep(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_out) override {
+    gsl_odeiv2_step_reset(session_.driver()->s);
+    y_out = y;
+    return gsl_odeiv2_step_apply(session_.driver()->s, t, h, y_out.data(), session_.yerr(), nullptr, nullptr, session_.sys()) == GSL_SUCCESS;
+  }
+  // a changed state (an event) invalidates the multistep history and the control's memory
+  void reset() override {
+    gsl_odeiv2_evolve_reset(session_.driver()->e);
+    gsl_odeiv2_step_reset(session_.driver()->s);
   }
 
  private:
+  GslSession session_;
   std::string method_;
-  const gsl_odeiv2_step_type* type_;
-  StepControl control_;
 };
 
 // one integrator of GSL's stepper `type`: fixed step when control.dt is set, else adaptive to rtol/atol
 MakeIntegrator gsl_integrator(const gsl_odeiv2_step_type* type) {
   return [type](const Method& method, const StepControl& control) -> std::unique_ptr<Integrator> {
     switch_off_abort_handler();
-    if (!control.dt) return std::make_unique<GslAdaptiveIntegrator>(std::string(method.name), type, control);
+    if (!control.dt)
+      return std::make_unique<AdaptiveStepIntegrator>(method, control, [name = std::string(method.name), type](const CountedSystem& system, const StepControl& c) {
+        // the driver's h0 is only its own first step (gsl_odeiv2_driver_apply); evolve_apply steps with the loop's h
+        return std::make_unique<GslAdaptiveStepper>(system, name, type, c, 1e-3);
+      });
     return std::make_unique<FixedStepIntegrator>(
         method, control, [name = std::string(method.name), type, control](const CountedSystem& system) {
           return std::make_unique<GslFixedStepper>(system, name, type, control);
