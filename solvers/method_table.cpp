@@ -13,6 +13,7 @@ void register_implicit_euler_methods(MethodTable& table);
 void register_cvode_methods(MethodTable& table);
 void register_arkode_methods(MethodTable& table);
 void register_gsl_methods(MethodTable& table);
+void register_odeint_methods(MethodTable& table);
 void register_wave_fd_methods(MethodTable& table);
 void register_rigid_splitting_methods(MethodTable& table);
 void register_sequential_impulses_methods(MethodTable& table);
@@ -33,6 +34,7 @@ const MethodTable& table() {
     register_cvode_methods(t);
     register_arkode_methods(t);
     register_gsl_methods(t);
+    register_odeint_methods(t);
     register_wave_fd_methods(t);
     gpu::register_gpu_methods(t);
     register_rigid_splitting_methods(t);
