@@ -74,7 +74,7 @@ void run_adapter(benchmark::State& state, const char* method) {
   const auto integrator = stepwise::make_integrator(method, control);
   long rhs = 0;
   for (auto _ : state) {
-    const auto r = integrator->integrate(*model, 0.0, model->initial_state(), std::vector{t_end});
+    const auto r = integrator->solve(*model, 0.0, model->initial_state(), std::vector{t_end});
     rhs = r.stats.rhs_evals;
     benchmark::DoNotOptimize(r.trajectory.y.back()[0]);
   }

@@ -24,7 +24,7 @@ void run_stepwise(benchmark::State& state, const char* method) {
   const auto model = stepwise::make_model("pendulum", {{"theta0", theta0}});
   const auto integrator = stepwise::make_integrator(method, stepwise::StepControl::fixed(dt));
   for (auto _ : state) {
-    const auto r = integrator->integrate(*model, 0.0, model->initial_state(), std::vector{t_end});
+    const auto r = integrator->solve(*model, 0.0, model->initial_state(), std::vector{t_end});
     benchmark::DoNotOptimize(r.trajectory.y.back()[0]);
   }
 }

@@ -9,11 +9,10 @@ double first_trial_step(const StepControl& control, const OdeSystem& system, dou
   return std::min(max_adaptive_step(control, system), 1e-3 * (t_out.front() - t0));
 }
 
-RunResult AdaptiveStepIntegrator::integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
+RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                                             std::span<const double> t_out) const {
   if (!method_.needs.offered_by(system)) throw BadMethod(method_requirement(method_, system));
   RunResult result = begin_run(t0, y0);
-  const double start = thread_cpu_seconds();
   CountedSystem counted(system, result.stats);
   auto stepper = make_stepper_(counted, control_);
   const double max_step = max_adaptive_step(control_, system);
@@ -32,43 +31,49 @@ RunResult AdaptiveStepIntegrator::integrate(const OdeSystem& system, double t0, 
   Eigen::VectorXd g_start = event_values(events, t, y);
   // re-steps from the step's start to a fraction of it, for locating an event
   const Restep restep = [&](double s, Eigen::VectorXd& ys) { return stepper->restep(t_start, s * taken, y_start, ys); };
-  for (const double target : t_out) {
-    while (t < target) {
-      y_start = y;
-      t_start = t;
-      if (result.stats.steps >= control_.max_steps) {
-        mark_failed(result, t, fmt::format("{}: more than {} steps before t = {:.9g}", method_.name, control_.max_steps, target));
-        break;
-      }
-      h = std::min(h, max_step);
-      if (!stepper->step(t, target, h, y, result.stats.rejected, failure)) {
-        if (failure.empty() || has_diverged(y, bound)) mark_diverged(result, t);
-        else mark_failed(result, t, failure);
-        break;
-      }
-      ++result.stats.steps;
-      // back onto the manifold, keeping the stepper's state: the correction is of the order of the local error
-      if (projects) counted.project(y);
-      if (has_diverged(y, bound)) {
-        mark_diverged(result, t);
-        break;
-      }
-      // an event inside the accepted step: locate it, apply its handler, restart the stepper there
-      if (watch_events) {
-        taken = t - t_start;
-        if (const auto t_event = settle_step_events(events, g_start, t_start, taken, y_start, y, control_.event_location, restep, result)) {
-          t = *t_event;
-          stepper->reset();
-        }
-      }
-    }
-    if (result.status != Status::ok) {
-      result.y_stop = y_start;  // the last finite state: the start of the step that failed
+  // the outputs are recorded as steps pass them: at a step's end, or, with dense output, interpolated inside it
+  const bool dense = stepper->dense();
+  Eigen::VectorXd y_out;
+  size_t next = 0;
+  while (next < t_out.size()) {
+    const double target = dense ? t_out.back() : t_out[next];
+    y_start = y;
+    t_start = t;
+    if (result.stats.steps >= control_.max_steps) {
+      mark_failed(result, t, fmt::format("{}: more than {} steps before t = {:.9g}", method_.name, control_.max_steps, t_out[next]));
       break;
     }
-    record_output(result, control_, t, y);
+    h = std::min(h, max_step);
+    if (!stepper->step(t, target, h, y, result.stats.rejected, failure)) {
+      if (failure.empty() || has_diverged(y, bound)) mark_diverged(result, t);
+      else mark_failed(result, t, failure);
+      break;
+    }
+    ++result.stats.steps;
+    // back onto the manifold, keeping the stepper's state: the correction is of the order of the local error
+    if (projects) counted.project(y);
+    if (has_diverged(y, bound)) {
+      mark_diverged(result, t);
+      break;
+    }
+    // an event inside the accepted step: locate it, apply its handler, restart the stepper there
+    if (watch_events) {
+      taken = t - t_start;
+      if (const auto t_event = settle_step_events(events, g_start, t_start, taken, y_start, y, control_.event_location, restep, result)) {
+        t = *t_event;
+        stepper->reset();
+      }
+    }
+    for (; next < t_out.size() && t_out[next] <= t; ++next) {
+      if (t_out[next] == t) {
+        record_output(result, control_, t, y);
+      } else {
+        stepper->interpolate(t_out[next], y_out);
+        record_output(result, control_, t_out[next], y_out);
+      }
+    }
   }
-  result.stats.cpu_seconds = thread_cpu_seconds() - start;
+  if (result.status != Status::ok) result.y_stop = y_start;  // the last finite state: the start of the step that failed
   return result;
 }
 

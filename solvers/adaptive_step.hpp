@@ -27,6 +27,10 @@ class AdaptiveStepper {
   virtual bool restep(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_out) = 0;
   // forget any history: the next step starts afresh (after an event changed the state)
   virtual void reset() {}
+  // whether it interpolates within its last accepted step (dense output): then steps pass over output
+  // times, which interpolate() fills in, rather than being cut short to land on each
+  virtual bool dense() const { return false; }
+  virtual void interpolate(double t, Eigen::VectorXd& y) { (void)t, (void)y; }
 };
 
 using AdaptiveStepperFactory = std::function<std::unique_ptr<AdaptiveStepper>(const CountedSystem& system, const StepControl& control)>;
@@ -36,7 +40,7 @@ class AdaptiveStepIntegrator final : public Integrator {
   // `method` is the table's entry; BadMethod from integrate() for a system without what it needs
   AdaptiveStepIntegrator(const Method& method, StepControl control, AdaptiveStepperFactory make_stepper)
       : method_(method), control_(std::move(control)), make_stepper_(std::move(make_stepper)) {}
-  RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0, std::span<const double> t_out) const override;
+  RunResult solve(const OdeSystem& system, double t0, const Eigen::VectorXd& y0, std::span<const double> t_out) const override;
 
  private:
   const Method& method_;

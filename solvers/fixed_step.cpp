@@ -9,11 +9,10 @@
 
 namespace stepwise {
 
-RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
+RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                                          std::span<const double> t_out) const {
   if (!method_.needs.offered_by(system)) throw BadMethod(method_requirement(method_, system));
   RunResult result = begin_run(t0, y0);
-  const double start = thread_cpu_seconds();
   CountedSystem counted(system, result.stats);
   auto stepper = make_stepper_(counted);
   const double dt = *control_.dt;
@@ -76,7 +75,6 @@ RunResult FixedStepIntegrator::integrate(const OdeSystem& system, double t0, con
     if (result.status != Status::ok) break;
     record_output(result, control_, t, y);
   }
-  result.stats.cpu_seconds = thread_cpu_seconds() - start;
   return result;
 }
 

@@ -47,8 +47,8 @@ class FixedStepper {
 
 // the same stepper built for a state of N entries known at compile time (its loops unrolled: on a pendulum
 // the loop bookkeeping would otherwise cost as much as the method's arithmetic), or for any size (N = 0)
-template <template <int> class Stepper, class... Args>
-std::unique_ptr<FixedStepper> make_sized(Eigen::Index n, Args&&... args) {
+template <template <int> class Stepper, class Base = FixedStepper, class... Args>
+std::unique_ptr<Base> make_sized(Eigen::Index n, Args&&... args) {
   switch (n) {
     case 2: return std::make_unique<Stepper<2>>(std::forward<Args>(args)...);
     case 3: return std::make_unique<Stepper<3>>(std::forward<Args>(args)...);
@@ -81,7 +81,7 @@ class FixedStepIntegrator final : public Integrator {
   // the structure the method needs
   FixedStepIntegrator(const Method& method, StepControl control, FixedStepperFactory make_stepper)
       : method_(method), control_(control), make_stepper_(std::move(make_stepper)) {}
-  RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
+  RunResult solve(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                       std::span<const double> t_out) const override;
 
  private:

@@ -1,5 +1,7 @@
 #include "integrator.hpp"
 
+#include <ctime>
+
 #include <unistd.h>
 
 namespace stepwise {
@@ -15,6 +17,19 @@ std::string_view to_string(Status status) {
 
 double physical_memory_bytes() {
   return static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+}
+
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+RunResult Integrator::integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0, std::span<const double> t_out) const {
+  const double start = thread_cpu_seconds();
+  RunResult result = solve(system, t0, y0, t_out);
+  result.stats.cpu_seconds = thread_cpu_seconds() - start;
+  return result;
 }
 
 }  // namespace stepwise

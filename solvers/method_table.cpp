@@ -9,6 +9,7 @@ namespace stepwise {
 void register_euler_methods(MethodTable& table);
 void register_symplectic_euler_methods(MethodTable& table);
 void register_rk4_methods(MethodTable& table);
+void register_embedded_pair_methods(MethodTable& table);
 void register_implicit_euler_methods(MethodTable& table);
 void register_cvode_methods(MethodTable& table);
 void register_arkode_methods(MethodTable& table);
@@ -30,6 +31,7 @@ const MethodTable& table() {
     register_euler_methods(t);
     register_symplectic_euler_methods(t);
     register_rk4_methods(t);
+    register_embedded_pair_methods(t);
     register_implicit_euler_methods(t);
     register_cvode_methods(t);
     register_arkode_methods(t);

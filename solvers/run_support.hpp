@@ -70,12 +70,6 @@ inline void force_jacobians(const CountedSystem& system, const MassSpringView& v
   view.force_jacobians(t, y, definite, dfdx, dfdv);
 }
 
-// thread CPU time in seconds: sweeps run in parallel, so process time would mix runs
-inline double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 // the largest step an adaptive integrator may take on this system: the control's cap, and half the
 // shortest event-free interval

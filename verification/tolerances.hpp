@@ -30,6 +30,10 @@ inline constexpr double tight_adaptive_error = 1e-6;
 // with p the lowest order the method uses, by at most order_band.
 inline constexpr double min_tolerance_slope(int p) { return static_cast<double>(p) / (p + 1) - order_band; }
 
+// a tableau's sums of up to 16 coefficients of size up to 36 (Verner's), each given to double precision:
+// rounding leaves ~16 x 36 x eps ~ 1e-13
+inline constexpr double tableau_roundoff = 1e-12;
+
 // errors measured against a reference run of CVODE BDF at rtol 1e-12 (not an exact solution): below this
 // the reference's own error (a small multiple of its tolerance) is part of what is measured
 inline constexpr double reference_floor = 1e-10;

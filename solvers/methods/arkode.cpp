@@ -59,7 +59,7 @@ constexpr Table tables[] = {
     {"arkode-imex-ark548", Kind::imex, ARKODE_ARK548L2SA_ERK_8_4_5, ARKODE_ARK548L2SA_DIRK_8_4_5, 5, "IMEX ARK 5(4)8L[2]SA on the model's stiff/non-stiff split"},
 };
 
-// the Newton iterations' tolerances and their number at a fixed step (see integrate())
+// the Newton iterations' tolerances and their number at a fixed step (see solve())
 constexpr double fixed_newton_rtol = 1e-10, fixed_newton_atol = 1e-12;
 constexpr int fixed_newton_iterations = 10;
 
@@ -76,10 +76,9 @@ class ArkodeIntegrator final : public Integrator {
  public:
   ArkodeIntegrator(const Method& method, const Table& table, StepControl control) : method_(method), table_(table), control_(control) {}
 
-  RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0, std::span<const double> t_out) const override {
+  RunResult solve(const OdeSystem& system, double t0, const Eigen::VectorXd& y0, std::span<const double> t_out) const override {
     if (!method_.needs.offered_by(system)) throw BadMethod(method_requirement(method_, system));
     RunResult result = begin_run(t0, y0);
-    const double start = thread_cpu_seconds();
     CountedSystem counted(system, result.stats);
     Callbacks callbacks;
     callbacks.system = &counted;
@@ -88,7 +87,6 @@ class ArkodeIntegrator final : public Integrator {
     const std::string_view name = method_.name;
     auto setup_failed = [&](std::string_view call, long code) {
       mark_failed(result, t0, fmt::format("{}: {} returned {} ({})", name, call, code, flag_name(code)));
-      result.stats.cpu_seconds = thread_cpu_seconds() - start;
       return result;
     };
 
@@ -182,7 +180,6 @@ class ArkodeIntegrator final : public Integrator {
         .flag_name = flag_name,
     };
     output_loop(driver, callbacks, y.get(), t0, t_out, control_, result);
-    result.stats.cpu_seconds = thread_cpu_seconds() - start;
     return result;
   }
 

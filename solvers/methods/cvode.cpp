@@ -55,10 +55,9 @@ class CvodeIntegrator final : public Integrator {
   CvodeIntegrator(std::string method, bool bdf, StepControl control)
       : method_(std::move(method)), bdf_(bdf), control_(control) {}
 
-  RunResult integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
+  RunResult solve(const OdeSystem& system, double t0, const Eigen::VectorXd& y0,
                       std::span<const double> t_out) const override {
     RunResult result = begin_run(t0, y0);
-    const double start = thread_cpu_seconds();
     CountedSystem counted(system, result.stats);
     const int n = system.size();
     Callbacks callbacks;
@@ -67,7 +66,6 @@ class CvodeIntegrator final : public Integrator {
     // a failing setup call ends the run with its name and code
     auto setup_failed = [&](std::string_view call, long code) {
       mark_failed(result, t0, fmt::format("{}: {} returned {} ({})", method_, call, code, flag_name(code)));
-      result.stats.cpu_seconds = thread_cpu_seconds() - start;
       return result;
     };
 
@@ -156,7 +154,6 @@ class CvodeIntegrator final : public Integrator {
         .flag_name = flag_name,
     };
     output_loop(driver, callbacks, y.get(), t0, t_out, control_, result);
-    result.stats.cpu_seconds = thread_cpu_seconds() - start;
     return result;
   }
 

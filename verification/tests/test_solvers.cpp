@@ -1,6 +1,8 @@
 // Solver backends: counting, the pitfalls of the exact library versions, divergence, and the seeds'
 // claim about explicit and implicit Euler in a position-independent force field.
 #include "models/model.hpp"
+#include "solvers/tableaus/tsitouras54.hpp"
+#include "solvers/tableaus/verner98.hpp"
 #include "solvers/method_table.hpp"
 #include "run/measure.hpp"
 #include "verification/tolerances.hpp"
@@ -216,6 +218,32 @@ TEST(Solvers, UnknownMethodsAndMismatchedStepControlsAreRefused) {
   const auto flow = make_model("flow-particle");
   EXPECT_THROW(make_integrator("symplectic-euler", StepControl::fixed(0.1))->integrate(*flow, 0, flow->initial_state(), std::vector{1.0}),
                BadMethod);
+}
+
+// a hand-written pair's coefficients against the conditions every order-p tableau meets: each row of a sums to
+// its node (c_i = sum_j a_ij), the weights integrate polynomials of degree < p exactly (sum_i b_i c_i^(k-1)
+// = 1/k, k = 1..p, the quadrature conditions), and the error weights vanish on constants (sum e_i = 0). A
+// digit mistyped in b or c breaks one of them by far more than the double-precision rounding of 16 terms
+template <class T>
+void expect_consistent_tableau(const char* name) {
+  for (int i = 0; i < T::stages; ++i) {
+    double row = 0;
+    for (int j = 0; j < i; ++j) row += T::a[i][j];
+    EXPECT_NEAR(row, T::c[i], tolerance::tableau_roundoff) << name << " row " << i;
+  }
+  for (int k = 1; k <= T::order; ++k) {
+    double quadrature = 0;
+    for (int i = 0; i < T::stages; ++i) quadrature += T::b[i] * std::pow(T::c[i], k - 1);
+    EXPECT_NEAR(quadrature, 1.0 / k, tolerance::tableau_roundoff) << name << " quadrature condition k = " << k;
+  }
+  double e = 0;
+  for (int i = 0; i < T::stages; ++i) e += T::e[i];
+  EXPECT_NEAR(e, 0.0, tolerance::tableau_roundoff) << name;
+}
+
+TEST(Solvers, TheHandWrittenPairsTableausMeetTheirOrderConditions) {
+  expect_consistent_tableau<tableau::Tsitouras54>("tsitouras54");
+  expect_consistent_tableau<tableau::Verner98>("verner98");
 }
 
 }  // namespace

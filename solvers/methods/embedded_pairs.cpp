@@ -1,0 +1,253 @@
+// tsitouras54, verner98: embedded Runge-Kutta pairs of our own, hand-written on the fixed-step path's terms
+// (plain loops, nothing allocated, f called through the counted system and nothing else per stage), with a
+// PI step-size controller and, where the pair has one, dense output for output times and events.
+//
+// The stage sums are unrolled at compile time over the tableau's nonzero coefficients (a tableau is a type,
+// solvers/tableaus/), so a 16-stage Verner step does only the multiplications its coefficients need.
+#include "solvers/adaptive_step.hpp"
+#include "solvers/fixed_step.hpp"
+#include "solvers/run_support.hpp"
+#include "solvers/tableaus/tsitouras54.hpp"
+#include "solvers/tableaus/verner98.hpp"
+
+#include <array>
+#include <utility>
+
+namespace stepwise {
+namespace {
+
+// the stages of one explicit Runge-Kutta step of tableau T on a state of N entries (0: any size)
+template <class T, int N>
+class Stages {
+ public:
+  explicit Stages(const CountedSystem& s) : system_(s), n_(s.size()), k_(T::stages * n_), tmp_(s.size()) {}
+
+  // k_0 = f(t, y0) unless first-same-as-last left it from the previous step (reuse_first)
+  STEPWISE_SCALAR_STORES void compute(double t, double h, const double* y0, bool reuse_first) {
+    if (!reuse_first) system_.rhs(t, Eigen::Map<const Eigen::VectorXd>(y0, n_), stage_out(0));
+    [&]<int... I>(std::integer_sequence<int, I...>) { (stage<I + 1>(t, h, y0), ...); }(std::make_integer_sequence<int, T::stages - 1>{});
+  }
+
+  // y1 = y0 + h sum b_i k_i, and the error estimate's max over entries of |h sum e_i k_i| / (atol + rtol max(|y0|, |y1|))
+  STEPWISE_SCALAR_STORES double finish(double h, const double* y0, double* y1, double rtol, double atol) const {
+    double worst = 0, nonfinite = 0;
+    for (Eigen::Index i = 0; i < size(); ++i) {
+      const double v = y0[i] + h * weighted<Row::b>(i);
+      y1[i] = v;
+      const double scale = atol + rtol * std::max(std::abs(y0[i]), std::abs(v));
+      worst = std::max(worst, std::abs(h * weighted<Row::e>(i)) / scale);
+      nonfinite += v - v;
+    }
+    return nonfinite == 0 ? worst : std::numeric_limits<double>::infinity();
+  }
+
+  // y(t0 + theta h) from the last step's stages (T::dense_degree > 0)
+  void interpolate(double theta, double h, const double* y0, double* out) const {
+    std::array<double, T::stages> w{};
+    for (int s = 0; s < T::stages; ++s) {
+      double p = 0;
+      for (int d = T::dense_degree - 1; d >= 0; --d) p = (p + T::r[s][d]) * theta;
+      w[static_cast<size_t>(s)] = p;
+    }
+    for (Eigen::Index i = 0; i < size(); ++i) {
+      double sum = 0;
+      for (int s = 0; s < T::stages; ++s) sum += w[static_cast<size_t>(s)] * k(s)[i];
+      out[i] = y0[i] + h * sum;
+    }
+  }
+
+  // first same as last: the last stage is f at the step's end, the next step's first (the two trade places,
+  // so that the step's own first stage can be put back for its interpolant)
+  void carry_last() {
+    double *first = k(0), *last = k(T::stages - 1);
+    for (Eigen::Index i = 0; i < size(); ++i) std::swap(first[i], last[i]);
+  }
+
+ private:
+  Eigen::Index size() const { return N > 0 ? N : n_; }
+
+  // which of the tableau's coefficient rows a sum takes: row I of a, b or e
+  enum class Row { a, b, e };
+  template <Row R, int I>
+  static constexpr double coefficient(int j) {
+    if constexpr (R == Row::a) return T::a[I][j];
+    else if constexpr (R == Row::b) return T::b[j];
+    else return T::e[j];
+  }
+
+  // sum_j coefficient_j k_j[i] over the first Count stages, the zero coefficients left out at compile time
+  template <Row R, int I = 0, int Count = T::stages>
+  double weighted(Eigen::Index i) const {
+    double sum = 0;
+    [&]<int... J>(std::integer_sequence<int, J...>) {
+      const auto term = [&]<int Jc>() {
+        if constexpr (coefficient<R, I>(Jc) != 0) sum += coefficient<R, I>(Jc) * k(Jc)[i];
+      };
+      (term.template operator()<J>(), ...);
+    }(std::make_integer_sequence<int, Count>{});
+    return sum;
+  }
+
+  template <int I>
+  void stage(double t, double h, const double* y0) {
+    double* tmp = tmp_.data();
+    for (Eigen::Index i = 0; i < size(); ++i) tmp[i] = y0[i] + h * weighted<Row::a, I, I>(i);
+    system_.rhs(t + T::c[I] * h, stage_, stage_out(I));
+  }
+
+  // stage j's values: one block of the stages' buffer (with N known, at a fixed offset from one pointer)
+  double* k(int j) { return k_.data() + j * size(); }
+  const double* k(int j) const { return k_.data() + j * size(); }
+  Eigen::Map<Eigen::VectorXd> stage_out(int j) { return {k(j), size()}; }
+
+  const CountedSystem& system_;
+  Eigen::Index n_;
+  Eigen::VectorXd k_;  // the stages, one after another
+  Eigen::VectorXd tmp_;
+  const Eigen::Ref<const Eigen::VectorXd> stage_{tmp_};
+};
+
+// the pair at a fixed step (for the order tests and fixed-step sweeps): no error estimate used
+template <class T>
+struct FixedPair {
+  template <int N>
+  class Stepper final : public FixedStepper {
+   public:
+    explicit Stepper(const CountedSystem& s) : stages_(s) {}
+    bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
+      stages_.compute(t, h, y.data(), false);
+      norm_ = std::isfinite(stages_.finish(h, y.data(), y_next.data(), 0, 1)) ? y_next.lpNorm<Eigen::Infinity>() : std::numeric_limits<double>::infinity();
+      return true;
+    }
+
+   private:
+    Stages<T, N> stages_;
+  };
+};
+
+// the pair with its error estimate, a PI controller (Gustafsson's: h_new = h 0.9 err^(-0.7/k) err_prev^(0.4/k),
+// k the estimate's order plus one, the factor kept in [0.2, 10]) and dense output where the tableau has it
+template <class T>
+struct AdaptivePair {
+  template <int N>
+  class Stepper final : public AdaptiveStepper {
+   public:
+    Stepper(const CountedSystem& s, const StepControl& control, std::string name)
+        : stages_(s), rtol_(control.rtol), atol_(control.atol), y1_(s.size()), name_(std::move(name)) {}
+
+    bool step(double& t, double t_limit, double& h, Eigen::VectorXd& y, long& rejected, std::string& failure) override {
+      constexpr double k = T::estimate_order + 1, alpha = 0.7 / k, beta = 0.4 / k;
+      for (;;) {
+        const bool clamped = t + h >= t_limit;
+        const double dt = clamped ? t_limit - t : h;
+        stages_.compute(t, dt, y.data(), T::fsal && have_first_);
+        have_first_ = false;
+        const double err = stages_.finish(dt, y.data(), y1_.data(), rtol_, atol_);
+        if (err <= 1) {
+          last_t_ = t;
+          last_h_ = dt;
+          t = clamped ? t_limit : t + dt;
+          y.swap(y1_);  // y1_ keeps the step's start, for dense output
+          if constexpr (T::fsal) {
+            stages_.carry_last();
+            have_first_ = true;
+            carried_ = true;
+          }
+          // err^(-alpha) err_prev^beta as one exponential, the previous logarithm kept (two pow() calls
+          // were 6% of a Verner step on the pendulum)
+          const double log_err = std::log(std::max(err, 1e-10));
+          const double factor = std::clamp(0.9 * std::exp(beta * log_err_prev_ - alpha * log_err), 0.2, 10.0);
+          log_err_prev_ = std::max(log_err, std::log(1e-4));
+          const double next = dt * factor;
+          h = clamped ? std::max(h, next) : next;
+          return true;
+        }
+        ++rejected;
+        // a non-finite estimate (f blew up inside the step) cuts the step fivefold
+        h = dt * (std::isfinite(err) ? std::max(0.2, 0.9 * std::pow(err, -1 / k)) : 0.2);
+        if (!(h > 1e-14 * std::max(1.0, std::abs(t)))) {
+          failure = std::isfinite(err) ? fmt::format("{}: step size underflow (h = {:.3g}) at t = {:.9g}", name_, h, t) : std::string();
+          return false;
+        }
+      }
+    }
+
+    bool dense() const override { return T::dense_degree > 0; }
+    void interpolate(double t, Eigen::VectorXd& out) override {
+      out.resize(y1_.size());
+      if (carried_) uncarry();
+      stages_.interpolate((t - last_t_) / last_h_, last_h_, y1_.data(), out.data());
+    }
+
+    bool restep(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_out) override {
+      // within the last accepted step from its start: the interpolant, where the pair has one
+      if constexpr (T::dense_degree > 0) {
+        if (t == last_t_ && h <= last_h_ && y == y1_) {
+          y_out.resize(y.size());
+          if (carried_) uncarry();
+          stages_.interpolate(h / last_h_, last_h_, y1_.data(), y_out.data());
+          return true;
+        }
+      }
+      have_first_ = carried_ = false;
+      y_out.resize(y.size());
+      stages_.compute(t, h, y.data(), false);
+      return std::isfinite(stages_.finish(h, y.data(), y_out.data(), rtol_, atol_));
+    }
+
+    void reset() override {
+      have_first_ = carried_ = false;
+      log_err_prev_ = 0;
+    }
+
+   private:
+    // the last step's first stage back in place for its interpolant (carry_last moved it); the next step
+    // then computes its first stage afresh
+    void uncarry() {
+      stages_.carry_last();
+      carried_ = have_first_ = false;
+    }
+
+    Stages<T, N> stages_;
+    double rtol_, atol_;
+    Eigen::VectorXd y1_;
+    std::string name_;
+    bool have_first_ = false;  // k_0 holds f at the current (t, y) (first same as last)
+    bool carried_ = false;     // the last step's stages were rotated for that
+    double log_err_prev_ = 0, last_t_ = 0, last_h_ = 0;  // log_err_prev_: the last accepted error's log
+  };
+};
+
+template <class T>
+MakeIntegrator pair_integrator() {
+  return [](const Method& method, const StepControl& control) -> std::unique_ptr<Integrator> {
+    if (control.dt)
+      return std::make_unique<FixedStepIntegrator>(method, control, [](const CountedSystem& s) {
+        return make_sized<FixedPair<T>::template Stepper>(s.size(), s);
+      });
+    return std::make_unique<AdaptiveStepIntegrator>(method, control, [name = std::string(method.name)](const CountedSystem& s, const StepControl& c) {
+      return make_sized<AdaptivePair<T>::template Stepper, AdaptiveStepper>(s.size(), s, c, name);
+    });
+  };
+}
+
+}  // namespace
+
+void register_embedded_pair_methods(MethodTable& table) {
+  table.add({.name = "tsitouras54",
+             .family = "embedded-pairs",
+             .source = "hand-written",
+             .description = "Tsitouras 5(4), 7 stages FSAL, PI control, 4th-order dense output",
+             .order = {5, 5, "5"},
+             .stepping = Stepping::fixed_or_adaptive,
+             .make = pair_integrator<tableau::Tsitouras54>()});
+  table.add({.name = "verner98",
+             .family = "embedded-pairs",
+             .source = "hand-written",
+             .description = "Verner's most efficient 9(8), 16 stages, PI control",
+             .order = {9, 9, "9"},
+             .stepping = Stepping::fixed_or_adaptive,
+             .make = pair_integrator<tableau::Verner98>()});
+}
+
+}  // namespace stepwise
