@@ -232,6 +232,20 @@ def cloth_implicit_damping(directory, _, styles):
            "Implicit Euler's numerical damping of one spring", grid="both")
 
 
+def cloth_realtime(directory, _, styles):
+    rows = read(directory, "cloth_realtime")
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for method, points in by_method(rows).items():
+        good = sorted((r for r in points if r["status"] == "ok" and r["position_error"] > 0), key=lambda r: r["cpu_per_simulated_second"])
+        if good:
+            ax.loglog([r["cpu_per_simulated_second"] for r in good], [r["position_error"] for r in good], linewidth=1, markersize=4,
+                      label=method, **styles(method))
+    ax.axvline(1.0, color="black", linestyle=":", label="real time (one core)")
+    ax.axhline(rows[0]["half_pixel_m"], color="grey", linestyle="--", label="half a pixel (720-pixel frame)")
+    single(fig, ax, directory, "cloth_realtime", "CPU seconds per simulated second", "largest node position error (m)",
+           "The 32 x 32 flag over 2 s: accuracy against cost", grid="both")
+
+
 REGIONS = {
     "euler": lambda z: 1 + z,
     "rk4": lambda z: 1 + z + z ** 2 / 2 + z ** 3 / 6 + z ** 4 / 24,
@@ -374,7 +388,7 @@ def main():
         DPI = int(sys.argv[sys.argv.index("--dpi") + 1])
     styles = Styles(directory)
     drawers = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, wave_adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
-                                        cloth_implicit_damping, stability_regions, rigid_body_invariants, event_times, contacts)}
+                                        cloth_implicit_damping, cloth_realtime, stability_regions, rigid_body_invariants, event_times, contacts)}
     for figure in read(directory, "figures"):
         kind = figure["kind"]
         if kind not in drawers:

@@ -17,25 +17,28 @@ void Progress::begin_study(std::string_view name) {
   std::lock_guard lock(mutex_);
   study_ = name;
   total_ = done_ = last_line_ = 0;
+  total_weight_ = done_weight_ = 0;
   if (!terminal_) fmt::print(stderr, "stepwise: study {} ...\n", study_);
 }
 
-void Progress::begin_sweep(size_t points) {
+void Progress::begin_sweep(size_t points, double weight) {
   std::lock_guard lock(mutex_);
   total_ += points;
+  total_weight_ += weight;
   if (done_ == 0) sweep_start_ = std::chrono::steady_clock::now();
 }
 
-void Progress::point_done(const std::string& label) {
+void Progress::point_done(const std::string& label, double weight) {
   std::lock_guard lock(mutex_);
   ++done_;
+  done_weight_ += weight;
   draw(label);
 }
 
 void Progress::draw(const std::string& label) {
   if (total_ == 0) return;
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - sweep_start_).count();
-  const double left = elapsed / static_cast<double>(done_) * static_cast<double>(total_ - done_);
+  const double left = done_weight_ > 0 ? elapsed / done_weight_ * std::max(0.0, total_weight_ - done_weight_) : 0.0;
   if (terminal_) {
     constexpr int width = 24;
     const int filled = static_cast<int>(width * done_ / total_);
@@ -55,18 +58,27 @@ void Progress::end_study(double seconds) {
   else fmt::print(stderr, "stepwise: study {} done in {:.1f} s\n", study_, seconds);
 }
 
-void StudyContext::run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point) const {
-  if (progress) progress->begin_sweep(labels.size());
+void StudyContext::run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point,
+                              const std::vector<double>& costs) const {
+  const auto cost = [&](size_t i) { return costs.empty() ? 1.0 : costs[i]; };
+  // the order the points are taken in: the costliest first
+  std::vector<size_t> order(labels.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  if (!costs.empty()) std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return costs[a] > costs[b]; });
+  double total = 0;
+  for (size_t i = 0; i < labels.size(); ++i) total += cost(i);
+  if (progress) progress->begin_sweep(labels.size(), total);
   std::atomic<size_t> next{0};
   std::vector<std::exception_ptr> errors(labels.size());
   auto worker = [&] {
-    for (size_t i = next++; i < labels.size(); i = next++) {
+    for (size_t k = next++; k < labels.size(); k = next++) {
+      const size_t i = order[k];
       try {
         point(i);
       } catch (...) {
         errors[i] = std::current_exception();
       }
-      if (progress) progress->point_done(labels[i]);
+      if (progress) progress->point_done(labels[i], cost(i));
     }
   };
   const size_t n = std::min(labels.size(), static_cast<size_t>(std::max(threads, 1)));

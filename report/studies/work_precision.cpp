@@ -55,6 +55,24 @@ const WorkPoint* cheapest_reaching(const std::vector<const WorkPoint*>& front, d
   return nullptr;
 }
 
+// a point's expected CPU time in nanoseconds, for the sweep's order and its time-left estimate (within a
+// factor of a few per point, which the sums over a sweep average out): steps (t_end / dt, or for an
+// order-p method at rtol about 10 rtol^(-1/(p+1)) per time scale) times a step's cost (a fixed part, and
+// ~10 ns per entry and stage, the stages ~ the order; five times that for an implicit method's Newton
+// iterations; ~10 us more for a GPU pass's round trip through OpenGL), the runs repeated when short
+double expected_cost(const WorkPoint& p, int repeats) {
+  const auto model = make_model(p.scene->model, p.scene->params);
+  const double n = model->size(), order = std::max(1, p.method->order.max);
+  const double steps = p.control.dt ? p.scene->t_end / *p.control.dt
+                                    : 10 * p.scene->t_end / p.scene->time_scale * std::pow(p.control.rtol, -1 / (order + 1));
+  const bool implicit = p.method->dense != DenseMatrices::none || p.method->needs.type == needs_mass_spring.type ||
+                        p.method->needs.type == needs_imex_split.type;
+  const bool gpu = p.method->source == "OpenGL shader";
+  const double per_step = 200 + 10 * n * std::min(order, 8.0) * (implicit ? 5 : 1) + (gpu ? 1e4 : 0);
+  const double once = steps * per_step;
+  return once < long_run_seconds * 1e9 ? once * (1 + repeats) : once;
+}
+
 StudyOutput work_precision(const StudyContext& ctx) {
   const int repeats = ctx.quick ? 1 : 3;
   const int halvings = ctx.quick ? 4 : 7;
@@ -99,7 +117,11 @@ StudyOutput work_precision(const StudyContext& ctx) {
           plan.push_back(point);
         }
     }
-  for (const auto& p : plan) labels.push_back(fmt::format("{} {} {}", p.scene->label, p.method->name, p.setting()));
+  std::vector<double> costs;
+  for (const auto& p : plan) {
+    labels.push_back(fmt::format("{} {} {}", p.scene->label, p.method->name, p.setting()));
+    costs.push_back(expected_cost(p, repeats));
+  }
   const auto runs = ctx.sweep<WorkPoint>(labels, [&](size_t i) {
     WorkPoint p = plan[i];
     const auto model = make_model(p.scene->model, p.scene->params);
@@ -111,7 +133,7 @@ StudyOutput work_precision(const StudyContext& ctx) {
     p.steps = m.result.stats.steps;
     p.status = m.result.status;
     return p;
-  });
+  }, costs);
 
   Table points{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}};
   Table fronts{{"scene", "cost", "method", "setting", "error", "rhs_evals", "cpu_seconds"}, {}};
