@@ -16,9 +16,10 @@ class Progress {
  public:
   Progress();
   void begin_study(std::string_view name);
-  // a sweep of points whose expected costs add up to `weight` (the point count where they are not known)
-  void begin_sweep(size_t points, double weight);
-  void point_done(const std::string& label, double weight);  // thread-safe
+  // a sweep of points with their expected costs (CPU nanoseconds where given, else 1 each) and groups (points
+  // of one group, one method on one scene, cost alike relative to their expectation), run on `threads` threads
+  void begin_sweep(const std::vector<double>& costs, const std::vector<std::string>& groups, int threads, bool in_nanoseconds);
+  void point_done(size_t point, const std::string& label, double seconds);  // thread-safe
   void end_study(double seconds);
 
  private:
@@ -26,9 +27,19 @@ class Progress {
   bool terminal_;
   std::mutex mutex_;
   std::string study_;
-  size_t total_ = 0, done_ = 0, last_line_ = 0;  // last_line_: points done at the last plain line
-  double total_weight_ = 0, done_weight_ = 0;     // the points' expected costs: the time left is the elapsed
-                                                  // time scaled by the cost left over the cost done
+  // the time left: the expected cost left in each group, times the seconds its done points took per unit of
+  // expected cost (the whole sweep's where the group has none done yet), over the threads
+  double seconds_left() const;
+  size_t total_ = 0, done_ = 0, sweep_offset_ = 0;  // sweep_offset_: the running sweep's first point in costs_
+  int threads_ = 1;
+  bool costs_given_ = false;  // the running sweep's costs are expected nanoseconds
+  std::vector<double> costs_;
+  std::vector<size_t> group_of_;  // each point's group
+  struct Group {
+    double expected_left = 0, expected_done = 0, seconds_done = 0;
+  };
+  std::vector<Group> groups_;
+  double total_weight_ = 0, done_weight_ = 0, last_line_weight_ = 0;  // last_line_weight_: cost done at the last plain line
   std::chrono::steady_clock::time_point sweep_start_;
 };
 
@@ -40,17 +51,21 @@ struct StudyContext {
 
   // task(i) for each i < labels.size(), on up to `threads` threads; results in index order, whatever the
   // thread count (a point never reads another's result). An exception from any point is rethrown here.
-  // `costs`, where given, are the points' expected costs (any unit): the costliest run first (so that no
+  // `costs`, where given, are the points' expected CPU times in nanoseconds: the costliest run first (so that no
   // thread is left with one long point at the end) and the time left is estimated from them
   template <class R>
-  std::vector<R> sweep(const std::vector<std::string>& labels, const std::function<R(size_t)>& task, const std::vector<double>& costs = {}) const {
+  // `groups` name which points cost alike relative to their expected costs (the time-left estimate learns
+  // each group's ratio from its points done)
+  std::vector<R> sweep(const std::vector<std::string>& labels, const std::function<R(size_t)>& task, const std::vector<double>& costs = {},
+                       const std::vector<std::string>& groups = {}) const {
     std::vector<R> results(labels.size());
-    run_points(labels, [&](size_t i) { results[i] = task(i); }, costs);
+    run_points(labels, [&](size_t i) { results[i] = task(i); }, costs, groups);
     return results;
   }
 
  private:
-  void run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point, const std::vector<double>& costs) const;
+  void run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point, const std::vector<double>& costs,
+                  const std::vector<std::string>& groups) const;
 };
 
 }  // namespace stepwise

@@ -118,9 +118,11 @@ StudyOutput work_precision(const StudyContext& ctx) {
         }
     }
   std::vector<double> costs;
+  std::vector<std::string> groups;  // one method on one scene
   for (const auto& p : plan) {
     labels.push_back(fmt::format("{} {} {}", p.scene->label, p.method->name, p.setting()));
     costs.push_back(expected_cost(p, repeats));
+    groups.push_back(fmt::format("{} {}", p.scene->label, p.method->name));
   }
   const auto runs = ctx.sweep<WorkPoint>(labels, [&](size_t i) {
     WorkPoint p = plan[i];
@@ -133,7 +135,7 @@ StudyOutput work_precision(const StudyContext& ctx) {
     p.steps = m.result.stats.steps;
     p.status = m.result.status;
     return p;
-  }, costs);
+  }, costs, groups);
 
   Table points{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}};
   Table fronts{{"scene", "cost", "method", "setting", "error", "rhs_evals", "cpu_seconds"}, {}};
