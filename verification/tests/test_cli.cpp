@@ -166,6 +166,11 @@ TEST_F(Cli, BadInputExitsTwoWithOneLineNamingTheKeyAndWritesNothing) {
       {fmt::format("run scenes/particle-system.toml --set count=1e12 --out '{}'", out.string()), "--set count"},
       {fmt::format("run scenes/particle-system.toml --set count=-5 --out '{}'", out.string()), "--set count"},
       {fmt::format("run scenes/particle-system.toml --method implicit-euler --out '{}'", out.string()), "--method: implicit-euler keeps dense"},
+      // ARKODE: an unknown table, an IMEX method on a model without a split, a DIRK method's dense matrices
+      {fmt::format("run scenes/pendulum.toml --method arkode-erk-nosuch --out '{}'", out.string()), "--method: unknown method 'arkode-erk-nosuch'"},
+      {fmt::format("run scenes/pendulum.toml --method arkode-imex-ark548 --out '{}'", out.string()), "--method: arkode-imex-ark548 needs a model that declares a stiff/non-stiff split"},
+      {fmt::format("run scenes/particle-system.toml --set count=20000 --method arkode-dirk-kvaerno43 --rtol 1e-6 --out '{}'", out.string()),
+       "--method: arkode-dirk-kvaerno43 keeps dense"},
       {fmt::format("run scenes/water-drop.toml --set size=2 --out '{}'", out.string()), "--set size: parameter 'size' must be at least 3"},
       {fmt::format("run scenes/water-drop.toml --set c=0 --out '{}'", out.string()), "--set c"},
       {fmt::format("run scenes/water-drop.toml --set spacing=-0.1 --out '{}'", out.string()), "--set spacing"},
