@@ -169,6 +169,31 @@ TEST(Imex, AMethodNeedingASplitRefusesAModelWithout) {
   }
 }
 
+TEST(Odeint, TheFlagThroughOdeintAgreesWithTheSameMethodsElsewhere) {
+  // the same Runge-Kutta methods in two codes on the gusting flag: odeint's rk4 and stepwise's at a fixed
+  // step differ by round-off only (a few ulps a step); odeint's dopri5 and rkf78 and ARKODE's Dormand-Prince
+  // and Fehlberg 8(7) at rtol 1e-9 agree as two tolerance-controlled codes do
+  const auto model = small_flag();
+  const std::vector<double> t_out{0.25};
+  const auto run = [&](const char* method, const StepControl& control) {
+    const RunResult r = make_integrator(method, control)->integrate(*model, 0, model->initial_state(), t_out);
+    EXPECT_EQ(r.status, Status::ok) << method << ": " << r.message;
+    return r;
+  };
+  const RunResult ours = run("rk4", StepControl::fixed(1e-3)), theirs = run("odeint-rk4", StepControl::fixed(1e-3));
+  const double size = ours.y_stop.lpNorm<Eigen::Infinity>();
+  EXPECT_LE((ours.y_stop - theirs.y_stop).lpNorm<Eigen::Infinity>(),
+            tolerance::roundoff_per_step * 2.220446049250313e-16 * size * static_cast<double>(ours.stats.steps));
+  const double rtol = 1e-9;
+  const auto control = StepControl::adaptive(rtol, 1e-3 * rtol);
+  for (const auto& [a, b] : {std::pair{"odeint-dopri5", "arkode-erk-dormand-prince54"}, {"odeint-rkf78", "arkode-erk-fehlberg87"}}) {
+    const RunResult x = run(a, control), y = run(b, control);
+    const double difference = (x.y_stop - y.y_stop).lpNorm<Eigen::Infinity>();
+    std::cout << a << " against " << b << " at rtol 1e-9: " << difference << '\n';
+    EXPECT_LE(difference, tolerance::adaptive_agreement_factor * rtol * size) << a << " against " << b;
+  }
+}
+
 TEST(Arkode, AFailureNamesTheCallAndItsCode) {
   const auto model = make_model("pendulum", {{"theta0", 1.0}});
   StepControl control = StepControl::adaptive(1e-10, 1e-12);
