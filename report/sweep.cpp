@@ -28,7 +28,7 @@ void Progress::begin_study(std::string_view name) {
 void Progress::begin_sweep(const std::vector<double>& costs, const std::vector<std::string>& groups, int threads, bool in_nanoseconds) {
   std::lock_guard lock(mutex_);
   costs_given_ = in_nanoseconds;
-  if (done_ == 0) sweep_start_ = std::chrono::steady_clock::now();
+  if (done_ == 0) sweep_start_ = last_line_time_ = std::chrono::steady_clock::now();
   threads_ = std::max(1, threads);
   sweep_offset_ = costs_.size();
   // a study may run several sweeps, one after another: each sweep's groups are its own
@@ -78,10 +78,12 @@ void Progress::draw(const std::string& label) {
     std::string shown = label.size() > 40 ? label.substr(0, 39) + "~" : label;
     fmt::print(stderr, "\r\033[K{} [{}{}] {}/{} {} ~{:.0f} s left", study_, std::string(filled, '#'), std::string(width - filled, '.'),
                done_, total_, shown, left);
-  } else if (done_ == total_ || (done_weight_ - last_line_weight_) * 10 >= total_weight_) {
+  } else if (const auto now = std::chrono::steady_clock::now();
+             done_ == total_ || (done_weight_ - last_line_weight_) * 10 >= total_weight_ || now - last_line_time_ >= std::chrono::seconds(30)) {
     // a line each tenth of the sweep's expected cost (the costliest points come first, so a tenth of the
-    // count could be most of the time): a log keeps the progress without a line per point
+    // count could be most of the time), and at least every 30 s: a log keeps the progress without a line per point
     last_line_weight_ = done_weight_;
+    last_line_time_ = now;
     fmt::print(stderr, "stepwise:   {}/{} points, last {}, ~{:.0f} s left\n", done_, total_, label, left);
   }
 }
