@@ -28,7 +28,7 @@ void Progress::begin_study(std::string_view name) {
 void Progress::begin_sweep(const std::vector<double>& costs, const std::vector<std::string>& groups, int threads, bool in_nanoseconds) {
   std::lock_guard lock(mutex_);
   costs_given_ = in_nanoseconds;
-  if (done_ == 0) sweep_start_ = last_line_time_ = std::chrono::steady_clock::now();
+  if (done_ == 0) last_line_time_ = std::chrono::steady_clock::now();
   threads_ = std::max(1, threads);
   sweep_offset_ = costs_.size();
   // a study may run several sweeps, one after another: each sweep's groups are its own

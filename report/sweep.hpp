@@ -40,7 +40,7 @@ class Progress {
   };
   std::vector<Group> groups_;
   double total_weight_ = 0, done_weight_ = 0, last_line_weight_ = 0;  // last_line_weight_: cost done at the last plain line
-  std::chrono::steady_clock::time_point sweep_start_, last_line_time_;
+  std::chrono::steady_clock::time_point last_line_time_;
 };
 
 // what a study runs with: the sweep size and the pool its points share

@@ -44,20 +44,35 @@ int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
   return finite_or_retry(c, out);
 }
 
-int explicit_part(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
+namespace {
+
+// one part of the split, counted as one call of f
+template <ImexSplit::Part ImexSplit::*part>
+int split_part(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
   auto& c = *static_cast<Callbacks*>(user_data);
   auto out = view_mut(ydot);
   ++c.system->stats().rhs_evals;
-  c.split->explicit_part(t, view(y), out);
+  (c.split->*part)(t, view(y), out);
   return finite_or_retry(c, out);
 }
 
+}  // namespace
+
+int explicit_part(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
+  return split_part<&ImexSplit::explicit_part>(t, y, ydot, user_data);
+}
+
 int implicit_part(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
-  auto& c = *static_cast<Callbacks*>(user_data);
-  auto out = view_mut(ydot);
-  ++c.system->stats().rhs_evals;
-  c.split->implicit_part(t, view(y), out);
-  return finite_or_retry(c, out);
+  return split_part<&ImexSplit::implicit_part>(t, y, ydot, user_data);
+}
+
+int serial_state(const Eigen::VectorXd& y0, ContextPtr& context, VectorPtr& y) {
+  SUNContext raw = nullptr;
+  if (const int code = SUNContext_Create(nullptr, &raw); code != 0) return code;
+  context.reset(raw);
+  y.reset(N_VNew_Serial(static_cast<sunindextype>(y0.size()), context.get()));
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y.get()), y0.size()) = y0;
+  return 0;
 }
 
 int dense_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user_data, N_Vector, N_Vector, N_Vector) {

@@ -45,6 +45,8 @@ struct Callbacks {
 int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data);
 int explicit_part(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data);
 int implicit_part(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data);
+// a SUNDIALS context and a serial vector holding y0: SUNContext_Create's return code (0: made)
+int serial_state(const Eigen::VectorXd& y0, ContextPtr& context, VectorPtr& y);
 // df/dy (df_I/dy for an IMEX run) into a dense or a sparse SUNMatrix; one Jacobian evaluation each
 int dense_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user_data, N_Vector, N_Vector, N_Vector);
 int sparse_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user_data, N_Vector, N_Vector, N_Vector);

@@ -60,9 +60,8 @@ const WorkPoint* cheapest_reaching(const std::vector<const WorkPoint*>& front, d
 // order-p method at rtol about 10 rtol^(-1/(p+1)) per time scale) times a step's cost (a fixed part, and
 // ~10 ns per entry and stage, the stages ~ the order; five times that for an implicit method's Newton
 // iterations; ~10 us more for a GPU pass's round trip through OpenGL), the runs repeated when short
-double expected_cost(const WorkPoint& p, int repeats) {
-  const auto model = make_model(p.scene->model, p.scene->params);
-  const double n = model->size(), order = std::max(1, p.method->order.max);
+double expected_cost(const WorkPoint& p, double n, int repeats) {
+  const double order = std::max(1, p.method->order.max);
   const double steps = p.control.dt ? p.scene->t_end / *p.control.dt
                                     : 10 * p.scene->t_end / p.scene->time_scale * std::pow(p.control.rtol, -1 / (order + 1));
   const bool implicit = p.method->dense != DenseMatrices::none || p.method->needs.type == needs_mass_spring.type ||
@@ -117,11 +116,13 @@ StudyOutput work_precision(const StudyContext& ctx) {
           plan.push_back(point);
         }
     }
+  std::map<const StudyScene*, double> sizes;  // each scene's state size, for the cost model
+  for (const auto& scene : scenes) sizes[&scene] = make_model(scene.model, scene.params)->size();
   std::vector<double> costs;
   std::vector<std::string> groups;  // one method on one scene
   for (const auto& p : plan) {
     labels.push_back(fmt::format("{} {} {}", p.scene->label, p.method->name, p.setting()));
-    costs.push_back(expected_cost(p, repeats));
+    costs.push_back(expected_cost(p, sizes.at(p.scene), repeats));
     groups.push_back(fmt::format("{} {}", p.scene->label, p.method->name));
   }
   const auto runs = ctx.sweep<WorkPoint>(labels, [&](size_t i) {

@@ -90,11 +90,9 @@ class ArkodeIntegrator final : public Integrator {
       return result;
     };
 
-    SUNContext raw_context = nullptr;
-    if (const int code = SUNContext_Create(nullptr, &raw_context); code != 0) return setup_failed("SUNContext_Create", code);
-    ContextPtr context(raw_context);
-    VectorPtr y(N_VNew_Serial(n, context.get()));
-    Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y.get()), n) = y0;
+    ContextPtr context;
+    VectorPtr y;
+    if (const int code = serial_state(y0, context, y)) return setup_failed("SUNContext_Create", code);
     const double max_step = max_adaptive_step(control_, system);
     const auto events = system.events();
     std::vector<int> directions;

@@ -69,11 +69,9 @@ class CvodeIntegrator final : public Integrator {
       return result;
     };
 
-    SUNContext raw_context = nullptr;
-    if (const int code = SUNContext_Create(nullptr, &raw_context); code != 0) return setup_failed("SUNContext_Create", code);
-    ContextPtr context(raw_context);
-    VectorPtr y(N_VNew_Serial(n, context.get()));
-    Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y.get()), n) = y0;
+    ContextPtr context;
+    VectorPtr y;
+    if (const int code = serial_state(y0, context, y)) return setup_failed("SUNContext_Create", code);
     CvodePtr mem(CVodeCreate(bdf_ ? CV_BDF : CV_ADAMS, context.get()));
     if (!mem) return setup_failed("CVodeCreate", CV_MEM_NULL);
 

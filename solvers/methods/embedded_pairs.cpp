@@ -29,16 +29,20 @@ class Stages {
   }
 
   // y1 = y0 + h sum b_i k_i, and the error estimate's max over entries of |h sum e_i k_i| / (atol + rtol max(|y0|, |y1|))
-  STEPWISE_SCALAR_STORES double finish(double h, const double* y0, double* y1, double rtol, double atol) const {
-    double worst = 0, nonfinite = 0;
+  // (+inf where y1 is not finite); at a fixed step, where no estimate is wanted, |y1|inf instead, measured on
+  // the way for the loop's divergence test
+  template <bool estimate = true>
+  STEPWISE_SCALAR_STORES double finish(double h, const double* y0, double* y1, double rtol = 0, double atol = 1) const {
+    double worst = 0;
+    RunningNorm norm;
     for (Eigen::Index i = 0; i < size(); ++i) {
       const double v = y0[i] + h * weighted<Row::b>(i);
       y1[i] = v;
-      const double scale = atol + rtol * std::max(std::abs(y0[i]), std::abs(v));
-      worst = std::max(worst, std::abs(h * weighted<Row::e>(i)) / scale);
-      nonfinite += v - v;
+      if constexpr (estimate) worst = std::max(worst, std::abs(h * weighted<Row::e>(i)) / (atol + rtol * std::max(std::abs(y0[i]), std::abs(v))));
+      norm.add(v);
     }
-    return nonfinite == 0 ? worst : std::numeric_limits<double>::infinity();
+    if constexpr (!estimate) return norm.value();
+    return std::isfinite(norm.value()) ? worst : std::numeric_limits<double>::infinity();
   }
 
   // y(t0 + theta h) from the last step's stages (T::dense_degree > 0)
@@ -116,7 +120,7 @@ struct FixedPair {
     explicit Stepper(const CountedSystem& s) : stages_(s) {}
     bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
       stages_.compute(t, h, y.data(), false);
-      norm_ = std::isfinite(stages_.finish(h, y.data(), y_next.data(), 0, 1)) ? y_next.lpNorm<Eigen::Infinity>() : std::numeric_limits<double>::infinity();
+      norm_ = stages_.template finish<false>(h, y.data(), y_next.data());
       return true;
     }
 
