@@ -1,6 +1,8 @@
 // The stepwise command line: methods, scenes, run, study, report (DESIGN.md's contract).
 #include "render_command.hpp"
 #include "run_command.hpp"
+#include "run/interrupt.hpp"
+#include "run/message.hpp"
 #include "run/scene.hpp"
 
 #include "models/model.hpp"
@@ -11,6 +13,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 
@@ -32,6 +36,8 @@ int list_methods(bool json) {
 
 int list_scenes() {
   const auto dir = stepwise::scenes_directory();
+  if (!std::filesystem::is_directory(dir))
+    throw stepwise::InputError(fmt::format("{}: the scenes directory{} is not a directory", dir, std::getenv("STEPWISE_SCENES") ? " ($STEPWISE_SCENES)" : ""));
   std::vector<std::filesystem::path> files;
   for (const auto& entry : std::filesystem::directory_iterator(dir))
     if (entry.path().extension() == ".toml") files.push_back(entry.path());
@@ -48,9 +54,7 @@ int list_scenes() {
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"stepwise: the numerics behind physically based animation"};
   app.require_subcommand(1);
 
@@ -72,6 +76,7 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--output-dt", run.output_dt, "trajectory sampling interval (s), default t_end/1000");
   run_cmd->add_option("--event-location", run.event_location,
                       "linear (the seeds' segment method, default) or restep (re-step to the root of g)");
+  run_cmd->add_option("--max-steps", run.max_steps, fmt::format("steps (and output rows) the run may take (default {:.0e})", stepwise::default_max_steps));
   run_cmd->add_option("--out", run.out, "output directory")->required();
 
   std::string study_name, study_out;
@@ -98,11 +103,22 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--method", render.run.method, "method name (see `stepwise methods`)");
   render_cmd->add_option("--dt", render.run.dt, "fixed step (s)");
   render_cmd->add_option("--t-end", render.run.t_end, "end time (s): the last frame's");
+  render_cmd->add_option("--max-steps", render.run.max_steps, fmt::format("steps the run may take (default {:.0e})", stepwise::default_max_steps));
   render_cmd->add_option("--frames", render.frames, "frames from t = 0 to t_end (default 60)");
   render_cmd->add_option("--size", render.size, "WIDTHxHEIGHT in pixels (default 1280x720)");
   render_cmd->add_option("--backend", render.backend, "osmesa (default) or egl (Mesa surfaceless)");
   render_cmd->add_option("--out", render.out, "output directory")->required();
 
+  // a first word that names no subcommand is said so (CLI11 would say a subcommand is required)
+  if (argc > 1 && argv[1][0] != '-') {
+    const auto subcommands = app.get_subcommands([](const CLI::App*) { return true; });
+    if (std::none_of(subcommands.begin(), subcommands.end(), [&](const CLI::App* c) { return c->get_name() == argv[1]; })) {
+      std::string names;
+      for (const auto* c : subcommands) names += (names.empty() ? "" : ", ") + c->get_name();
+      stepwise::print_error("", fmt::format("unknown subcommand '{}' (one of {})", argv[1], names));
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -110,20 +126,42 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForAllHelp& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "stepwise: " << e.what() << '\n';
+    stepwise::print_error("", e.what());
     return 2;
   }
 
-  try {
-    if (*methods) return list_methods(json);
-    if (*scenes) return list_scenes();
-    if (*run_cmd) return stepwise::run_command(run);
-    if (*render_cmd) return stepwise::render_command(render);
-    if (*study) return stepwise::study_command(study_name, study_quick, study_threads, study_out);
-    if (*report) return stepwise::report_command(report_quick, report_threads, report_out, stepwise::scenes_directory());
-  } catch (const stepwise::InputError& e) {
-    std::cerr << "stepwise: " << e.what() << '\n';
-    return 2;
-  }
+  if (*methods) return list_methods(json);
+  if (*scenes) return list_scenes();
+  if (*run_cmd) return stepwise::run_command(run);
+  if (*render_cmd) return stepwise::render_command(render);
+  if (*study) return stepwise::study_command(study_name, study_quick, study_threads, study_out);
+  if (*report) return stepwise::report_command(report_quick, report_threads, report_out, stepwise::scenes_directory());
   return 2;
+}
+
+}  // namespace
+
+// the one guard: nothing escapes main. Bad input (the commands' own InputError, a file system refusing a path
+// the user gave) is exit 2, anything else a failed run, exit 1; either way one line, and the outputs as the
+// commands leave them (temporaries removed as their guards unwind; the previous outputs untouched)
+int main(int argc, char** argv) {
+  stepwise::interrupt::install();
+  try {
+    return run(argc, argv);
+  } catch (const stepwise::InputError& e) {
+    stepwise::print_error("", e.what());
+    return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    stepwise::print_error("", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    stepwise::print_error("", "out of memory: the run needed more than this machine could give");
+    return 1;
+  } catch (const std::exception& e) {
+    stepwise::print_error("", fmt::format("failed: {}", e.what()));
+    return 1;
+  } catch (...) {
+    stepwise::print_error("", "failed: an unknown exception");
+    return 1;
+  }
 }

@@ -1,6 +1,8 @@
 #include "render_command.hpp"
 
-#include <iostream>
+#include "run/message.hpp"
+
+#include <fmt/format.h>
 
 namespace stepwise {
 
@@ -8,12 +10,12 @@ int render_command(const RenderOptions& options) {
   try {
     const RenderedRun drawn = render_scene(options);
     if (drawn.status != Status::ok) {
-      std::cerr << "stepwise render: " << drawn.message << " (frames drawn up to t = " << drawn.t_last << " s)\n";
+      print_error("render", fmt::format("{} (frames drawn up to t = {} s)", drawn.message, drawn.t_last));
       return 1;
     }
     return 0;
   } catch (const InputError& e) {
-    std::cerr << "stepwise render: " << e.what() << '\n';
+    print_error("render", e.what());
     return 2;
   }
 }

@@ -110,7 +110,8 @@ class HeightField final : public Model {
       amplitude_ = p.at("amplitude");
     }
     if (scene == Scene::pool) {
-      const int count = particle_count(p, "drops", 0, "drops");
+      // each drop is an event of its own, kept and watched for the whole run
+      const int count = particle_count(p, "drops", sizeof(Drop) + sizeof(Event) + 64, "drops");
       std::mt19937_64 rng(particle_seed(p));
       const double span = count * p.at("interval");
       for (int k = 0; k < count; ++k) {

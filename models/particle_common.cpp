@@ -20,6 +20,17 @@ int particle_count(const Params& params, std::string_view key, double bytes_each
   return static_cast<int>(count);
 }
 
+std::pair<int, int> particle_grid(const Params& params, std::string_view rows, std::string_view columns, double bytes_each,
+                                  std::string_view what) {
+  const int r = particle_count(params, rows, bytes_each, what), c = particle_count(params, columns, bytes_each, what);
+  const double count = static_cast<double>(r) * c, memory = physical_memory_bytes();
+  if (count * bytes_each > memory / 2 || count > 2e9)
+    throw BadParameter(std::string(rows), fmt::format("parameters '{}' x '{}' = {:.0f} {} would not fit in memory: about {:.3g} GiB, "
+                                                      "and this machine has {:.3g} GiB",
+                                                      rows, columns, count, what, count * bytes_each / 0x1p30, memory / 0x1p30));
+  return {r, c};
+}
+
 unsigned long particle_seed(const Params& params) {
   const double seed = params.at("seed");
   if (seed != std::floor(seed) || seed < 0 || seed > 9.007199254740992e15)

@@ -16,6 +16,11 @@ inline double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng()
 // naming the key if not
 int particle_count(const Params& params, std::string_view key, double bytes_each, std::string_view what = "particles");
 
+// two parameters that multiply (a wall's rows and columns): each a whole number, their product's memory at
+// bytes_each checked as particle_count checks one; BadParameter naming both when the product does not fit
+std::pair<int, int> particle_grid(const Params& params, std::string_view rows, std::string_view columns, double bytes_each,
+                                  std::string_view what);
+
 // the parameter "seed" as a whole number below 2^53
 unsigned long particle_seed(const Params& params);
 

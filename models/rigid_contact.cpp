@@ -204,7 +204,7 @@ std::unique_ptr<Model> make_dropped_body(const Params& p, const TriangleMesh* me
 
 std::unique_ptr<Model> make_box_stack(const Params& p) {
   // a box's state and shape are a few kilobytes; the count check also refuses what is not whole
-  const int rows = particle_count(p, "rows", 4096, "boxes"), columns = particle_count(p, "columns", 4096, "boxes");
+  const auto [rows, columns] = particle_grid(p, "rows", "columns", 4096, "boxes");
   const Eigen::Vector3d h(p.at("hx"), p.at("hy"), p.at("hz"));
   const TriangleMesh box = box_mesh(h);
   const Eigen::Quaterniond level = Eigen::Quaterniond::Identity();

@@ -3,12 +3,18 @@
 #include "run/atomic_write.hpp"
 #include "pictures.hpp"
 #include "run/process.hpp"
+#include "run/message.hpp"
+#include "run/interrupt.hpp"
 #include "studies.hpp"
 #include "solvers/method_table.hpp"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <fstream>
+#include <memory>
 #include <filesystem>
 #include <iostream>
 #include <thread>
@@ -23,6 +29,8 @@ std::string study_names() {
 }
 
 namespace {
+
+constexpr const char* report_marker = ".stepwise-report.json";
 
 const Study* find_study(const std::string& name) {
   for (const auto& s : studies())
@@ -65,6 +73,55 @@ void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, bool 
     throw std::runtime_error(fmt::format("{} {} failed (exit status {}): the figures were not drawn", python, script, *status));
 }
 
+// the report's marker: the names it wrote at the top of its directory, so that a later report replaces only those
+void write_report_marker(const fs::path& dir) {
+  nlohmann::json files = nlohmann::json::array();
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  for (const auto& name : names) files.push_back(name);
+  write_file_atomic(dir / report_marker, nlohmann::json{{"written_by", "stepwise report"}, {"files", files}}.dump(2) + "\n");
+}
+
+// the names an earlier report's marker lists (plain names only: nothing outside its directory)
+std::vector<std::string> marked_files(const fs::path& dir) {
+  std::vector<std::string> names;
+  std::ifstream in(dir / report_marker);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_object() && j.contains("files") && j["files"].is_array())
+    for (const auto& f : j["files"])
+      if (f.is_string()) {
+        const std::string name = f.get<std::string>();
+        if (!name.empty() && name != "." && name != ".." && name.find('/') == std::string::npos) names.push_back(name);
+      }
+  return names;
+}
+
+// the new report in place of the old: the old directory moved aside and the new one renamed in (one rename,
+// so a reader sees one report or the other), then what the old marker does not list (a user's own files)
+// moved back in beside the new report, and only what it lists removed
+void swap_report(const fs::path& staging, const fs::path& target) {
+  const fs::path old = target.parent_path() / fmt::format(".{}{}old", target.filename().string(), interrupt::temporary_tag());
+  const bool had_old = fs::exists(target);
+  const std::vector<std::string> listed = had_old ? marked_files(target) : std::vector<std::string>{};
+  const interrupt::Uninterrupted swapping;
+  if (had_old) fs::rename(target, old);
+  fs::rename(staging, target);
+  if (!had_old) return;
+  std::error_code ec;
+  std::vector<std::string> kept;
+  for (const auto& entry : fs::directory_iterator(old)) {
+    const std::string name = entry.path().filename().string();
+    if (name == report_marker || std::find(listed.begin(), listed.end(), name) != listed.end()) continue;
+    if (fs::exists(target / name)) kept.push_back(name);
+    else fs::rename(entry.path(), target / name, ec);
+  }
+  for (const auto& name : listed) fs::remove_all(old / name, ec);
+  fs::remove(old / report_marker, ec);
+  if (!fs::remove(old, ec) || ec)
+    print_error("report", fmt::format("{}: kept, with {} file(s) of yours the new report has a file of the same name for", old.string(), kept.size()));
+}
+
 // the threads asked for, or one per core
 int threads_or_default(int requested) { return requested > 0 ? requested : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
@@ -73,13 +130,14 @@ int threads_or_default(int requested) { return requested > 0 ? requested : stati
 int study_command(const std::string& name, bool quick, int threads, const std::string& out) {
   const Study* study = find_study(name);
   if (!study) {
-    std::cerr << fmt::format("stepwise study: unknown study '{}' (one of {})\n", name, study_names());
+    print_error("study", fmt::format("unknown study '{}' (one of {})", name, study_names()));
     return 2;
   }
   try {
     ensure_writable_directory(out);
+    interrupt::remove_stale(out);
   } catch (const std::runtime_error& e) {
-    std::cerr << "stepwise study: " << e.what() << '\n';
+    print_error("study", e.what());
     return 2;
   }
   try {
@@ -89,7 +147,7 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
     write_file_atomic(fs::path(out) / (name + ".md"), run_study(*study, ctx, out, figures));
     draw_figures(figures, out, false);
   } catch (const std::runtime_error& e) {
-    std::cerr << "stepwise study: " << e.what() << '\n';
+    print_error("study", e.what());
     return 1;
   }
   return 0;
@@ -99,20 +157,24 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
   const fs::path target = fs::absolute(out).lexically_normal();
   const fs::path parent = target.parent_path();
   fs::path staging;
+  std::unique_ptr<interrupt::Temporary> staging_guard;
   try {
-    // the old report is replaced whole: never a directory that is something else (a source folder, a home)
-    if (fs::exists(target) && !(fs::is_directory(target) && (fs::is_empty(target) || fs::exists(target / "report.md"))))
-      throw std::runtime_error(fmt::format("{}: exists and is not a stepwise report (no report.md); refusing to replace it",
-                                           target.string()));
+    // the old report is replaced, never a directory that is something else (a source folder, a home)
+    if (fs::exists(target) && !(fs::is_directory(target) && (fs::is_empty(target) || fs::exists(target / report_marker))))
+      throw std::runtime_error(fmt::format("{}: exists and is not a stepwise report (no {} listing what a report wrote); refusing to "
+                                           "write into it: give a new or empty directory", target.string(), report_marker));
     ensure_writable_directory(parent);
-    // the report is built beside its target and swapped in whole at the end
-    std::string pattern = (parent / fmt::format(".{}.tmp-XXXXXX", target.filename().string())).string();
+    // the staging directories of reports killed outright (ours by name, their process gone)
+    interrupt::remove_stale(parent);
+    // the report is built beside its target and swapped in at the end
+    std::string pattern = (parent / fmt::format(".{}{}XXXXXX", target.filename().string(), interrupt::temporary_tag())).string();
     if (!mkdtemp(pattern.data())) throw std::runtime_error(fmt::format("{}: cannot create a staging directory", parent.string()));
     staging = pattern;
+    staging_guard = std::make_unique<interrupt::Temporary>(staging);
     // mkdtemp's 0700 widened to what a directory made the usual way gets
     fs::permissions(staging, static_cast<fs::perms>(default_mode(true)));
   } catch (const std::runtime_error& e) {
-    std::cerr << "stepwise report: --out: " << e.what() << '\n';
+    print_error("report", fmt::format("--out: {}", e.what()));
     return 2;
   }
 
@@ -130,19 +192,14 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
     md += fmt::format("---\nStudies run in {:.1f} s of wall time on {} threads.\n", seconds, ctx.threads);
     write_file_atomic(staging / "report.md", md);
     draw_figures(figures, staging, true);
+    write_report_marker(staging);
   } catch (const std::exception& e) {
     fs::remove_all(staging, ec);
-    std::cerr << "stepwise report: " << e.what() << '\n';
+    print_error("report", e.what());
     return 1;
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  // swap: the old report is moved aside, the new one renamed into place, then the old one removed
-  const fs::path old = parent / fmt::format(".{}.old", target.filename().string());
-  fs::remove_all(old, ec);
-  if (fs::exists(target)) fs::rename(target, old);
-  fs::rename(staging, target);
-  fs::remove_all(old, ec);
+  swap_report(staging, target);
   std::cerr << fmt::format("stepwise: report written to {} in {:.1f} s\n", target.string(), seconds);
   return 0;
 }

@@ -1,5 +1,7 @@
 #include "atomic_write.hpp"
 
+#include "interrupt.hpp"
+
 #include <fmt/format.h>
 
 #include <cerrno>
@@ -24,27 +26,76 @@ unsigned default_mode(bool directory) {
   return (directory ? 0777u : 0666u) & ~umask;
 }
 
-void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
-  std::string tmp = (path.parent_path() / fmt::format(".{}.XXXXXX", path.filename().string())).string();
-  const int fd = mkstemp(tmp.data());
-  if (fd < 0) throw std::runtime_error(fmt::format("{}: cannot create a temporary file: {}", path.string(), std::strerror(errno)));
-  bool ok = ::fchmod(fd, static_cast<mode_t>(default_mode(false))) == 0;
+AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
+  temporary_ = (target_.parent_path() / fmt::format(".{}{}XXXXXX", target_.filename().string(), interrupt::temporary_tag())).string();
+  fd_ = mkstemp(temporary_.data());
+  if (fd_ < 0) throw std::runtime_error(fmt::format("{}: cannot create a temporary file: {}", target_.string(), std::strerror(errno)));
+  guard_ = std::make_unique<interrupt::Temporary>(temporary_);
+  if (::fchmod(fd_, static_cast<mode_t>(default_mode(false))) != 0)
+    throw std::runtime_error(fmt::format("{}: cannot write: {}", target_.string(), std::strerror(errno)));
+}
+
+AtomicFile::~AtomicFile() {
+  if (fd_ >= 0) {
+    ::close(fd_);
+    std::remove(temporary_.c_str());
+  }
+}
+
+void AtomicFile::flush() {
+  write_through(buffer_);
+  buffer_.clear();
+}
+
+void AtomicFile::write_through(std::string_view content) {
   const char* p = content.data();
   size_t left = content.size();
-  while (left > 0 && ok) {
-    const ssize_t n = ::write(fd, p, left);
+  while (left > 0) {
+    const ssize_t n = ::write(fd_, p, left);
     if (n < 0 && errno == EINTR) continue;
-    ok = n > 0;
-    if (ok) { p += n; left -= static_cast<size_t>(n); }
+    if (n <= 0) throw std::runtime_error(fmt::format("{}: cannot write: {}", target_.string(), std::strerror(n < 0 ? errno : ENOSPC)));
+    p += n;
+    left -= static_cast<size_t>(n);
   }
-  ok = ok && ::fsync(fd) == 0;
-  const int saved = errno;
-  ok = (::close(fd) == 0) && ok;
-  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = ok ? errno : saved;
-    std::remove(tmp.c_str());
-    throw std::runtime_error(fmt::format("{}: cannot write: {}", path.string(), std::strerror(err)));
+}
+
+void AtomicFile::write(std::string_view content) {
+  if (content.size() >= (1u << 20)) {
+    flush();
+    write_through(content);
+    return;
   }
+  buffer_ += content;
+  if (buffer_.size() >= (1u << 20)) flush();
+}
+
+void AtomicFile::commit() {
+  flush();
+  if (::fsync(fd_) != 0) throw std::runtime_error(fmt::format("{}: cannot write: {}", target_.string(), std::strerror(errno)));
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0 || std::rename(temporary_.c_str(), target_.c_str()) != 0) {
+    const int err = errno;
+    std::remove(temporary_.c_str());
+    throw std::runtime_error(fmt::format("{}: cannot write: {}", target_.string(), std::strerror(err)));
+  }
+}
+
+void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+  AtomicFile file(path);
+  file.write(content);
+  file.commit();
+}
+
+void check_writable_directory(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  fs::path at = fs::absolute(dir).lexically_normal();
+  std::error_code ec;
+  while (!fs::exists(at, ec) && at.has_parent_path() && at != at.parent_path()) at = at.parent_path();
+  if (!fs::is_directory(at, ec))
+    throw std::runtime_error(fmt::format("{}: cannot create output directory: {} is not a directory", dir.string(), at.string()));
+  if (::access(at.c_str(), W_OK | X_OK) != 0)
+    throw std::runtime_error(fmt::format("{}: {} is not writable: {}", dir.string(), at.string(), std::strerror(errno)));
 }
 
 void ensure_writable_directory(const std::filesystem::path& dir) {

@@ -20,20 +20,18 @@ std::string cell_text(const Cell& cell) {
 }
 }  // namespace
 
-std::string to_csv(const Table& table) {
+std::string csv_row(const std::vector<Cell>& row) {
   std::string out;
-  for (size_t i = 0; i < table.columns.size(); ++i) {
+  for (size_t i = 0; i < row.size(); ++i) {
     if (i) out += ',';
-    out += cell_text(table.columns[i]);
+    out += cell_text(row[i]);
   }
-  out += '\n';
-  for (const auto& row : table.rows) {
-    for (size_t i = 0; i < row.size(); ++i) {
-      if (i) out += ',';
-      out += cell_text(row[i]);
-    }
-    out += '\n';
-  }
+  return out + '\n';
+}
+
+std::string to_csv(const Table& table) {
+  std::string out = csv_row(std::vector<Cell>(table.columns.begin(), table.columns.end()));
+  for (const auto& row : table.rows) out += csv_row(row);
   return out;
 }
 

@@ -14,6 +14,9 @@ struct Table {
   std::vector<std::vector<Cell>> rows;
 };
 
+// one row of CSV, its newline included (a row streamed to its file as it is computed)
+std::string csv_row(const std::vector<Cell>& row);
+
 // CSV text: a header row, doubles with 17 significant digits so they read back exactly
 std::string to_csv(const Table& table);
 

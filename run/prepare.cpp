@@ -9,6 +9,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <sys/statvfs.h>
 
 namespace stepwise {
 namespace {
@@ -28,9 +29,11 @@ void require_positive(std::optional<double> value, const std::string& where) {
 
 }  // namespace
 
-PreparedRun prepare_run(const RunOptions& o) {
+PreparedRun prepare_run(const RunOptions& o) { return prepare_run(o, load_scene(o.scene_file)); }
+
+PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   PreparedRun p;
-  p.scene = load_scene(o.scene_file);
+  p.scene = std::move(scene);
   Scene& s = p.scene;
 
   // parameters: the scene's, then --set overrides
@@ -76,6 +79,9 @@ PreparedRun prepare_run(const RunOptions& o) {
   require_positive(s.atol, s.where("run.atol"));
   require_positive(s.t_end, s.where("run.t_end"));
   require_positive(s.output_dt, s.where("run.output_dt"));
+  // a relative tolerance of 1 or more asks for no digit at all
+  for (const auto& [value, where] : {std::pair{o.rtol, std::string("--rtol")}, std::pair{s.rtol, s.where("run.rtol")}})
+    if (value && *value >= 1) throw InputError(fmt::format("{}: a relative tolerance must be below 1, got {}", where, *value));
 
   const bool adaptive = o.rtol || o.atol || (!o.dt && (!s.dt || !method->fixed_step()) && method->adaptive());
   if (adaptive) {
@@ -129,10 +135,38 @@ PreparedRun prepare_run(const RunOptions& o) {
                  limit, mode.omega, mode.damping);
   }
   p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
+  // budgets, from the inputs alone, before anything runs: the steps and the output rows
+  const double max_steps = o.max_steps.value_or(default_max_steps);
+  if (o.max_steps && !(max_steps >= 1 && max_steps <= 1e15 && std::floor(max_steps) == max_steps))
+    throw InputError(fmt::format("--max-steps {}: must be a whole number in 1..1e15", max_steps));
+  p.control.max_steps = static_cast<long>(max_steps);
+  const auto where_t_end = [&] { return o.t_end ? std::string("--t-end") : s.t_end ? s.where("run.t_end") : std::string("t_end"); };
+  if (p.control.dt) {
+    if (const double steps = std::ceil(p.t_end / *p.control.dt * (1 - 1e-12)); steps > max_steps)
+      throw InputError(fmt::format("{} and {}: t_end / dt = {:.3g} steps, more than the {:.3g} allowed: take a larger step or a shorter run, "
+                                   "or raise the limit with --max-steps", o.dt ? "--dt" : s.where("run.dt"), where_t_end(), steps, max_steps));
+  }
+  const double rows = std::floor(p.t_end / p.output_dt);
+  if (rows > max_steps)
+    throw InputError(fmt::format("{}: t_end / output_dt = {:.3g} output rows, more than the {:.3g} allowed: sample less often, or raise "
+                                 "the limit with --max-steps", o.output_dt ? "--output-dt" : s.output_dt ? s.where("run.output_dt") : "output_dt",
+                                 rows, max_steps));
   // a fixed-step run samples on its own step grid: an output time between grid points would shorten a step
   // and change the very run being sampled (a dt beyond the stability limit would be hidden by short steps)
   if (p.control.dt) p.output_dt = std::max(1.0, std::round(p.output_dt / *p.control.dt)) * *p.control.dt;
+  // a row: t, the samples and the energy, 17 significant digits and a sign, exponent and comma each
+  const double columns = 2.0 + static_cast<double>(p.model->summary_names().empty() ? p.model->state_names().size() : p.model->summary_names().size());
+  p.output_bytes = (std::floor(p.t_end / p.output_dt) + 2) * columns * 25;
   return p;
+}
+
+void check_output_fits(const std::string& out, const PreparedRun& p) {
+  struct statvfs fs {};
+  if (::statvfs(out.c_str(), &fs) != 0) return;  // unknown: the write itself will say
+  const double free_bytes = static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize);
+  if (p.output_bytes > free_bytes)
+    throw InputError(fmt::format("--output-dt: the trajectory would take about {:.3g} GB, more than the {:.3g} GB free in {}: sample "
+                                 "less often", p.output_bytes / 1e9, free_bytes / 1e9, out));
 }
 
 }  // namespace stepwise

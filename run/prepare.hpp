@@ -19,8 +19,13 @@ struct RunOptions {
   std::optional<std::string> method;
   std::optional<std::string> event_location;  // linear | restep
   std::optional<double> dt, rtol, atol, t_end, output_dt;
+  std::optional<double> max_steps;  // the steps (and output rows) a run may take; default_max_steps
   std::string out;
 };
+
+// the steps (fixed, or the adaptive cap) and output rows a run may take unless --max-steps raises it: a few
+// seconds of the pendulum, minutes to hours of the grids
+constexpr double default_max_steps = 1e7;
 
 // a scene ready to run: its model, resolved parameters, method and step control
 struct PreparedRun {
@@ -31,10 +36,18 @@ struct PreparedRun {
   StepControl control;
   double t_end = 0;
   double output_dt = 0;
+  double output_bytes = 0;  // the trajectory's size, estimated from its rows and columns
 };
 
 // the options checked against the scene, its model and the method; InputError (or BadMethod) naming the
 // file, line, key or option at fault
 PreparedRun prepare_run(const RunOptions& options);
+
+// the same for a scene already loaded (options.scene_file unused)
+PreparedRun prepare_run(const RunOptions& options, Scene scene);
+
+// the trajectory's estimated size against the space free where it goes; InputError naming --output-dt and
+// both figures when it does not fit
+void check_output_fits(const std::string& out, const PreparedRun& p);
 
 }  // namespace stepwise

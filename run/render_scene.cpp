@@ -4,6 +4,8 @@
 #include "run/atomic_write.hpp"
 #include "run/measure.hpp"
 #include "run/process.hpp"
+#include "run/interrupt.hpp"
+#include "run/message.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -14,6 +16,8 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <limits>
+#include <mutex>
 
 namespace stepwise {
 namespace {
@@ -47,13 +51,34 @@ struct Samples {
   RunResult result;
 };
 
-Samples simulate(PreparedRun& p, int frames, bool trails) {
-  const size_t stride = trails ? 16 : 1;
-  double interval = (frames > 1 ? p.t_end / (frames - 1) : p.t_end) / static_cast<double>(stride);
-  // whole steps, rounded down so that the frames asked for fit before t_end
-  if (p.control.dt) interval = std::max(1.0, std::floor(interval / *p.control.dt * (1 + 1e-9))) * *p.control.dt;
-  const double frame_interval = interval * static_cast<double>(stride);
-  const int count = frames > 1 ? std::min(frames, 1 + static_cast<int>(std::floor(p.t_end / frame_interval * (1 + 1e-12)))) : 1;
+// when the samples and frames fall: every `interval` (whole steps), a frame every `stride` samples, `count` frames
+struct FramePlan {
+  double interval = 0;
+  size_t stride = 1;
+  int count = 1;
+};
+
+FramePlan plan_frames(const PreparedRun& p, int frames, bool trails) {
+  FramePlan plan;
+  plan.stride = trails ? 16 : 1;
+  plan.interval = (frames > 1 ? p.t_end / (frames - 1) : p.t_end) / static_cast<double>(plan.stride);
+  if (p.control.dt) {
+    // whole steps, rounded down so that the frames asked for fit before t_end; fewer trail samples between
+    // frames when the steps between them are fewer than the stride
+    const double dt = *p.control.dt;
+    const double steps_per_frame = std::floor((frames > 1 ? p.t_end / (frames - 1) : p.t_end) / dt * (1 + 1e-9));
+    plan.stride = static_cast<size_t>(std::clamp<double>(steps_per_frame, 1, static_cast<double>(plan.stride)));
+    plan.interval = std::max(1.0, std::floor(steps_per_frame / static_cast<double>(plan.stride))) * dt;
+  }
+  const double frame_interval = plan.interval * static_cast<double>(plan.stride);
+  plan.count = frames > 1 ? static_cast<int>(std::min<double>(frames, 1 + std::floor(p.t_end / frame_interval * (1 + 1e-12)))) : 1;
+  return plan;
+}
+
+Samples simulate(PreparedRun& p, const FramePlan& plan) {
+  const size_t stride = plan.stride;
+  const double interval = plan.interval, frame_interval = interval * static_cast<double>(stride);
+  const int count = plan.count;
   Samples s;
   s.stride = stride;
   s.t.push_back(0);
@@ -69,12 +94,41 @@ Samples simulate(PreparedRun& p, int frames, bool trails) {
   return s;
 }
 
+// ffmpeg refuses a picture whose (width + 128)(height + 128) reaches INT_MAX / 8 (libavutil's
+// av_image_check_size): 16384 x 16384 does, 16384 x 8192 does not (both tried here)
+bool ffmpeg_takes(int width, int height) {
+  return (static_cast<double>(width) + 128) * (static_cast<double>(height) + 128) < std::numeric_limits<int>::max() / 8;
+}
+
+// a frame of one colour shows nothing of the scene
+bool one_colour(const render::Image& image) {
+  const auto* p = reinterpret_cast<const std::uint32_t*>(image.rgba.data());
+  const size_t n = image.rgba.size() / 4;
+  return std::all_of(p, p + n, [first = p[0]](std::uint32_t v) { return v == first; });
+}
+
+// a camera that sees something: finite, the eye apart from the target, up not along the line of sight
+void check_camera(const render::Camera& camera, const Scene& scene) {
+  // the GL pipeline works in single precision: a point a billion metres out has no digits left for a picture
+  constexpr double farthest = 1e9;
+  for (const auto& [point, key] : {std::pair{camera.eye, "render.eye"}, std::pair{camera.target, "render.target"}})
+    if (!(point.cwiseAbs().maxCoeff() <= farthest))
+      throw InputError(fmt::format("{}: ({}, {}, {}) m is beyond {:.0e} m of the origin, where single-precision drawing has nothing to show",
+                                   scene.where(key), point.x(), point.y(), point.z(), farthest));
+  const Eigen::Vector3d sight = camera.target - camera.eye;
+  const bool finite = camera.eye.allFinite() && camera.target.allFinite() && sight.allFinite() && camera.up.allFinite();
+  if (!finite || !(sight.norm() > 0))
+    throw InputError(fmt::format("{}: the camera's eye and target give no line of sight ({})", scene.where("render.eye"),
+                                 finite ? "the same point" : "not finite"));
+  if (!(sight.normalized().cross(camera.up.normalized()).norm() > 1e-6))
+    throw InputError(fmt::format("{}: up is along the line of sight from the eye to the target: the picture has no up", scene.where("render.up")));
+}
+
 // ffmpeg's MP4 (H.264, even sides) and GIF (480 px wide, its own palette) from the PNGs, each written to a
 // temporary name and renamed
 void encode_movies(const fs::path& dir, int fps) {
   if (!on_path("ffmpeg")) {
-    std::cerr << "stepwise render: ffmpeg is not installed: wrote the PNG frames only (apt-get install ffmpeg for animation.mp4 "
-                 "and animation.gif)\n";
+    print_error("render", "ffmpeg is not installed: wrote the PNG frames only (apt-get install ffmpeg for animation.mp4 and animation.gif)");
     return;
   }
   const std::string input = (dir / "frame_%04d.png").string(), rate = std::to_string(fps);
@@ -111,7 +165,7 @@ RenderedRun render_scene(const RenderOptions& options) {
     p = prepare_run(options.run);
     if (!p.model->shapes(p.model->initial_state()))
       throw InputError(fmt::format("{}: model {} has nothing to draw", p.scene.where("model"), p.scene.model));
-    ensure_writable_directory(options.out);
+    check_writable_directory(options.out);
   } catch (const InputError&) {
     throw;
   } catch (const BadMethod& e) {
@@ -129,10 +183,23 @@ RenderedRun render_scene(const RenderOptions& options) {
 
   const auto [width, height] = size;
   const fs::path out(options.out);
-  const auto start = std::chrono::steady_clock::now();
   const Shapes first = *p.model->shapes(p.model->initial_state());
   const bool has_trails = std::any_of(first.balls.begin(), first.balls.end(), [](const Shapes::Ball& b) { return b.trail; });
-  Samples samples = simulate(p, options.frames, has_trails);
+  // what the frames asked for cost, before anything runs: every sample is kept for the frames and trails
+  const FramePlan plan = plan_frames(p, options.frames, has_trails);
+  if (plan.count < options.frames)
+    throw InputError(fmt::format("--frames {}: the run's step dt = {} s leaves room for only {} distinct frames up to t_end = {} s: ask for "
+                                 "at most {}, or take a smaller --dt", options.frames, *p.control.dt, plan.count, p.t_end, plan.count));
+  const double sample_bytes = (static_cast<double>(plan.count - 1) * static_cast<double>(plan.stride) + 1) * static_cast<double>(p.model->size()) * 8;
+  if (sample_bytes > 0.5 * physical_memory_bytes())
+    throw InputError(fmt::format("--frames {}: the frames' states would take {:.3g} GiB, more than half this machine's memory", options.frames,
+                                 sample_bytes / 0x1p30));
+  const bool movies = ffmpeg_takes(width, height);
+  if (!movies && options.frames > 1)
+    print_error("render", fmt::format("--size {}: larger than ffmpeg takes ((width + 128)(height + 128) must stay below 2^28): writing the "
+                                      "PNG frames only", options.size));
+  const auto start = std::chrono::steady_clock::now();
+  Samples samples = simulate(p, plan);
   const double simulate_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // the frames: every stride-th sample, and the last one if the run stopped between frames (diverged)
@@ -143,13 +210,51 @@ RenderedRun render_scene(const RenderOptions& options) {
   for (const size_t k : frame_samples) shapes.push_back(*p.model->shapes(samples.y[k]));
   // one view for the whole animation: the union of the frames' bounds
   const render::View view = render::make_view(shapes, p.scene.look, width, height);
+  check_camera(view.camera, p.scene);
+  try {
+    ensure_writable_directory(out);
+    interrupt::remove_stale(out);
+  } catch (const std::runtime_error& e) {
+    throw InputError(fmt::format("--out: {}", e.what()));
+  }
 
+  // render.json: the run's and the picture's facts, then the frames as their PNGs are written; an interruption
+  // writes it with the frames finished so far
   nlohmann::json summary;
+  std::mutex summary_mutex;
+  summary["scene"] = p.scene.name;
+  summary["model"] = std::string(p.model->name());
+  summary["method"] = p.method;
+  summary["status"] = std::string(to_string(samples.result.status));
+  summary["message"] = samples.result.message.empty() ? nlohmann::json(nullptr) : nlohmann::json(samples.result.message);
+  summary["width"] = width;
+  summary["height"] = height;
+  summary["backend"] = options.backend;
+  summary["renderer"] = context->description();
+  summary["simulate_seconds"] = simulate_seconds;
+  summary["camera"] = {{"eye", {view.camera.eye.x(), view.camera.eye.y(), view.camera.eye.z()}},
+                       {"target", {view.camera.target.x(), view.camera.target.y(), view.camera.target.z()}},
+                       {"up", {view.camera.up.x(), view.camera.up.y(), view.camera.up.z()}},
+                       {"fov_deg", view.camera.fov_deg}};
+  summary["frames"] = nlohmann::json::array();
+  std::vector<nlohmann::json> drawn;  // each frame's entry, joining summary["frames"] once its PNG is written
+  const interrupt::OnInterrupt last_words([&] {
+    std::lock_guard lock(summary_mutex);
+    nlohmann::json partial = summary;
+    partial["status"] = "interrupted";
+    write_file_atomic(out / "render.json", partial.dump(2) + "\n");
+  });
+  size_t empty_frames = 0;
+
   try {
     render::Renderer renderer(*context, width, height);
-    render::EncodeQueue queue([&](size_t k, const std::string& png) { write_file_atomic(out / fmt::format("frame_{:04d}.png", k), png); });
+    render::EncodeQueue queue([&](size_t k, const std::string& png) {
+      write_file_atomic(out / fmt::format("frame_{:04d}.png", k), png);
+      std::lock_guard lock(summary_mutex);
+      summary["frames"].push_back(drawn[k]);
+    });
     std::vector<std::vector<Eigen::Vector3d>> trails;
-    summary["frames"] = nlohmann::json::array();
+    drawn.reserve(shapes.size());  // entries stay where they are while the writer reads them
     double draw_seconds = 0;
     size_t sampled = 0;  // samples already on the trails
     for (size_t f = 0; f < shapes.size(); ++f) {
@@ -166,36 +271,29 @@ RenderedRun render_scene(const RenderOptions& options) {
       render::Image image = renderer.draw(shapes[f], trails, view);
       draw_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
       const double t = samples.t[frame_samples[f]];
-      summary["frames"].push_back({{"file", fmt::format("frame_{:04d}.png", f)}, {"t", t}, {"hash", render::pixel_hash(image)}});
+      if (one_colour(image)) ++empty_frames;
+      drawn.push_back({{"file", fmt::format("frame_{:04d}.png", f)}, {"t", t}, {"hash", render::pixel_hash(image)}});
       queue.push(std::move(image));
     }
     queue.finish();
-    summary["draw_seconds"] = draw_seconds;
     const double span = samples.t[frame_samples.back()];
     const int fps = span > 0 ? std::clamp(static_cast<int>(std::lround((shapes.size() - 1) / span)), 1, 60) : 1;
-    if (shapes.size() > 1) encode_movies(out, fps);
+    if (shapes.size() > 1 && movies) encode_movies(out, fps);
+    std::lock_guard lock(summary_mutex);
+    summary["draw_seconds"] = draw_seconds;
     summary["fps"] = fps;
+    summary["empty_frames"] = empty_frames;
   } catch (const gl::GlError& e) {
     throw InputError(e.what());
   } catch (const std::runtime_error& e) {
     throw InputError(e.what());
   }
 
-  summary["scene"] = p.scene.name;
-  summary["model"] = std::string(p.model->name());
-  summary["method"] = p.method;
-  summary["status"] = std::string(to_string(samples.result.status));
-  summary["message"] = samples.result.message.empty() ? nlohmann::json(nullptr) : nlohmann::json(samples.result.message);
-  summary["width"] = width;
-  summary["height"] = height;
-  summary["backend"] = options.backend;
-  summary["renderer"] = context->description();
-  summary["simulate_seconds"] = simulate_seconds;
-  summary["camera"] = {{"eye", {view.camera.eye.x(), view.camera.eye.y(), view.camera.eye.z()}},
-                       {"target", {view.camera.target.x(), view.camera.target.y(), view.camera.target.z()}},
-                       {"up", {view.camera.up.x(), view.camera.up.y(), view.camera.up.z()}},
-                       {"fov_deg", view.camera.fov_deg}};
+  if (empty_frames > 0)
+    print_error("render", fmt::format("{} of {} frames show one colour only: the scene is outside the camera's view (see render.json's camera)",
+                                      empty_frames, shapes.size()));
   try {
+    std::lock_guard lock(summary_mutex);
     write_file_atomic(out / "render.json", summary.dump(2) + "\n");
   } catch (const std::runtime_error& e) {
     throw InputError(e.what());

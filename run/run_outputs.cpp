@@ -1,9 +1,11 @@
 #include "run_outputs.hpp"
 
-#include "run/atomic_write.hpp"
 #include "run/csv.hpp"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
+
+#include <cmath>
 
 namespace stepwise {
 namespace {
@@ -12,26 +14,6 @@ namespace {
 std::vector<std::string> sample_names(const Model& model) {
   auto names = model.summary_names();
   return names.empty() ? model.state_names() : names;
-}
-
-std::string trajectory_csv(const Model& model, const Measured& m) {
-  Table table;
-  table.columns.push_back("t");
-  for (const auto& name : sample_names(model)) table.columns.push_back(name);
-  const bool summarised = !model.summary_names().empty();
-  const bool with_energy = !summarised && model.energy(model.initial_state()).has_value();
-  if (with_energy) table.columns.push_back("energy");
-  // a recorded sample is the state itself (energy computed from it), or already the model's summary of it
-  auto add_row = [&](double t, const Eigen::VectorXd& sample) {
-    std::vector<Cell> row{t};
-    for (const double v : sample) row.emplace_back(v);
-    if (with_energy) row.emplace_back(*model.energy(sample));
-    table.rows.push_back(std::move(row));
-  };
-  add_row(0.0, model.summary(model.initial_state()));
-  for (size_t i = 0; i < m.result.trajectory.t.size(); ++i) add_row(m.result.trajectory.t[i], m.result.trajectory.y[i]);
-  if (m.result.status != Status::ok) add_row(m.result.t_stop, model.summary(m.result.y_stop));
-  return to_csv(table);
 }
 
 nlohmann::json summary_json(const PreparedRun& p, const Measured& m) {
@@ -76,9 +58,44 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m) {
 
 }  // namespace
 
-void write_run_outputs(const std::filesystem::path& out, const PreparedRun& p, const Measured& m) {
-  write_file_atomic(out / "trajectory.csv", trajectory_csv(*p.model, m));
-  write_file_atomic(out / "summary.json", summary_json(p, m).dump(2) + "\n");
+RunOutputs::RunOutputs(const std::filesystem::path& out, const PreparedRun& p) : out_(out), p_(p), trajectory_(out / "trajectory.csv") {
+  const Model& model = *p.model;
+  std::vector<Cell> header{std::string("t")};
+  for (const auto& name : sample_names(model)) header.emplace_back(name);
+  with_energy_ = model.summary_names().empty() && model.energy(model.initial_state()).has_value();
+  if (with_energy_) header.emplace_back(std::string("energy"));
+  trajectory_.write(csv_row(header));
+  sample(0.0, model.summary(model.initial_state()));
+}
+
+// a sample is the state itself (energy computed from it), or already the model's summary of it
+std::string RunOutputs::sample(double t, const Eigen::VectorXd& sample) {
+  std::vector<Cell> row{t};
+  row.reserve(static_cast<size_t>(sample.size()) + 2);
+  for (const double v : sample) row.emplace_back(v);
+  if (with_energy_) row.emplace_back(*p_.model->energy(sample));
+  trajectory_.write(csv_row(row));
+  last_t_ = t;
+  for (size_t i = 1; i < row.size(); ++i)
+    if (!std::isfinite(std::get<double>(row[i])))
+      return fmt::format("{} overflowed ({})", i == static_cast<size_t>(sample.size()) + 1 ? std::string("the energy") : "a sampled value",
+                         std::get<double>(row[i]));
+  return {};
+}
+
+void RunOutputs::finish(const Measured& m) {
+  // a run that stopped between output times ends its trajectory where it stopped
+  if (m.result.status != Status::ok && m.result.t_stop > last_t_ && m.result.y_stop.allFinite()) {
+    const Eigen::VectorXd last = p_.model->summary(m.result.y_stop);
+    std::vector<Cell> row{m.result.t_stop};
+    for (const double v : last) row.emplace_back(v);
+    if (with_energy_) row.emplace_back(*p_.model->energy(last));
+    trajectory_.write(csv_row(row));
+  }
+  std::error_code ignored;
+  std::filesystem::remove(out_ / "summary.json", ignored);  // the manifest goes first and comes back last
+  trajectory_.commit();
+  write_file_atomic(out_ / "summary.json", summary_json(p_, m).dump(2) + "\n");
 }
 
 }  // namespace stepwise

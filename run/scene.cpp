@@ -10,6 +10,11 @@
 #include <vector>
 #include <cstdlib>
 #include <filesystem>
+#include <cerrno>
+#include <fstream>
+#include <iterator>
+#include <cstring>
+#include <unistd.h>
 
 namespace stepwise {
 
@@ -19,6 +24,8 @@ std::string Scene::where(const std::string& key) const {
 }
 
 namespace {
+
+constexpr std::uintmax_t max_scene_bytes = 16u << 20;  // a large mesh fits in a few MiB of TOML
 
 int line_of(const toml::node& node) { return static_cast<int>(node.source().begin.line); }
 
@@ -158,14 +165,30 @@ std::string scenes_directory() {
 }
 
 Scene load_scene(const std::string& file) {
+  // what the path is, said as it is: missing, a directory, a device or a pipe, unreadable, or too large to be a scene
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status status = fs::status(file, ec);
+  if (!fs::exists(status)) throw InputError(fmt::format("{}: no such scene file", file));
+  if (fs::is_directory(status)) throw InputError(fmt::format("{}: is a directory, not a scene file", file));
+  if (!fs::is_regular_file(status)) throw InputError(fmt::format("{}: is not a regular file (a scene is a TOML file)", file));
+  if (::access(file.c_str(), R_OK) != 0) throw InputError(fmt::format("{}: cannot read the scene file: {}", file, std::strerror(errno)));
+  if (const auto bytes = fs::file_size(file, ec); !ec && bytes > max_scene_bytes)
+    throw InputError(fmt::format("{}: {} bytes, more than a scene file may hold ({} MiB)", file, bytes, max_scene_bytes >> 20));
+
+  std::ifstream in(file, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw InputError(fmt::format("{}: cannot read the scene file", file));
+  return load_scene_text(text, file);
+}
+
+Scene load_scene_text(std::string_view text, const std::string& file) {
   Scene scene;
   scene.file = file;
   scene.name = std::filesystem::path(file).stem().string();
-  if (!std::filesystem::is_regular_file(file)) throw InputError(fmt::format("{}: no such scene file", file));
-
   toml::table root;
   try {
-    root = toml::parse_file(file);
+    root = toml::parse(text, file);
   } catch (const toml::parse_error& e) {
     throw InputError(fmt::format("{}:{}:{}: malformed TOML: {}", file, e.source().begin.line, e.source().begin.column, e.description()));
   }

@@ -49,6 +49,9 @@ struct Scene {
 
 Scene load_scene(const std::string& file);
 
+// the same from the file's text (`file` names it in messages): what load_scene does once the file is read
+Scene load_scene_text(std::string_view text, const std::string& file);
+
 // where the scene files are: $STEPWISE_SCENES, else ./scenes, else the source tree's scenes/
 std::string scenes_directory();
 

@@ -65,13 +65,10 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
       }
     }
     for (; next < t_out.size() && t_out[next] <= t; ++next) {
-      if (t_out[next] == t) {
-        record_output(result, control_, t, y);
-      } else {
-        stepper->interpolate(t_out[next], y_out);
-        record_output(result, control_, t_out[next], y_out);
-      }
+      if (t_out[next] != t) stepper->interpolate(t_out[next], y_out);
+      if (!record_output(result, control_, t_out[next], t_out[next] == t ? y : y_out)) break;
     }
+    if (result.status != Status::ok) break;
   }
   if (result.status != Status::ok) result.y_stop = y_start;  // the last finite state: the start of the step that failed
   return result;

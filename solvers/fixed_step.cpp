@@ -72,8 +72,7 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
       y.swap(y_next);
     }
     result.y_stop = y;
-    if (result.status != Status::ok) break;
-    record_output(result, control_, t, y);
+    if (result.status != Status::ok || !record_output(result, control_, t, y)) break;
   }
   return result;
 }

@@ -1,6 +1,10 @@
 #include "integrator.hpp"
 
+#include <algorithm>
+#include <cstdlib>
 #include <ctime>
+#include <fstream>
+#include <string>
 
 #include <unistd.h>
 
@@ -16,7 +20,20 @@ std::string_view to_string(Status status) {
 }
 
 double physical_memory_bytes() {
-  return static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  static const double bytes = [] {
+    double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+    // a container's or a batch job's share (cgroup v2), where it is smaller
+    if (std::ifstream limit("/sys/fs/cgroup/memory.max"); limit) {
+      std::string text;
+      limit >> text;
+      if (!text.empty() && text != "max") memory = std::min(memory, std::strtod(text.c_str(), nullptr));
+    }
+    // what the user says the run may assume (a node shared with other jobs; the fuzzer's own limit)
+    if (const char* env = std::getenv("STEPWISE_MEMORY"))
+      if (const double said = std::strtod(env, nullptr); said > 0) memory = std::min(memory, said);
+    return memory;
+  }();
+  return bytes;
 }
 
 double thread_cpu_seconds() {

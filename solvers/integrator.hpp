@@ -32,6 +32,10 @@ struct StepControl {
   // what the trajectory keeps at each output time: the whole state when empty, or a summary of it (a
   // particle system's energy and centroid rather than every particle)
   std::function<Eigen::VectorXd(const Eigen::VectorXd& y)> observe;
+  // where the samples go when set, instead of the trajectory (a long run's rows streamed to their file, not
+  // held): called with each output time and sample; a non-empty return ends the run diverged there, for that
+  // reason (the sample's energy overflowed)
+  std::function<std::string(double t, const Eigen::VectorXd& sample)> sink;
 
   static StepControl fixed(double dt) {
     StepControl c;
@@ -87,6 +91,7 @@ struct RunResult {
 };
 
 // this machine's physical memory, the bound memory checks (a method's dense matrices, a particle count) are made against
+// (the smallest of the machine's, its cgroup's memory.max and $STEPWISE_MEMORY in bytes)
 double physical_memory_bytes();
 
 // thread CPU time in seconds: sweeps run in parallel, so process time would mix runs

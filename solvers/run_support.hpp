@@ -118,12 +118,22 @@ inline void handle_event(RunResult& result, std::span<const Event> events, size_
   if (!kind.empty()) record_event(result, t, std::move(kind), index);
 }
 
-// the state at an output time joins the trajectory (through the control's observer, if it has one)
-inline void record_output(RunResult& result, const StepControl& control, double t, const Eigen::VectorXd& y) {
-  result.trajectory.t.push_back(t);
-  result.trajectory.y.push_back(control.observe ? control.observe(y) : y);
+// the state at an output time joins the trajectory, or goes to the control's sink (through its observer, if it
+// has one); false when the sink ended the run (it is then diverged at t, for the reason the sink gave)
+[[nodiscard]] inline bool record_output(RunResult& result, const StepControl& control, double t, const Eigen::VectorXd& y) {
   result.t_stop = t;
   result.y_stop = y;
+  if (!control.sink) {
+    result.trajectory.t.push_back(t);
+    result.trajectory.y.push_back(control.observe ? control.observe(y) : y);
+    return true;
+  }
+  if (const std::string stop = control.sink(t, control.observe ? control.observe(y) : y); !stop.empty()) {
+    result.status = Status::diverged;
+    result.message = fmt::format("diverged at t = {:.9g}: {}", t, stop);
+    return false;
+  }
+  return true;
 }
 
 }  // namespace stepwise

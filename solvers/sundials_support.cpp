@@ -157,7 +157,7 @@ void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double 
       mark_diverged(result, t);
       break;
     }
-    record_output(result, control, t, ym);
+    if (!record_output(result, control, t, ym)) break;
   }
   driver.add_counters();
 }

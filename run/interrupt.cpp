@@ -1,0 +1,138 @@
+#include "interrupt.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <csignal>
+#include <cstdio>
+#include <mutex>
+#include <pthread.h>
+#include <thread>
+#include <unistd.h>
+#include <vector>
+
+namespace stepwise::interrupt {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Registry {
+  std::recursive_mutex mutex;  // recursive: last words write files, and a file registers its temporary
+  std::vector<fs::path> paths;
+  std::vector<pid_t> children;
+  std::vector<std::pair<const void*, std::function<void()>>> last_words;
+};
+
+Registry& registry() {
+  static Registry r;
+  return r;
+}
+
+const char* signal_name(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "a signal"; }
+
+// on the signal thread: children first (they write into our staging directories), then the paths, newest first;
+// a worker still writing can recreate an entry in a directory being removed, so each removal is tried again
+[[noreturn]] void clean_up_and_exit(int sig) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  for (const pid_t child : r.children) ::kill(child, SIGTERM);
+  for (const auto& [owner, words] : r.last_words) {
+    try {
+      words();
+    } catch (...) {  // what could not be written is said by its absence
+    }
+  }
+  for (auto it = r.paths.rbegin(); it != r.paths.rend(); ++it)
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      std::error_code ec;
+      fs::remove_all(*it, ec);
+      if (!ec) break;
+    }
+  std::fprintf(stderr, "stepwise: interrupted (%s): its temporary files removed, earlier outputs left as they were\n", signal_name(sig));
+  std::fflush(stderr);
+  ::_exit(128 + sig);
+}
+
+}  // namespace
+
+void install() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    sigset_t set;
+    sigemptyset(&set);
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&set, sig);
+    pthread_sigmask(SIG_BLOCK, &set, nullptr);
+    std::thread([set] {
+      int sig = 0;
+      while (sigwait(&set, &sig) != 0) {
+      }
+      clean_up_and_exit(sig);
+    }).detach();
+  });
+}
+
+Temporary::Temporary(fs::path path) : path_(std::move(path)) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  r.paths.push_back(path_);
+}
+
+Temporary::~Temporary() {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  if (const auto it = std::find(r.paths.rbegin(), r.paths.rend(), path_); it != r.paths.rend()) r.paths.erase(std::next(it).base());
+}
+
+OnInterrupt::OnInterrupt(std::function<void()> last_words) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  r.last_words.emplace_back(this, std::move(last_words));
+}
+
+OnInterrupt::~OnInterrupt() {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  std::erase_if(r.last_words, [this](const auto& entry) { return entry.first == this; });
+}
+
+Uninterrupted::Uninterrupted() { registry().mutex.lock(); }
+Uninterrupted::~Uninterrupted() { registry().mutex.unlock(); }
+
+void add_child(pid_t pid) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  r.children.push_back(pid);
+}
+
+void remove_child(pid_t pid) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  std::erase(r.children, pid);
+}
+
+std::string temporary_tag() { return fmt::format(".stepwise-{}.", ::getpid()); }
+
+int remove_stale(const fs::path& dir) {
+  constexpr std::string_view marker = ".stepwise-";
+  int removed = 0;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const auto at = name.find(marker);
+    if (name.empty() || name[0] != '.' || at == std::string::npos) continue;
+    const char* first = name.data() + at + marker.size();
+    const char* last = name.data() + name.size();
+    pid_t pid = 0;
+    const auto [end_of_pid, parsed] = std::from_chars(first, last, pid);
+    if (parsed != std::errc() || end_of_pid == last || *end_of_pid != '.' || pid <= 0 || pid == ::getpid()) continue;
+    if (::kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to signal): kept
+    std::error_code removal;
+    fs::remove_all(it->path(), removal);
+    if (!removal) ++removed;
+  }
+  return removed;
+}
+
+}  // namespace stepwise::interrupt

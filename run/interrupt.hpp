@@ -1,0 +1,61 @@
+// What an interruption (SIGINT, SIGTERM, SIGHUP) leaves: nothing of ours. The signals are taken by one thread
+// that stops the children we started, removes the temporary files and staging directories registered here, and
+// ends the process with the shell's status for the signal (128 + its number). A run killed outright (SIGKILL)
+// cannot clean up: its temporaries carry the process id in their names, and the next run in the same directory
+// removes those whose process is gone (remove_stale).
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <sys/types.h>
+
+namespace stepwise::interrupt {
+
+// take the signals; call first in main, before any other thread starts (threads inherit the blocked mask)
+void install();
+
+// a path removed (recursively) if the process is interrupted while the guard lives
+class Temporary {
+ public:
+  explicit Temporary(std::filesystem::path path);
+  ~Temporary();
+  Temporary(const Temporary&) = delete;
+  Temporary& operator=(const Temporary&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// while one lives, `last_words` runs on an interruption before the temporaries go (render writes render.json
+// for the frames it finished); it must take its own lock on what it reads
+class OnInterrupt {
+ public:
+  explicit OnInterrupt(std::function<void()> last_words);
+  ~OnInterrupt();
+  OnInterrupt(const OnInterrupt&) = delete;
+  OnInterrupt& operator=(const OnInterrupt&) = delete;
+};
+
+// while one lives, an interruption waits (a report's swap: two renames that must both happen)
+class Uninterrupted {
+ public:
+  Uninterrupted();
+  ~Uninterrupted();
+  Uninterrupted(const Uninterrupted&) = delete;
+  Uninterrupted& operator=(const Uninterrupted&) = delete;
+};
+
+// a child process stopped (SIGTERM) if we are interrupted while it runs
+void add_child(pid_t pid);
+void remove_child(pid_t pid);
+
+// the part of a temporary's name that marks it ours and names its process: ".stepwise-<pid>."
+std::string temporary_tag();
+
+// remove the entries of `dir` whose names carry a temporary tag of a process that no longer exists (a run
+// killed outright); returns how many were removed. Entries of live processes and everything else are kept
+int remove_stale(const std::filesystem::path& dir);
+
+}  // namespace stepwise::interrupt

@@ -1,0 +1,37 @@
+// libFuzzer target: a scene file's text -> its parameters -> the model -> a few steps of the scene's method,
+// the path every `stepwise run` takes (run/prepare.hpp). Bad input must come back as InputError or BadMethod
+// (the command line's exit 2); a crash, a sanitizer report, a hang or any other exception is a bug.
+//   cmake --preset fuzz && cmake --build --preset fuzz
+//   build/fuzz/verification/fuzz/fuzz_scene -max_total_time=60 verification/fuzz/corpus
+#include "run/measure.hpp"
+#include "run/prepare.hpp"
+#include "solvers/method_table.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <string_view>
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  // the memory rules judge against what the fuzzer's own RSS limit (2 GiB) lets a run have
+  setenv("STEPWISE_MEMORY", "1.5e9", 1);
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace stepwise;
+  if (size > (1u << 16)) return 0;
+  try {
+    Scene scene = load_scene_text(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.toml");
+    PreparedRun p = prepare_run(RunOptions{}, std::move(scene));
+    // a GPU method needs a GL context (its own tests draw through llvmpipe), and a large grid is slow, not wrong
+    if (find_method(p.method)->family == "gpu" || p.model->size() > 20000) return 0;
+    StepControl control = p.control;
+    control.max_steps = 200;
+    const double t_end = control.dt ? std::min(p.t_end, 20 * *control.dt) : std::min(p.t_end, 0.05);
+    run_and_measure(*p.model, p.method, control, t_end, t_end / 4);
+  } catch (const InputError&) {
+  } catch (const BadMethod&) {
+  }
+  return 0;
+}
