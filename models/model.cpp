@@ -84,7 +84,7 @@ Params resolve_params(const ModelInfo& model, const Params& values) {
   Params resolved;
   for (const auto& spec : model.params) resolved[std::string(spec.key)] = spec.default_value;
   for (const auto& [key, value] : values) {
-    const auto spec = std::find_if(model.params.begin(), model.params.end(), [&](const ParamSpec& s) { return s.key == key; });
+    const auto spec = std::find_if(model.params.begin(), model.params.end(), [&key = key](const ParamSpec& s) { return s.key == key; });
     if (spec == model.params.end()) {
       std::string known;
       for (const auto& s : model.params) known += (known.empty() ? "" : ", ") + std::string(s.key);

@@ -8,7 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <mutex>
-#include <pthread.h>
+#include <fcntl.h>
 #include <thread>
 #include <unistd.h>
 #include <vector>
@@ -55,21 +55,33 @@ const char* signal_name(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGT
   ::_exit(128 + sig);
 }
 
+// the handler only passes the signal's number down a pipe (write(2) is async-signal-safe); the thread reading
+// the other end does the work. A handler rather than a blocked mask: libraries start threads before main
+// (OpenBLAS's pool), and a signal can be delivered to any of them
+int signal_pipe[2] = {-1, -1};
+
+extern "C" void pass_signal(int sig) {
+  const unsigned char byte = static_cast<unsigned char>(sig);
+  [[maybe_unused]] const ssize_t n = ::write(signal_pipe[1], &byte, 1);
+}
+
 }  // namespace
 
 void install() {
   static std::once_flag once;
   std::call_once(once, [] {
-    sigset_t set;
-    sigemptyset(&set);
-    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&set, sig);
-    pthread_sigmask(SIG_BLOCK, &set, nullptr);
-    std::thread([set] {
-      int sig = 0;
-      while (sigwait(&set, &sig) != 0) {
+    if (::pipe2(signal_pipe, O_CLOEXEC) != 0) return;
+    std::thread([] {
+      unsigned char byte = 0;
+      while (::read(signal_pipe[0], &byte, 1) != 1) {
       }
-      clean_up_and_exit(sig);
+      clean_up_and_exit(byte);
     }).detach();
+    struct sigaction action {};
+    action.sa_handler = pass_signal;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART;
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &action, nullptr);
   });
 }
 

@@ -1,5 +1,4 @@
-// What an interruption (SIGINT, SIGTERM, SIGHUP) leaves: nothing of ours. The signals are taken by one thread
-// that stops the children we started, removes the temporary files and staging directories registered here, and
+// What an interruption (SIGINT, SIGTERM, SIGHUP) leaves: nothing of ours. The signals wake one thread that stops the children we started, removes the temporary files and staging directories registered here, and
 // ends the process with the shell's status for the signal (128 + its number). A run killed outright (SIGKILL)
 // cannot clean up: its temporaries carry the process id in their names, and the next run in the same directory
 // removes those whose process is gone (remove_stale).
@@ -12,7 +11,7 @@
 
 namespace stepwise::interrupt {
 
-// take the signals; call first in main, before any other thread starts (threads inherit the blocked mask)
+// take the signals (a handler that wakes the cleaning thread); call first in main
 void install();
 
 // a path removed (recursively) if the process is interrupted while the guard lives

@@ -64,6 +64,14 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
                                  e.what()));
   }
 
+  // a state that overflows from the start (a speed of 1e200 m/s squares to infinity) is refused, not run
+  {
+    const Eigen::VectorXd y0 = p.model->initial_state();
+    if (!y0.allFinite()) throw InputError(fmt::format("{}: the parameters give a non-finite initial state", s.where("parameters")));
+    if (const auto e0 = p.model->energy(y0); e0 && !std::isfinite(*e0))
+      throw InputError(fmt::format("{}: the parameters give an initial energy that overflows ({})", s.where("parameters"), *e0));
+  }
+
   // method and step control: the command line wins over the scene; --dt and --rtol exclude each other
   p.method = o.method.value_or(s.method.value_or("rk4"));
   const Method* method = find_method(p.method);
@@ -102,6 +110,13 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
                                  "machine's memory: use an explicit method{}",
                                  o.method ? "--method" : s.where("run.method"), p.method, p.model->size(), p.model->size(),
                                  bytes / 0x1p30, p.model->size(),
+                                 p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
+  // and the time: a dense LU of the Newton matrix takes (2/3) n^3 flops, at least once per step; past 1e12 (a
+  // minute or more on one core here) a run of any length takes hours
+  if (const double n = p.model->size(); dense_matrix_bytes(*method, *p.model) > 0 && 2.0 / 3.0 * n * n * n > 1e12)
+    throw InputError(fmt::format("{}: {} factorises a dense {} x {} Newton matrix, {:.2g} flops each time (at least once a step): "
+                                 "too slow to run; use an explicit method{}", o.method ? "--method" : s.where("run.method"), p.method,
+                                 p.model->size(), p.model->size(), 2.0 / 3.0 * n * n * n,
                                  p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
   if (!method_applies(*method, *p.model))
     throw InputError(fmt::format("{}: {} (model {})", o.method ? "--method" : s.where("run.method"), method_requirement(*method, *p.model), s.model));

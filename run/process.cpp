@@ -42,18 +42,15 @@ std::optional<int> run_process(const std::vector<std::string>& args, std::string
   for (auto& a : copy) argv.push_back(a.data());
   argv.push_back(nullptr);
   const pid_t parent = ::getpid();
-  // fork and exec rather than posix_spawn: the child must unblock the signals our signal thread takes
-  // (interrupt.hpp) and ask to die with us (PR_SET_PDEATHSIG: a parent killed outright leaves no child
-  // writing on); between fork and exec only async-signal-safe calls
+  // fork and exec rather than posix_spawn: the child asks to die with us (PR_SET_PDEATHSIG: a parent killed
+  // outright leaves no child writing on); between fork and exec only async-signal-safe calls (our signal
+  // handlers go back to the defaults at exec)
   const pid_t pid = ::fork();
   if (pid < 0) {
     if (why) *why = std::strerror(errno);
     return std::nullopt;
   }
   if (pid == 0) {
-    sigset_t none;
-    sigemptyset(&none);
-    ::sigprocmask(SIG_SETMASK, &none, nullptr);
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (::getppid() != parent) ::_exit(127);  // the parent died before the request took hold
     ::execve(program->c_str(), argv.data(), environ);

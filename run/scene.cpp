@@ -73,7 +73,8 @@ render::Look render_table(const toml::node& node, Scene& scene) {
   const auto* table = node.as_table();
   if (!table) throw InputError(fmt::format("{}:{}: render: expected a table", scene.file, line_of(node)));
   render::Look look;
-  for (auto&& [k, value] : *table) {
+  for (auto&& [k, entry] : *table) {
+    const toml::node& value = entry;  // (a lambda may not capture a structured binding before C++20's clang 16)
     const std::string name(k.str()), full = "render." + name;
     scene.lines[full] = line_of(value);
     const auto vector = [&]() {

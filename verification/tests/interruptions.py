@@ -1,0 +1,110 @@
+#!/usr/bin/env python3
+"""What an interruption leaves (issue 26): the previous outputs intact, no litter after the next run.
+
+usage: interruptions.py STEPWISE SCENES_DIR
+
+- `report --quick` killed at several points (SIGTERM, SIGINT, SIGKILL) over a previous report that holds a
+  file of the user's: the previous report and the user's file intact each time; after SIGTERM and SIGINT no
+  staging directory, after SIGKILL the next report's start removes the one left.
+- `run` killed while streaming a long trajectory: the previous trajectory.csv and summary.json intact, no
+  temporary after SIGTERM, and the one a SIGKILL left removed by the next run.
+- `render` stopped: render.json written for the frames finished."""
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+failures = []
+
+
+def expect(condition, what):
+    if not condition:
+        failures.append(what)
+        print("FAIL", what)
+
+
+def litter(d):
+    return sorted(os.path.join(r, n) for r, ds, fs in os.walk(d) for n in ds + fs if ".stepwise-" in n and n != ".stepwise-report.json")
+
+
+def start(args):
+    return subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
+def stop(p, sig, after):
+    time.sleep(after)
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=60)
+    return p.returncode, err
+
+
+def main():
+    binary, scenes = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+    d = tempfile.mkdtemp(prefix="stepwise-interrupt-")
+    try:
+        # a previous report: its files and the marker listing them, and a file of the user's beside them
+        prev = os.path.join(d, "prev")
+        os.mkdir(prev)
+        for name, text in [("report.md", "# the previous report\n"), ("a.csv", "x\n1\n")]:
+            with open(os.path.join(prev, name), "w") as f:
+                f.write(text)
+        with open(os.path.join(prev, ".stepwise-report.json"), "w") as f:
+            json.dump({"written_by": "stepwise report", "files": ["report.md", "a.csv"]}, f)
+        with open(os.path.join(prev, "mine.txt"), "w") as f:
+            f.write("the user's\n")
+        snapshot = {n: open(os.path.join(prev, n)).read() for n in os.listdir(prev)}
+
+        for sig, after in [(signal.SIGTERM, 1.0), (signal.SIGINT, 4.0), (signal.SIGKILL, 2.5)]:
+            code, err = stop(start([binary, "report", "--quick", "--out", prev]), sig, after)
+            name = signal.Signals(sig).name
+            expect(code in (128 + sig, -sig), f"report killed by {name}: exit status {code}")
+            now = {n: open(os.path.join(prev, n)).read() for n in os.listdir(prev)}
+            expect(now == snapshot, f"report killed by {name} after {after} s: the previous report changed")
+            if sig != signal.SIGKILL:
+                expect(not litter(d), f"report killed by {name}: left {litter(d)}")
+                expect("interrupted" in err, f"report killed by {name}: said {err[-200:]!r}")
+        expect(litter(d), "a report killed outright leaves its staging directory (the next run's to remove)")
+        code, _ = stop(start([binary, "report", "--quick", "--out", prev]), signal.SIGTERM, 2.0)
+        expect(not litter(d), f"the next report removed the staging a SIGKILL left: {litter(d)}")
+
+        # run: a previous run's outputs, then a long run stopped while it streams
+        out = os.path.join(d, "run")
+        subprocess.run([binary, "run", os.path.join(scenes, "pendulum.toml"), "--out", out], check=True, capture_output=True)
+        before = {n: open(os.path.join(out, n)).read() for n in ("trajectory.csv", "summary.json")}
+        long_run = [binary, "run", os.path.join(scenes, "pendulum.toml"), "--dt", "1e-6", "--output-dt", "1e-6", "--t-end", "40",
+                    "--max-steps", "1e8", "--out", out]
+        for sig in (signal.SIGTERM, signal.SIGKILL):
+            code, _ = stop(start(long_run), sig, 1.5)
+            after = {n: open(os.path.join(out, n)).read() for n in ("trajectory.csv", "summary.json")}
+            expect(after == before, f"run killed by {signal.Signals(sig).name}: the previous outputs changed")
+            if sig == signal.SIGTERM:
+                expect(not litter(out), f"run killed by SIGTERM: left {litter(out)}")
+        expect(litter(out), "a run killed outright leaves its temporary (the next run's to remove)")
+        subprocess.run([binary, "run", os.path.join(scenes, "pendulum.toml"), "--out", out], check=True, capture_output=True)
+        expect(not litter(out), f"the next run removed the temporary a SIGKILL left: {litter(out)}")
+
+        # render stopped part-way: render.json lists the frames written
+        frames = os.path.join(d, "frames")
+        code, _ = stop(start([binary, "render", os.path.join(scenes, "water-drop.toml"), "--frames", "1000", "--dt", "0.001", "--t-end", "3",
+                              "--size", "1280x720", "--out", frames]), signal.SIGTERM, 8.0)
+        summary = os.path.join(frames, "render.json")
+        expect(os.path.exists(summary), "render stopped by SIGTERM: no render.json")
+        if os.path.exists(summary):
+            j = json.load(open(summary))
+            listed = [f["file"] for f in j["frames"]]
+            expect(j["status"] == "interrupted", f"render.json says {j['status']}")
+            expect(all(os.path.exists(os.path.join(frames, f)) for f in listed), "render.json lists a frame not written")
+            print(f"render stopped after {len(listed)} frames; render.json lists them")
+        expect(not litter(frames), f"render stopped by SIGTERM: left {litter(frames)}")
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+    print("interruptions:", "ok" if not failures else f"{len(failures)} failure(s)")
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":
+    main()
