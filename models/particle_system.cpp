@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <numbers>
 
 namespace stepwise {
 namespace {
@@ -26,6 +27,7 @@ constexpr std::array params{
 
 // per particle: six state entries in up to 32 copies (CVODE Adams keeps about 25 vectors, rk4 seven)
 constexpr double bytes_per_particle = 32 * 6 * 8;
+constexpr double max_pairs = 1e8;
 
 class ParticleSystem final : public Model {
  public:
@@ -33,6 +35,16 @@ class ParticleSystem final : public Model {
       : n_(particle_count(p, "count", bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
         speed_(p.at("speed")), k_(p.at("stiffness")), gamma_(p.at("drag")), g_(p.at("g")), s_(p.at("repulsion")),
         rc_(p.at("radius")) {
+    // the pairs within the cut-off, each evaluation of f: at the start, uniform in the cube of side 2 spread,
+    // N^2 / 2 times the chance that two lie within r_c (the ball's share of the cube, at most 1); past 1e8 pairs
+    // an evaluation takes seconds and a run days (the particles also crowd together in the trap)
+    if (s_ > 0) {
+      const double n = n_, share = std::min(1.0, 4.0 / 3.0 * std::numbers::pi * rc_ * rc_ * rc_ / std::pow(2 * spread_, 3));
+      if (const double pairs = n * n / 2 * share; pairs > max_pairs)
+        throw BadParameter("radius", fmt::format("parameter 'radius' = {} m puts about {:.3g} pairs of the {} particles within reach of "
+                                                 "each other, more than {:.0e} each evaluation: a smaller radius or fewer particles",
+                                                 rc_, pairs, n_, max_pairs));
+    }
     second_order_.positions = 3 * n_;
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
     // without repulsion each coordinate's acceleration is its own: steppers may sweep in blocks

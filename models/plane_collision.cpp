@@ -1,5 +1,7 @@
 #include "plane_collision.hpp"
 
+#include "mass_properties.hpp"
+
 #include "kernels/collision_response.hpp"
 
 #include <fmt/format.h>
@@ -48,7 +50,8 @@ std::string plane_contact(const Plane& plane, Eigen::Ref<Eigen::Vector3d> p, Eig
 }
 
 std::vector<Plane> convex_faces(const TriangleMesh& mesh) {
-  validate_closed(mesh);
+  // closed, with a volume and faces outward: what a solid body's mesh must be (the rigid bodies ask the same)
+  mass_properties(mesh, 1.0);
   const Aabb box = bounding_box(mesh);
   const double size = (box.hi - box.lo).norm();
   std::vector<Plane> planes;

@@ -128,6 +128,13 @@ TriangleMesh mesh_table(const toml::node& node, Scene& scene) {
   if (!vertices || !triangles) throw InputError(fmt::format("{}:{}: mesh: needs both vertices and triangles", scene.file, line_of(node)));
   const auto v = rows_of<double, 3>(*vertices, scene, "mesh.vertices", "coordinates");
   const auto f = rows_of<int, 3>(*triangles, scene, "mesh.triangles", "vertex indices");
+  // a coordinate's cube (a volume) must not overflow: 1e100 m is far past any scene and far below that
+  constexpr double farthest = 1e100;
+  for (size_t r = 0; r < v.size(); ++r)
+    for (const double x : v[r])
+      if (!(std::abs(x) <= farthest))
+        throw InputError(fmt::format("{}:{}: mesh.vertices[{}]: coordinate {} is beyond {:.0e} m, where the mesh's areas and volume overflow",
+                                     scene.file, line_of(*vertices->as_array()->get(r)), r, x, farthest));
   TriangleMesh mesh;
   mesh.vertices.resize(static_cast<Eigen::Index>(v.size()), 3);
   mesh.faces.resize(static_cast<Eigen::Index>(f.size()), 3);
