@@ -2,6 +2,7 @@
 // they solve, invariants of the exact solutions, bad parameters.
 #include "models/model.hpp"
 #include "models/pendulum.hpp"
+#include "run/measure.hpp"
 #include "solvers/fd_jacobian.hpp"
 #include "verification/tolerances.hpp"
 
@@ -79,6 +80,20 @@ TEST(Models, ExactPendulumConservesEnergyAndHasTheEllipticPeriod) {
   EXPECT_LT((model->exact(1000 * period) - model->initial_state()).lpNorm<Eigen::Infinity>(), 1e-9);
   // half a period later the bob is at -theta0
   EXPECT_NEAR(model->exact(period / 2)[0], -theta0, 1e-12);
+}
+
+TEST(Models, ExactProjectileWithoutDragConservesEnergy) {
+  // kinetic plus potential energy along the exact parabola: a term missing from either changes it by O(1)
+  const auto model = make_model("projectile", {{"drag", 0.0}, {"vx0", 3.0}, {"vy0", 12.0}});
+  const double e0 = *model->energy(model->initial_state());
+  for (const double t : {0.3, 1.1, 2.4}) EXPECT_NEAR(*model->energy(model->exact(t)), e0, tolerance::exact_invariant * std::abs(e0)) << t;
+}
+
+TEST(Models, AStateFarFromTheOriginIsNotTakenForABlowUp) {
+  // the blow-up bound scales with the initial state: a projectile thrown 1e13 m from the origin runs as one at it
+  const auto model = make_model("projectile", {{"x0", 1e13}});
+  const Measured m = run_and_measure(*model, "rk4", StepControl::fixed(1e-3), 1.0, 1.0);
+  EXPECT_EQ(m.result.status, Status::ok) << m.result.message;
 }
 
 TEST(Models, BadParametersNameTheirKey) {
