@@ -28,9 +28,14 @@ unsigned default_mode(bool directory) {
 
 AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
   temporary_ = (target_.parent_path() / fmt::format(".{}{}XXXXXX", target_.filename().string(), interrupt::temporary_tag())).string();
-  fd_ = mkstemp(temporary_.data());
-  if (fd_ < 0) throw std::runtime_error(fmt::format("{}: cannot create a temporary file: {}", target_.string(), std::strerror(errno)));
-  guard_ = std::make_unique<interrupt::Temporary>(temporary_);
+  {
+    // made and registered as one: an interruption between the two would leave the file unlisted, and one
+    // already under way stops this thread here before the file exists
+    const interrupt::Uninterrupted registering;
+    fd_ = mkstemp(temporary_.data());
+    if (fd_ < 0) throw std::runtime_error(fmt::format("{}: cannot create a temporary file: {}", target_.string(), std::strerror(errno)));
+    guard_ = std::make_unique<interrupt::Temporary>(temporary_);
+  }
   if (::fchmod(fd_, static_cast<mode_t>(default_mode(false))) != 0)
     throw std::runtime_error(fmt::format("{}: cannot write: {}", target_.string(), std::strerror(errno)));
 }
