@@ -34,6 +34,12 @@ inline constexpr double min_tolerance_slope(int p) { return static_cast<double>(
 // rounding leaves ~16 x 36 x eps ~ 1e-13
 inline constexpr double tableau_roundoff = 1e-12;
 
+// an error estimate err(h) = C h^k (1 + D h + ...) followed from 2 h* to the retry: the model's relative
+// deviation over that range, with |D| up to k |f'| + (the forcing's frequency) ~ k + 3 per unit time on the
+// controller test's y' = -y + sin(3t); a controller exponent off by one (1/(k-1)) changes the retry's error
+// by 2^(-k/(k-1)) ~ 0.42-0.46, far outside
+inline constexpr double error_model_deviation(double k, double h) { return (k + 3) * h; }
+
 // errors measured against a reference run of CVODE BDF at rtol 1e-12 (not an exact solution): below this
 // the reference's own error (a small multiple of its tolerance) is part of what is measured
 inline constexpr double reference_floor = 1e-10;

@@ -7,6 +7,7 @@
 #include "solvers/adaptive_step.hpp"
 #include "solvers/fixed_step.hpp"
 #include "solvers/run_support.hpp"
+#include "solvers/step_controller.hpp"
 #include "solvers/tableaus/tsitouras54.hpp"
 #include "solvers/tableaus/verner98.hpp"
 
@@ -129,8 +130,8 @@ struct FixedPair {
   };
 };
 
-// the pair with its error estimate, a PI controller (Gustafsson's: h_new = h 0.9 err^(-0.7/k) err_prev^(0.4/k),
-// k the estimate's order plus one, the factor kept in [0.2, 10]) and dense output where the tableau has it
+// the pair with its error estimate, the PI controller of step_controller.hpp and dense output where the
+// tableau has it
 template <class T>
 struct AdaptivePair {
   template <int N>
@@ -140,7 +141,6 @@ struct AdaptivePair {
         : stages_(s), rtol_(control.rtol), atol_(control.atol), y1_(s.size()), name_(std::move(name)) {}
 
     bool step(double& t, double t_limit, double& h, Eigen::VectorXd& y, long& rejected, std::string& failure) override {
-      constexpr double k = T::estimate_order + 1, alpha = 0.7 / k, beta = 0.4 / k;
       for (;;) {
         const bool clamped = t + h >= t_limit;
         const double dt = clamped ? t_limit - t : h;
@@ -157,18 +157,12 @@ struct AdaptivePair {
             have_first_ = true;
             carried_ = true;
           }
-          // err^(-alpha) err_prev^beta as one exponential, the previous logarithm kept (two pow() calls
-          // were 6% of a Verner step on the pendulum)
-          const double log_err = std::log(std::max(err, 1e-10));
-          const double factor = std::clamp(0.9 * std::exp(beta * log_err_prev_ - alpha * log_err), 0.2, 10.0);
-          log_err_prev_ = std::max(log_err, std::log(1e-4));
-          const double next = dt * factor;
+          const double next = dt * controller_.accepted(err);
           h = clamped ? std::max(h, next) : next;
           return true;
         }
         ++rejected;
-        // a non-finite estimate (f blew up inside the step) cuts the step fivefold
-        h = dt * (std::isfinite(err) ? std::max(0.2, 0.9 * std::pow(err, -1 / k)) : 0.2);
+        h = dt * controller_.rejected(err);
         if (!(h > 1e-14 * std::max(1.0, std::abs(t)))) {
           failure = std::isfinite(err) ? fmt::format("{}: step size underflow (h = {:.3g}) at t = {:.9g}", name_, h, t) : std::string();
           return false;
@@ -201,7 +195,7 @@ struct AdaptivePair {
 
     void reset() override {
       have_first_ = carried_ = false;
-      log_err_prev_ = 0;
+      controller_.reset();
     }
 
    private:
@@ -218,7 +212,8 @@ struct AdaptivePair {
     std::string name_;
     bool have_first_ = false;  // k_0 holds f at the current (t, y) (first same as last)
     bool carried_ = false;     // the last step's stages were rotated for that
-    double log_err_prev_ = 0, last_t_ = 0, last_h_ = 0;  // log_err_prev_: the last accepted error's log
+    PiStepController controller_{T::estimate_order + 1};
+    double last_t_ = 0, last_h_ = 0;
   };
 };
 
