@@ -66,4 +66,15 @@ GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, cons
   return program;
 }
 
+GLuint make_texture(const Gl& gl, GLenum format, int width, int height, GLenum wrap) {
+  GLuint texture = 0;
+  gl.CreateTextures(GL_TEXTURE_2D, 1, &texture);
+  gl.TextureStorage2D(texture, 1, format, width, height);
+  gl.TextureParameteri(texture, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  gl.TextureParameteri(texture, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  gl.TextureParameteri(texture, GL_TEXTURE_WRAP_S, static_cast<GLint>(wrap));
+  gl.TextureParameteri(texture, GL_TEXTURE_WRAP_T, static_cast<GLint>(wrap));
+  return texture;
+}
+
 }  // namespace stepwise::gl

@@ -100,4 +100,8 @@ void check_gl(const Gl& gl, const std::string& what);
 // a compiled and linked program from GLSL 4.50 sources (geometry may be empty); GlError with the log
 GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, const char* fragment, const std::string& name);
 
+// a 2D texture of width x height in `format` (one level), linearly filtered, wrapping as `wrap`
+// (GL_CLAMP_TO_EDGE, GL_REPEAT) in both directions
+GLuint make_texture(const Gl& gl, GLenum format, int width, int height, GLenum wrap);
+
 }  // namespace stepwise::gl

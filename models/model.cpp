@@ -2,6 +2,7 @@
 
 #include "bouncing_ball.hpp"
 #include "flow_particle.hpp"
+#include "fluid.hpp"
 #include "cloth.hpp"
 #include "hanging_chain.hpp"
 #include "height_field.hpp"
@@ -55,6 +56,14 @@ const std::array model_table{
               pool_params(), [](const Params& p) { return make_pool(p); }},
     ModelInfo{"shallow-water", "non-linear shallow water equations on the height field's grid (C grid), a drop at rest; tends to "
               "the wave equation with c^2 = g H as the drop's height goes to 0", shallow_water_params(), [](const Params& p) { return make_shallow_water(p); }},
+    ModelInfo{"taylor-green", "incompressible fluid (periodic, pseudo-spectral): the Taylor-Green vortex, decaying exactly",
+              taylor_green_params(), [](const Params& p) { return make_taylor_green(p); }},
+    ModelInfo{"shear-wave", "incompressible fluid (periodic, pseudo-spectral): a sine shear flow, decaying exactly",
+              shear_wave_params(), [](const Params& p) { return make_shear_wave(p); }},
+    ModelInfo{"shear-layer", "incompressible fluid (periodic, pseudo-spectral): Brown & Minion's double shear layer rolling up",
+              shear_layer_params(), [](const Params& p) { return make_shear_layer(p); }},
+    ModelInfo{"smoke", "incompressible fluid (periodic, pseudo-spectral) with a buoyant density fed by a source: a rising plume",
+              smoke_params(), [](const Params& p) { return make_smoke(p); }},
     ModelInfo{"rigid-body", "one rigid body: Euler's equations, unit quaternion, gravity, drag, a force at a point",
               rigid_body_params(), [](const Params& p) { return make_rigid_body(p); },
               [](const Params& p, const TriangleMesh& mesh) { return make_rigid_body(p, mesh); }},

@@ -29,6 +29,15 @@ struct Shapes {
     Eigen::VectorXd z;       // points^2 heights (m) about the still level z = 0
   };
 
+  // a scalar on a periodic square grid (a fluid's density or vorticity), drawn as a texture over the square
+  // [0, L)^2 in the plane z = 0
+  struct Field {
+    int points = 0;          // per side; values row-major, x along a row: node (i, j) at (j L / points, i L / points)
+    double length = 0;       // L (m)
+    Eigen::VectorXd values;  // points^2
+    bool is_signed = false;  // a diverging colour map about 0 (vorticity); else a smoke-like one from 0
+  };
+
   std::vector<Ball> balls;
   std::vector<Body> bodies;
   std::vector<TriangleMesh> surfaces;            // open deforming sheets (cloth), world coordinates, two-sided
@@ -36,6 +45,7 @@ struct Shapes {
   std::optional<Plane> ground;
   std::optional<Aabb> container;                 // the walls of a box, drawn as its edges
   std::optional<Water> water;
+  std::optional<Field> field;
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  // against gravity: the camera's up
   bool planar = false;                           // everything in the plane z = 0: seen face on
 };

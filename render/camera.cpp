@@ -50,6 +50,10 @@ Aabb bounds(const Shapes& shapes, double depth) {
     box.extend(shapes.container->lo);
     box.extend(shapes.container->hi);
   }
+  if (shapes.field) {
+    box.extend(Eigen::Vector3d::Zero());
+    box.extend(Eigen::Vector3d(shapes.field->length, shapes.field->length, 0));
+  }
   if (shapes.water) {
     const Pool pool(*shapes.water, depth);
     box.extend(Eigen::Vector3d(-pool.border, -pool.border, -depth));

@@ -64,12 +64,7 @@ PhotonMap::PhotonMap(const gl::Context& context, int resolution) : context_(cont
   context_.make_current();
   const std::string geometry = std::string("#version 450 core\n") + glsl_fresnel + geometry_shader_body;
   program_ = gl::link_program(gl_, vertex_shader, geometry.c_str(), fragment_shader, "photon map");
-  gl_.CreateTextures(GL_TEXTURE_2D, 1, &texture_);
-  gl_.TextureStorage2D(texture_, 1, GL_RGBA32F, resolution, resolution);
-  gl_.TextureParameteri(texture_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  gl_.TextureParameteri(texture_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  gl_.TextureParameteri(texture_, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  gl_.TextureParameteri(texture_, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  texture_ = gl::make_texture(gl_, GL_RGBA32F, resolution, resolution, GL_CLAMP_TO_EDGE);
   gl_.CreateFramebuffers(1, &framebuffer_);
   gl_.NamedFramebufferTexture(framebuffer_, GL_COLOR_ATTACHMENT0, texture_, 0);
   if (const GLenum status = gl_.CheckNamedFramebufferStatus(framebuffer_, GL_FRAMEBUFFER); status != GL_FRAMEBUFFER_COMPLETE)

@@ -29,16 +29,27 @@ void main() {
 )";
 
 // mode 0: lit (Lambert with a little Blinn-Phong), both sides, back faces in back_color; 1: unlit;
-// 2: lit, checkered along axis_u and axis_v (the ground)
+// 2: lit, checkered along axis_u and axis_v (the ground); 3: unlit, the colour the field texture's value maps
+// to at (world . axis_u, world . axis_v) / tile + field_offset (a fluid's density or vorticity)
 constexpr const char* lit_fragment = R"(#version 450 core
 in vec3 world, world_normal;
 uniform vec3 color, back_color, light, eye, axis_u, axis_v;
-uniform float tile;
-uniform int mode;
+uniform float tile, field_offset;
+uniform int mode, field_signed;
+uniform sampler2D field;
 out vec4 frag;
 void main() {
   vec3 base = gl_FrontFacing ? color : back_color;
   if (mode == 1) { frag = vec4(base, 1.0); return; }
+  if (mode == 3) {
+    float s = texture(field, vec2(dot(world, axis_u), dot(world, axis_v)) / tile + field_offset).r;
+    if (field_signed == 1)
+      base = s >= 0.0 ? mix(vec3(0.97), vec3(0.75, 0.15, 0.12), min(s, 1.0)) : mix(vec3(0.97), vec3(0.15, 0.30, 0.75), min(-s, 1.0));
+    else
+      base = mix(vec3(0.05, 0.07, 0.12), vec3(0.96, 0.94, 0.90), clamp(s, 0.0, 1.0));
+    frag = vec4(base, 1.0);
+    return;
+  }
   if (mode == 2) {
     float parity = mod(floor(dot(world, axis_u) / tile) + floor(dot(world, axis_v) / tile), 2.0);
     base *= parity < 0.5 ? 1.0 : 0.86;
@@ -227,6 +238,8 @@ struct Renderer::Impl {
   GLuint framebuffer = 0, color = 0, depth = 0;
   GLuint vertex_array = 0, vertices = 0, instances = 0;
   std::unique_ptr<PhotonMap> photons;
+  GLuint field_texture = 0;  // a Shapes::Field's values, R32F, field_points^2
+  int field_points = 0;
   // the unit sphere at subdivision levels 0..3 (20·4^level triangles): many balls are drawn coarser
   std::array<std::vector<float>, 4> sphere_vertices;
 
@@ -277,6 +290,7 @@ struct Renderer::Impl {
     gl.DeleteRenderbuffers(1, &color);
     gl.DeleteRenderbuffers(1, &depth);
     for (const GLuint p : {lit, pool, surface}) gl.DeleteProgram(p);
+    if (field_texture) gl.DeleteTextures(1, &field_texture);
   }
 
   void uniform(GLuint program, const char* name, const Eigen::Vector3f& v) const { gl.Uniform3fv(gl.GetUniformLocation(program, name), 1, v.data()); }
@@ -337,6 +351,35 @@ struct Renderer::Impl {
     gl.DrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(mesh.size() / 6));
   }
 
+  // the field's values scaled by their largest magnitude (to [0, 1], or [-1, 1] signed) into a texture that
+  // repeats (the field is periodic), drawn on the square [0, L)^2 at z = 0
+  void draw_field(const Shapes::Field& field) {
+    const int n = field.points;
+    if (field_points != n) {
+      if (field_texture) gl.DeleteTextures(1, &field_texture);
+      field_texture = gl::make_texture(gl, GL_R32F, n, n, GL_REPEAT);
+      field_points = n;
+    }
+    const double largest = field.values.cwiseAbs().maxCoeff();
+    const double scale = largest > 0 && std::isfinite(largest) ? 1 / largest : 1.0;
+    std::vector<float> texels(field.values.size());
+    for (Eigen::Index k = 0; k < field.values.size(); ++k) texels[k] = static_cast<float>(scale * field.values[k]);
+    gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl.TextureSubImage2D(field_texture, 0, 0, 0, n, n, GL_RED, GL_FLOAT, texels.data());
+    gl.BindTextureUnit(0, field_texture);
+    gl.Uniform1i(gl.GetUniformLocation(lit, "field"), 0);
+    gl.Uniform1i(gl.GetUniformLocation(lit, "field_signed"), field.is_signed ? 1 : 0);
+    uniform(lit, "field_offset", static_cast<float>(0.5 / n));  // grid points at the texels' centres
+    uniform(lit, "axis_u", Eigen::Vector3f::UnitX());
+    uniform(lit, "axis_v", Eigen::Vector3f::UnitY());
+    uniform(lit, "tile", static_cast<float>(field.length));
+    std::vector<float> square;
+    const double L = field.length;
+    append_quad(square, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(L, 0, 0), Eigen::Vector3d(L, L, 0), Eigen::Vector3d(0, L, 0));
+    const Eigen::Vector3f white(1, 1, 1);
+    draw_batch(square, {0, 0, 0, 1}, white, white, 3);
+  }
+
   void set_pool_uniforms(GLuint program, const View& view, double side) const {
     gl.BindTextureUnit(0, photons->texture());
     gl.Uniform1i(gl.GetUniformLocation(program, "photons"), 0);
@@ -364,6 +407,8 @@ struct Renderer::Impl {
     uniform(lit, "eye", view.camera.eye.cast<float>());
     const std::vector<float> one{0, 0, 0, 1};
     const Eigen::Vector3f color = view.look.color, dark(0.25f, 0.25f, 0.28f);
+
+    if (shapes.field) draw_field(*shapes.field);
 
     // balls, instanced on the unit sphere
     std::vector<float> balls;

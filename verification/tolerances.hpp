@@ -40,6 +40,24 @@ inline constexpr double tableau_roundoff = 1e-12;
 // by 2^(-k/(k-1)) ~ 0.42-0.46, far outside
 inline constexpr double error_model_deviation(double k, double h) { return (k + 3) * h; }
 
+// the fluid's method of lines: f is projected in Fourier space, so div u of every stage and step is the
+// rounding of the transforms, ~ log2(n^2) eps |grad u| per transform (12 eps at 64^2) over the few transforms
+// a stage takes and the steps' sums: 1e-12 of max |grad u| (the figure) holds with room
+inline constexpr double spectral_divergence = 1e-12;
+
+// an exact flow's kinetic energy against e^(-4 nu k^2 t) (Taylor-Green) with CVODE at rtol 1e-12: a global
+// error a few times the tolerance per unit time (the pendulum's factor near its separatrix is the worst seen,
+// here the flow is linear in its one mode) and the energy's relative error twice the state's: 1e-10
+inline constexpr double fluid_energy_decay = 1e-10;
+
+// the inviscid, dealiased method of lines conserves energy exactly as a semi-discrete system: what remains is
+// CVODE's error at rtol 1e-11 over the shear layer's roll-up start (0.5 s, a few hundred steps): 1e-8
+inline constexpr double inviscid_energy_drift = 1e-8;
+
+// a first-order error halved by halving grid and step together falls by 2: we ask for at least 1.5 (the
+// next term is O(h) relative, at CFL 1 up to a third on the coarsest grid)
+inline constexpr double first_order_refinement = 1.5;
+
 // errors measured against a reference run of CVODE BDF at rtol 1e-12 (not an exact solution): below this
 // the reference's own error (a small multiple of its tolerance) is part of what is measured
 inline constexpr double reference_floor = 1e-10;

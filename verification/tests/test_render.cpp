@@ -301,6 +301,9 @@ PixelBox projected_box(const Shapes& shapes, const render::View& view, int w, in
     for (Eigen::Index v = 0; v < sheet.vertices.rows(); ++v) add(sheet.vertices.row(v).transpose());
   for (const auto& line : shapes.lines)
     for (const auto& p : line) add(p, 0.35 * view.point_radius);
+  if (shapes.field)
+    for (const double x : {0.0, shapes.field->length})
+      for (const double y : {0.0, shapes.field->length}) add(Eigen::Vector3d(x, y, 0));
   if (shapes.water) {
     // the surround's corners, and the surface where it rises above the deck
     const render::Pool pool(*shapes.water, view.pool_depth);

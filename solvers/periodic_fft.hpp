@@ -1,0 +1,60 @@
+// Fourier analysis on a periodic square: n x n real values (row-major, row i at y = i d, column j at
+// x = j d, d = L / n) and their n x (n/2 + 1) complex modes (FFTW's real-to-complex layout: mode
+// m = r (n/2 + 1) + c has wavenumbers kx = 2 pi c / L and ky = 2 pi r' / L, r' = r or r - n).
+//
+// The spectral operators the fluid model and `stable-fluids` share, each written here once:
+//   derivative:  d/dx <-> i kx, d/dy <-> i ky (the Nyquist row and column have no derivative: zero)
+//   Laplacian:   -|k|^2
+//   2/3 rule:    keep modes with |c|, |r'| <= n/3 (Orszag): products of two kept fields alias only onto
+//                dropped modes
+//   Leray:       P(a) = a - k (k . a) / |k|^2, the divergence-free part (the mean, k = 0, kept)
+//
+// FFTW's plans are made once per size, with FFTW_MEASURE (FFTW_ESTIMATE beyond 512^2), and kept for the process (its wisdom); every
+// transform runs them on the caller's arrays (fftw_execute_dft_r2c/c2r: thread-safe).
+#pragma once
+
+#include <complex>
+#include <vector>
+
+namespace stepwise {
+
+class PeriodicFft {
+ public:
+  using Complex = std::complex<double>;
+
+  PeriodicFft(int n, double length);
+
+  int n() const { return n_; }
+  double length() const { return length_; }
+  double spacing() const { return length_ / n_; }
+  int points() const { return n_ * n_; }
+  int modes() const { return n_ * half_; }
+  double kx(int m) const { return k_[m % half_]; }
+  double ky(int m) const { return k_row_[m / half_]; }
+  // |k|^2 of the Laplacian (the Nyquist wavenumber n pi / L included)
+  double k2(int m) const { return k2_col_[m % half_] + k2_row_[m / half_]; }
+  // kept by the 2/3 rule
+  bool kept(int m) const { return keep_[m / half_] && keep_[m % half_ + n_]; }
+
+  // modes = FFT(grid), unnormalised
+  void forward(const double* grid, Complex* modes) const;
+  // grid = inverse FFT(modes) / n^2: the values whose forward() is `modes`. `modes` is overwritten
+  void inverse(Complex* modes, double* grid) const;
+
+  // the modes the 2/3 rule drops set to zero
+  void dealias(Complex* a) const;
+  // (u, v) <- P(u, v), the Leray projection
+  void project(Complex* u, Complex* v) const;
+  // the spectral divergence i (kx u + ky v) of one mode
+  Complex divergence(int m, Complex u, Complex v) const { return Complex(0, 1) * (kx(m) * u + ky(m) * v); }
+
+ private:
+  int n_, half_;
+  double length_;
+  std::vector<double> k_, k_row_;  // kx by column (half_ entries), ky by row (n entries); Nyquist: 0
+  std::vector<double> k2_col_, k2_row_;  // their squares, the Nyquist's included
+  std::vector<char> keep_;         // by row (n entries), then by column (half_ entries)
+  const void* plans_;              // the size's FFTW plans (periodic_fft.cpp)
+};
+
+}  // namespace stepwise

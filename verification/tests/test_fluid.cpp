@@ -1,0 +1,171 @@
+// The incompressible fluid: the pseudo-spectral method of lines against the exact Navier-Stokes flows
+// (Taylor-Green, the shear wave), its divergence and its invariants; Stam's Stable Fluids, stable at any step
+// and diffusive by an amount that falls as grid and step are refined.
+#include "models/model.hpp"
+#include "run/measure.hpp"
+#include "solvers/periodic_fft.hpp"
+#include "verification/order_fit.hpp"
+#include "verification/tolerances.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace stepwise {
+namespace {
+
+constexpr double two_pi = 2 * std::numbers::pi;
+
+// max |div u| and max |grad u| (over the four derivatives) on the grid, spectral derivatives
+std::pair<double, double> divergence_and_gradient(const Eigen::VectorXd& y, int n, double length) {
+  const PeriodicFft fft(n, length);
+  const int M = fft.modes(), P = n * n;
+  std::vector<PeriodicFft::Complex> U(M), V(M), tmp(M);
+  fft.forward(y.data(), U.data());
+  fft.forward(y.data() + P, V.data());
+  std::vector<double> g(P);
+  double div = 0, grad = 0;
+  const auto largest = [&](auto&& mode) {
+    for (int m = 0; m < M; ++m) tmp[m] = mode(m);
+    fft.inverse(tmp.data(), g.data());
+    double most = 0;
+    for (const double x : g) most = std::max(most, std::abs(x));
+    return most;
+  };
+  const PeriodicFft::Complex i(0, 1);
+  div = largest([&](int m) { return fft.divergence(m, U[m], V[m]); });
+  for (const auto* a : {&U, &V})
+    for (const bool along_x : {true, false}) grad = std::max(grad, largest([&](int m) { return i * (along_x ? fft.kx(m) : fft.ky(m)) * (*a)[m]; }));
+  return {div, grad};
+}
+
+// the whole state at every output (a large model's runs keep only its summary otherwise)
+StepControl whole(StepControl c) {
+  c.observe = [](const Eigen::VectorXd& y) { return y; };
+  return c;
+}
+
+TEST(Fluid, TheMethodOfLinesKeepsTheVelocityDivergenceFreeAtEveryOutput) {
+  for (const char* flow : {"taylor-green", "shear-layer", "smoke"}) {
+    const auto model = make_model(flow, {{"size", 64}});
+    const Measured m = run_and_measure(*model, "rk4", whole(StepControl::fixed(5e-3)), 0.5, 0.05);
+    ASSERT_EQ(m.result.status, Status::ok) << flow << ": " << m.result.message;
+    double worst = 0;
+    for (const auto& y : m.result.trajectory.y) {
+      const auto [div, grad] = divergence_and_gradient(y, 64, 1.0);
+      if (grad > 0) worst = std::max(worst, div / grad);
+    }
+    std::cout << flow << ": max |div u| / max |grad u| over the outputs " << worst << '\n';
+    EXPECT_LE(worst, tolerance::spectral_divergence) << flow;
+  }
+}
+
+// kinetic energy against the exact decay, relative, at every output
+double worst_energy_error(const Model& model, const Measured& m) {
+  double worst = 0;
+  for (size_t k = 0; k < m.result.trajectory.t.size(); ++k) {
+    const double exact = *model.energy(model.exact(m.result.trajectory.t[k]));
+    worst = std::max(worst, std::abs(*model.energy(m.result.trajectory.y[k]) / exact - 1));
+  }
+  return worst;
+}
+
+TEST(Fluid, TheExactFlowsEnergyDecayIsFollowedToCvodesTolerance) {
+  for (const char* flow : {"taylor-green", "shear-wave"}) {
+    const auto model = make_model(flow, {{"size", 32}, {"mode", 2}, {"viscosity", 0.01}});
+    const Measured m = run_and_measure(*model, "cvode-adams", whole(StepControl::adaptive(1e-12, 1e-14)), 1.0, 0.1);
+    ASSERT_EQ(m.result.status, Status::ok) << flow << ": " << m.result.message;
+    const double worst = worst_energy_error(*model, m);
+    std::cout << flow << " with cvode-adams at rtol 1e-12: energy's relative error " << worst << ", state's " << *m.error << '\n';
+    EXPECT_LE(worst, tolerance::fluid_energy_decay) << flow;
+  }
+}
+
+TEST(Fluid, Rk4ConvergesAtItsFourthOrderOnTheTaylorGreenVortex) {
+  // the vortex decays at lambda = 2 nu k^2 = 15.8/s (nu = 0.05, m = 2), h lambda 0.32 down to 0.02 over the
+  // halvings; the grid's fastest kept mode (wavenumbers (5, 5) on 16^2) decays at 98.7/s, inside rk4's
+  // stability limit h lambda <= 2.78 for h <= 0.028
+  const auto model = make_model("taylor-green", {{"size", 16}, {"mode", 2}, {"viscosity", 0.05}});
+  std::vector<double> steps, errors;
+  for (double h = 0.02; h > 0.001; h /= 2) {
+    const Measured m = run_and_measure(*model, "rk4", whole(StepControl::fixed(h)), 0.2, 0.2);
+    ASSERT_EQ(m.result.status, Status::ok);
+    if (*m.error < tolerance::roundoff_floor) break;
+    steps.push_back(h);
+    errors.push_back(*m.error);
+  }
+  ASSERT_GE(steps.size(), 4u);
+  const double order = loglog_slope(steps, errors);
+  std::cout << "rk4 on Taylor-Green: order " << order << " over " << steps.size() << " steps from " << errors.front() << '\n';
+  EXPECT_NEAR(order, 4.0, tolerance::order_band);
+}
+
+TEST(Fluid, WithoutViscosityTheDealiasedMethodOfLinesConservesEnergyAndDensity) {
+  // the 2/3-rule pseudo-spectral form is the Galerkin truncation, which conserves kinetic energy exactly
+  // when nu = 0; the density's mean is its k = 0 mode, which advection by a divergence-free flow never moves
+  const auto model = make_model("shear-layer", {{"size", 64}, {"viscosity", 0.0}});
+  const Measured m = run_and_measure(*model, "cvode-adams", whole(StepControl::adaptive(1e-11, 1e-13)), 0.5, 0.5);
+  ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+  const double e0 = *model->energy(model->initial_state()), e1 = *model->energy(m.result.trajectory.y.back());
+  std::cout << "shear layer, nu = 0: energy changed by " << e1 / e0 - 1 << " (relative) in 0.5 s\n";
+  EXPECT_LE(std::abs(e1 / e0 - 1), tolerance::inviscid_energy_drift);
+  // the smoke's density total grows at the source's integral, rate 2 pi r^2 for a Gaussian of unit peak
+  const double r = 0.04, t = 1.0;
+  const auto smoke = make_model("smoke", {{"size", 64}, {"source_radius", r}, {"source_rate", 1.0}});
+  const Measured s = run_and_measure(*smoke, "rk4", whole(StepControl::fixed(5e-3)), t, t);
+  ASSERT_EQ(s.result.status, Status::ok);
+  const double total = smoke->summary(s.result.trajectory.y.back())[3];
+  std::cout << "smoke: density total " << total << " after " << t << " s, the source's " << two_pi * r * r * t << '\n';
+  EXPECT_NEAR(total / (two_pi * r * r * t), 1.0, tolerance::spectral_divergence);
+}
+
+// the viscosity the Taylor-Green decay implies: E(t) = E(0) e^(-4 nu k^2 t)
+double effective_viscosity(const Model& model, const Measured& m, double k) {
+  const double e0 = *model.energy(model.initial_state()), e1 = *model.energy(m.result.trajectory.y.back());
+  return -std::log(e1 / e0) / (4 * k * k * m.result.trajectory.t.back());
+}
+
+TEST(Fluid, StableFluidsIsStableAtAnyStepAndItsNumericalViscosityFallsWithGridAndStep) {
+  const double nu = 1e-3, t_end = 1.0, k = two_pi;
+  double previous = 0;
+  for (const int n : {16, 32, 64}) {
+    const auto model = make_model("taylor-green", {{"size", n}, {"viscosity", nu}});
+    // the step at advective CFL 1 (A h / d = 1): the grid and the step refined together
+    const double h = 1.0 / n;
+    const Measured m = run_and_measure(*model, "stable-fluids", whole(StepControl::fixed(h)), t_end, t_end);
+    ASSERT_EQ(m.result.status, Status::ok);
+    const double excess = effective_viscosity(*model, m, k) / nu - 1;
+    std::cout << "stable-fluids on " << n << "^2, h = " << h << ": effective viscosity " << excess + 1 << " nu\n";
+    EXPECT_GT(excess, 0) << n;  // the method's own diffusion adds to nu
+    if (previous > 0) {
+      EXPECT_LT(excess, previous / tolerance::first_order_refinement) << n;
+    }
+    previous = excess;
+    const auto [div, grad] = divergence_and_gradient(m.result.trajectory.y.back(), n, 1.0);
+    EXPECT_LE(div / grad, tolerance::spectral_divergence) << n;
+  }
+  // far beyond any explicit limit (advective CFL 20): bounded, the energy only falls
+  const auto model = make_model("taylor-green", {{"size", 32}, {"viscosity", nu}});
+  const Measured m = run_and_measure(*model, "stable-fluids", whole(StepControl::fixed(20.0 / 32)), 10.0, 10.0 / 16);
+  ASSERT_EQ(m.result.status, Status::ok);
+  double before = *model->energy(model->initial_state());
+  for (size_t i = 0; i < m.result.trajectory.y.size(); ++i) {
+    const double e = *model->energy(m.result.trajectory.y[i]);
+    EXPECT_LE(e, before) << "output " << i;
+    before = e;
+  }
+}
+
+TEST(Fluid, MacCormackAdvectionIsLessDiffusiveThanBilinear) {
+  const auto model = make_model("taylor-green", {{"size", 32}, {"viscosity", 1e-3}});
+  const double k = two_pi;
+  const Measured bilinear = run_and_measure(*model, "stable-fluids", whole(StepControl::fixed(1.0 / 32)), 1.0, 1.0);
+  const Measured maccormack = run_and_measure(*model, "stable-fluids-maccormack", whole(StepControl::fixed(1.0 / 32)), 1.0, 1.0);
+  const double a = effective_viscosity(*model, bilinear, k), b = effective_viscosity(*model, maccormack, k);
+  std::cout << "effective viscosity on 32^2 at CFL 1: bilinear " << a / 1e-3 << " nu, MacCormack " << b / 1e-3 << " nu\n";
+  EXPECT_LT(b - 1e-3, (a - 1e-3) / tolerance::first_order_refinement);
+}
+
+}  // namespace
+}  // namespace stepwise
