@@ -19,11 +19,26 @@ struct Plans {
   fftw_plan forward = nullptr, inverse = nullptr;
 };
 
+// the plans of every size used, destroyed at exit with FFTW's own planner state (fftw_cleanup), so that a leak
+// checker sees nothing of FFTW's left (an interrupted run leaves by _exit, without destructors: no thread is
+// still transforming when they run)
+struct PlanCache {
+  std::map<int, Plans> plans;
+  ~PlanCache() {
+    for (auto& [n, p] : plans) {
+      fftw_destroy_plan(p.forward);
+      fftw_destroy_plan(p.inverse);
+    }
+    fftw_cleanup();
+  }
+};
+
 // FFTW_MEASURE times candidate algorithms on scratch arrays; FFTW_UNALIGNED lets the plans run on any
 // caller's arrays (std::vector's are 16-byte aligned, FFTW's own 32 or 64)
 const Plans& plans_for(int n) {
   static std::mutex lock;
-  static std::map<int, Plans> plans;
+  static PlanCache cache;
+  auto& plans = cache.plans;
   std::lock_guard guard(lock);
   auto [it, added] = plans.try_emplace(n);
   if (added) {
