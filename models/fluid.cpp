@@ -20,8 +20,8 @@ using Modes = std::vector<Complex>;
 constexpr double two_pi = 2 * std::numbers::pi;
 
 // per grid point: u, v, rho in up to 32 copies (CVODE Adams keeps about 25 vectors) and the right-hand
-// side's 11 grid fields and 7 mode arrays
-constexpr double bytes_per_point = 32 * 3 * 8 + 11 * 8 + 7 * 16;
+// side's scratch (8 grid fields and 7 mode arrays)
+constexpr double bytes_per_point = 32 * 3 * 8 + 8 * 8 + 7 * 16;
 
 std::vector<ParamSpec> with_fluid_params(double viscosity, double size, std::initializer_list<ParamSpec> own) {
   std::vector<ParamSpec> specs{
@@ -32,16 +32,33 @@ std::vector<ParamSpec> with_fluid_params(double viscosity, double size, std::ini
   return specs;
 }
 
+// the parameter "size": a whole number of points per side whose run fits in memory, at least 8
+int fluid_points(const Params& p) {
+  const int n = particle_count(p, "size", p.at("size") * bytes_per_point, "grid points per side");
+  if (n < 8) throw BadParameter("size", fmt::format("parameter 'size' must be at least 8 grid points per side, got {}", n));
+  return n;
+}
+
+// the right-hand side's working arrays, one set per thread (a model may be evaluated from several), kept
+// between calls: f allocates nothing once a size has been seen
+struct Scratch {
+  Modes U, V, R, A, B, C, tmp;
+  std::vector<double> fields;
+  void size_for(int modes, Eigen::Index points) {
+    for (Modes* m : {&U, &V, &R, &A, &B, &C, &tmp}) m->resize(modes);
+    fields.resize(8 * points);
+  }
+};
+
 class Fluid final : public Model {
  public:
   enum class Flow { taylor_green, shear_wave, shear_layer, smoke };
 
   Fluid(Flow flow, const Params& p)
       : flow_(flow),
-        n_(particle_count(p, "size", p.at("size") * bytes_per_point, "grid points per side")),
+        n_(fluid_points(p)),
         cells_(static_cast<Eigen::Index>(n_) * n_),
-        fft_(std::max(n_, 2), p.at("length")) {
-    if (n_ < 8) throw BadParameter("size", fmt::format("parameter 'size' must be at least 8 grid points per side, got {}", n_));
+        fft_(n_, p.at("length")) {
     grid_.points = n_;
     grid_.length = p.at("length");
     grid_.viscosity = p.at("viscosity");
@@ -137,13 +154,14 @@ class Fluid final : public Model {
   void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     const int M = fft_.modes();
     const Eigen::Index P = cells_;
-    Modes U(M), V(M), R(density_ ? M : 0), tmp(M);
+    thread_local Scratch scratch;
+    scratch.size_for(M, P);
+    auto& [U, V, R, A, B, C, tmp, fields] = scratch;
     fft_.forward(y.data(), U.data());
     fft_.forward(y.data() + P, V.data());
     fft_.dealias(U.data());
     fft_.dealias(V.data());
     // the fields the products need, on the grid: u, v and their derivatives (and rho's)
-    std::vector<double> fields((density_ ? 8 : 6) * P);
     double* u = fields.data();
     double* v = u + P;
     double* ux = v + P;
@@ -152,7 +170,7 @@ class Fluid final : public Model {
     double* vy = vx + P;
     const auto to_grid = [&](const Modes& a, int derivative, double* out) {
       for (int m = 0; m < M; ++m)
-        tmp[m] = derivative == 0 ? a[m] : Complex(0, derivative == 1 ? fft_.kx(m) : fft_.ky(m)) * a[m];
+        tmp[m] = derivative == 0 ? a[m] : derivative == 1 ? fft_.d_dx(m, a[m]) : fft_.d_dy(m, a[m]);
       fft_.inverse(tmp.data(), out);
     };
     to_grid(U, 0, u), to_grid(V, 0, v), to_grid(U, 1, ux), to_grid(U, 2, uy), to_grid(V, 1, vx), to_grid(V, 2, vy);
@@ -161,7 +179,6 @@ class Fluid final : public Model {
       ux[k] = u[k] * ux[k] + v[k] * uy[k];
       vx[k] = u[k] * vx[k] + v[k] * vy[k];
     }
-    Modes A(M), B(M);
     fft_.forward(ux, A.data());
     fft_.forward(vx, B.data());
     const double nu = grid_.viscosity;
@@ -176,7 +193,6 @@ class Fluid final : public Model {
       fft_.dealias(R.data());
       to_grid(R, 1, rx), to_grid(R, 2, ry);
       for (Eigen::Index k = 0; k < P; ++k) rx[k] = u[k] * rx[k] + v[k] * ry[k];
-      Modes C(M);
       fft_.forward(rx, C.data());
       const double kappa = grid_.diffusivity, b = grid_.buoyancy;
       for (int m = 0; m < M; ++m) {
@@ -261,7 +277,7 @@ class Fluid final : public Model {
   // w = v_x - u_y on the grid from the velocity's modes
   void vorticity(const Modes& U, const Modes& V, double* w) const {
     Modes tmp(fft_.modes());
-    for (int m = 0; m < fft_.modes(); ++m) tmp[m] = Complex(0, 1) * (fft_.kx(m) * V[m] - fft_.ky(m) * U[m]);
+    for (int m = 0; m < fft_.modes(); ++m) tmp[m] = fft_.d_dx(m, V[m]) - fft_.d_dy(m, U[m]);
     fft_.inverse(tmp.data(), w);
   }
 

@@ -99,6 +99,10 @@ void PeriodicFft::dealias(Complex* a) const {
     if (!kept(m)) a[m] = 0;
 }
 
+void PeriodicFft::diffuse(Complex* a, double c) const {
+  for (int m = 0; m < modes(); ++m) a[m] /= 1 + c * k2(m);
+}
+
 void PeriodicFft::project(Complex* u, Complex* v) const {
   for (int m = 0; m < modes(); ++m) {
     const double x = kx(m), y = ky(m), kk = x * x + y * y;

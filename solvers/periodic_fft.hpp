@@ -45,8 +45,12 @@ class PeriodicFft {
   void dealias(Complex* a) const;
   // (u, v) <- P(u, v), the Leray projection
   void project(Complex* u, Complex* v) const;
-  // the spectral divergence i (kx u + ky v) of one mode
-  Complex divergence(int m, Complex u, Complex v) const { return Complex(0, 1) * (kx(m) * u + ky(m) * v); }
+  // d/dx and d/dy of one mode, and the divergence i (kx u + ky v)
+  Complex d_dx(int m, Complex a) const { return Complex(0, kx(m)) * a; }
+  Complex d_dy(int m, Complex a) const { return Complex(0, ky(m)) * a; }
+  Complex divergence(int m, Complex u, Complex v) const { return d_dx(m, u) + d_dy(m, v); }
+  // one implicit Euler step of a' = c Lap a (c = diffusivity x step): a^ <- a^ / (1 + c |k|^2)
+  void diffuse(Complex* a, double c) const;
 
  private:
   int n_, half_;

@@ -69,17 +69,14 @@ class StableFluids final : public FixedStepper {
     double* rho1 = v1 + P;
     fft_.forward(u1, modes_.data());
     fft_.forward(v1, modes_v_.data());
-    for (int m = 0; m < fft_.modes(); ++m) {
-      const double damp = 1 / (1 + grid_.viscosity * fft_.k2(m) * h);
-      modes_[m] *= damp;
-      modes_v_[m] *= damp;
-    }
+    fft_.diffuse(modes_.data(), grid_.viscosity * h);
+    fft_.diffuse(modes_v_.data(), grid_.viscosity * h);
     fft_.project(modes_.data(), modes_v_.data());
     fft_.inverse(modes_.data(), u1);
     fft_.inverse(modes_v_.data(), v1);
     if (grid_.diffusivity > 0) {
       fft_.forward(rho1, modes_.data());
-      for (int m = 0; m < fft_.modes(); ++m) modes_[m] /= 1 + grid_.diffusivity * fft_.k2(m) * h;
+      fft_.diffuse(modes_.data(), grid_.diffusivity * h);
       fft_.inverse(modes_.data(), rho1);
     }
     RunningNorm norm;
@@ -149,26 +146,18 @@ class StableFluids final : public FixedStepper {
 }  // namespace
 
 void register_stable_fluids_methods(MethodTable& table) {
-  table.add({
-      .name = "stable-fluids",
-      .family = "stable-fluids",
-      .source = "hand-written",
-      .description = "Stam's Stable Fluids: forces, semi-Lagrangian advection (bilinear), diffusion and projection by FFT; fixed step",
-      .order = {1, 1, "1"},
-      .stepping = Stepping::fixed,
-      .needs = needs_fluid_grid,
-      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<StableFluids>(system, false); }),
-  });
-  table.add({
-      .name = "stable-fluids-maccormack",
-      .family = "stable-fluids",
-      .source = "hand-written",
-      .description = "Stable Fluids with MacCormack advection (Selle et al. 2008, clamped): sharper smoke, same stability",
-      .order = {1, 2, "1-2"},
-      .stepping = Stepping::fixed,
-      .needs = needs_fluid_grid,
-      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<StableFluids>(system, true); }),
-  });
+  for (const bool maccormack : {false, true})
+    table.add({
+        .name = maccormack ? "stable-fluids-maccormack" : "stable-fluids",
+        .family = "stable-fluids",
+        .source = "hand-written",
+        .description = maccormack ? "Stable Fluids with MacCormack advection (Selle et al. 2008, clamped): sharper smoke, same stability"
+                                  : "Stam's Stable Fluids: forces, semi-Lagrangian advection (bilinear), diffusion and projection by FFT; fixed step",
+        .order = maccormack ? Order{1, 2, "1-2"} : Order{1, 1, "1"},
+        .stepping = Stepping::fixed,
+        .needs = needs_fluid_grid,
+        .make = fixed_steps([maccormack](const CountedSystem& system) { return std::make_unique<StableFluids>(system, maccormack); }),
+    });
 }
 
 }  // namespace stepwise
