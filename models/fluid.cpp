@@ -156,7 +156,9 @@ class Fluid final : public Model {
     const Eigen::Index P = cells_;
     thread_local Scratch scratch;
     scratch.size_for(M, P);
-    auto& [U, V, R, A, B, C, tmp, fields] = scratch;
+    // plain references, not a structured binding: clang 15 (the fuzz build) cannot capture one in a lambda
+    Modes &U = scratch.U, &V = scratch.V, &R = scratch.R, &A = scratch.A, &B = scratch.B, &C = scratch.C, &tmp = scratch.tmp;
+    std::vector<double>& fields = scratch.fields;
     fft_.forward(y.data(), U.data());
     fft_.forward(y.data() + P, V.data());
     fft_.dealias(U.data());
