@@ -77,7 +77,13 @@ struct Motion {
 // down a slope felt 6% less friction and a spurious yaw torque)
 Eigen::Vector2d coulomb_friction(const Eigen::Matrix2d& Q, const Eigen::Vector2d& k, const Eigen::Vector2d& free, double limit) {
   const Eigen::Vector2d b = Q.transpose() * free;
-  const auto squared_norm = [&](double a) { return std::pow(b[0] / (k[0] + a), 2) + std::pow(b[1] / (k[1] + a), 2); };
+  // squares as products, not std::pow(x, 2): the optimiser turns that into x * x while an unoptimised build
+  // calls libm's pow, whose last bit may differ (measured: the contact collapse's frames differed between the
+  // two builds from the first impact on)
+  const auto squared_norm = [&](double a) {
+    const double u0 = b[0] / (k[0] + a), u1 = b[1] / (k[1] + a);
+    return u0 * u0 + u1 * u1;
+  };
   if (squared_norm(0) <= limit * limit) return Q * Eigen::Vector2d(-b[0] / k[0], -b[1] / k[1]);
   if (!(limit > 0)) return Eigen::Vector2d::Zero();
   // phi(a) = 1/|lambda(a)| - 1/limit rises from below zero at a = 0 through zero by a = |b| / limit, and is
@@ -89,7 +95,8 @@ Eigen::Vector2d coulomb_friction(const Eigen::Matrix2d& Q, const Eigen::Vector2d
     const double phi = 1 / std::sqrt(n2) - 1 / limit;
     if (std::abs(phi) <= 1e-15 / limit) break;
     (phi < 0 ? lo : hi) = a;
-    const double dn2 = -2 * (std::pow(b[0], 2) / std::pow(k[0] + a, 3) + std::pow(b[1], 2) / std::pow(k[1] + a, 3));
+    const double d0 = k[0] + a, d1 = k[1] + a;
+    const double dn2 = -2 * (b[0] * b[0] / (d0 * d0 * d0) + b[1] * b[1] / (d1 * d1 * d1));
     const double next = a + phi / (0.5 * dn2 / (n2 * std::sqrt(n2)));
     a = (next > lo && next < hi) ? next : (lo + hi) / 2;
   }
