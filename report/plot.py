@@ -18,6 +18,7 @@ try:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
     import numpy as np
 except ImportError as e:
     print(f"plot.py: {e.name} is missing: install Debian's python3-matplotlib (apt-get install python3-matplotlib)", file=sys.stderr)
@@ -232,6 +233,28 @@ def cloth_implicit_damping(directory, _, styles):
            "Implicit Euler's numerical damping of one spring", grid="both")
 
 
+def fluid_viscosity(directory, _, styles):
+    rows = read(directory, "fluid_viscosity")
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    fig, axes = plt.subplots(1, len(methods), figsize=(11, 4.5), sharey=True, squeeze=False)
+    for ax, method in zip(axes[0], methods):
+        points = [r for r in rows if r["method"] == method]
+        for cfl in sorted(set(r["cfl"] for r in points)):
+            line = sorted((r for r in points if r["cfl"] == cfl), key=lambda r: r["size"])
+            ax.loglog([r["size"] for r in line], [r["nu_effective_over_nu"] - 1 for r in line], marker="o", label=f"CFL {cfl:g}")
+        sizes = sorted(set(r["size"] for r in points))
+        top = max(r["nu_effective_over_nu"] - 1 for r in points)
+        ax.loglog(sizes, [top * sizes[0] / n for n in sizes], color="black", linestyle=":", label="first order (1/n)")
+        ax.set_xticks(sizes, [str(int(n)) for n in sizes])
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.set_xlabel("grid points per side n")
+        ax.set_title(method, fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+        legend(ax, ncol=1)
+    axes[0][0].set_ylabel("excess viscosity (nu_eff - nu) / nu")
+    finish(fig, directory, "fluid_viscosity")
+
+
 def cloth_realtime(directory, _, styles):
     rows = read(directory, "cloth_realtime")
     fig, ax = plt.subplots(figsize=(8, 5))
@@ -388,7 +411,7 @@ def main():
         DPI = int(sys.argv[sys.argv.index("--dpi") + 1])
     styles = Styles(directory)
     drawers = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, wave_adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
-                                        cloth_implicit_damping, cloth_realtime, stability_regions, rigid_body_invariants, event_times, contacts)}
+                                        cloth_implicit_damping, cloth_realtime, fluid_viscosity, stability_regions, rigid_body_invariants, event_times, contacts)}
     for figure in read(directory, "figures"):
         kind = figure["kind"]
         if kind not in drawers:

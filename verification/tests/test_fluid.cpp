@@ -4,6 +4,7 @@
 #include "models/model.hpp"
 #include "run/measure.hpp"
 #include "solvers/periodic_fft.hpp"
+#include "verification/fluid_checks.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/tolerances.hpp"
 
@@ -124,10 +125,9 @@ TEST(Fluid, WithoutViscosityTheDealiasedMethodOfLinesConservesEnergyAndDensity) 
   EXPECT_NEAR(total / (two_pi * r * r * t), 1.0, tolerance::spectral_divergence);
 }
 
-// the viscosity the Taylor-Green decay implies: E(t) = E(0) e^(-4 nu k^2 t)
+// the viscosity the Taylor-Green decay implies (verification/fluid_checks.hpp)
 double effective_viscosity(const Model& model, const Measured& m, double k) {
-  const double e0 = *model.energy(model.initial_state()), e1 = *model.energy(m.result.trajectory.y.back());
-  return -std::log(e1 / e0) / (4 * k * k * m.result.trajectory.t.back());
+  return taylor_green_effective_viscosity(model, k, model.initial_state(), m.result.trajectory.y.back(), m.result.trajectory.t.back());
 }
 
 TEST(Fluid, StableFluidsIsStableAtAnyStepAndItsNumericalViscosityFallsWithGridAndStep) {
