@@ -64,6 +64,23 @@ inline constexpr double first_order_refinement = 1.5;
 // refinement of a first-order method buys (first_order_refinement), else it is not worth its second pass
 inline constexpr double maccormack_gain = first_order_refinement;
 
+// FFTW's transform against the direct sum of the DFT's definition on an 8^2 grid of values in [-1, 1]: each of
+// the 64 terms of a mode rounded once in the sum and once in e^(-i theta) (libm's sin and cos, an ulp): a mode of
+// the direct sum errs by ~ sqrt(64) x 2 eps x |values|, FFTW's by log2(64) eps: 1e-13 absolute holds with room
+inline constexpr double dft_roundoff = 1e-13;
+
+// kinetic energy at successive outputs of an unforced, viscous run: the semi-discrete energy falls at
+// -2 nu x enstrophy, each output's energy summed from n^2 values (~ n eps relative): a rise beyond 1e-12 relative
+// is the method's, not the sum's
+inline constexpr double energy_sum_roundoff = 1e-12;
+
+// Semi-Lagrangian advection is not conservative: a step changes the density's total by the interpolation's
+// error summed over the grid, bilinear's at most (d^2 / 8)(max |rho_xx| + max |rho_yy|) a point, the second
+// differences taken on the grid; the midpoint trace of a divergence-free flow moves area only at O(h^3) (left out).
+// Summed over the steps, the total's drift must stay within this multiple of that sum (the bound is a worst
+// case: errors of both signs cancel in the sum)
+inline constexpr double semi_lagrangian_mass_bound = 1.0;
+
 // errors measured against a reference run of CVODE BDF at rtol 1e-12 (not an exact solution): below this
 // the reference's own error (a small multiple of its tolerance) is part of what is measured
 inline constexpr double reference_floor = 1e-10;

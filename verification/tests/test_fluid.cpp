@@ -170,5 +170,85 @@ TEST(Fluid, MacCormackAdvectionIsLessDiffusiveThanBilinear) {
   EXPECT_LT(b - 1e-3, (a - 1e-3) / tolerance::maccormack_gain);
 }
 
+// FFTW's real-to-complex transform, once, against the DFT's definition summed directly: a^(kx, ky) =
+// sum over (x, y) of q e^(-2 pi i (c j + r i) / n)
+TEST(Fluid, FftwsTransformIsTheDirectDftToRoundOff) {
+  const int n = 8;
+  const PeriodicFft fft(n, 1.0);
+  std::vector<double> q(n * n);
+  for (int k = 0; k < n * n; ++k) q[k] = std::sin(1.7 * k + 0.3) * std::cos(0.37 * k * k);  // in [-1, 1], no pattern
+  std::vector<PeriodicFft::Complex> modes(fft.modes());
+  fft.forward(q.data(), modes.data());
+  double worst = 0;
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c <= n / 2; ++c) {
+      PeriodicFft::Complex direct = 0;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) direct += q[i * n + j] * std::polar(1.0, -two_pi * (c * j + r * i) / n);
+      worst = std::max(worst, std::abs(modes[r * (n / 2 + 1) + c] - direct));
+    }
+  std::cout << "FFTW against the direct DFT on 8^2: largest difference " << worst << '\n';
+  EXPECT_LE(worst, tolerance::dft_roundoff);
+  // and back: inverse(forward(q)) = q
+  std::vector<double> back(n * n);
+  fft.inverse(modes.data(), back.data());
+  for (int k = 0; k < n * n; ++k) EXPECT_NEAR(back[k], q[k], tolerance::dft_roundoff) << k;
+}
+
+// without forcing, viscosity only takes energy out: the method of lines (dE/dt = -2 nu enstrophy for the
+// semi-discrete system) and Stable Fluids (interpolation, implicit diffusion and projection each shrink it) at
+// every output, on the shear layer rolling up
+TEST(Fluid, WithoutForcingTheEnergyNeverRises) {
+  const auto model = make_model("shear-layer", {{"size", 32}, {"viscosity", 1e-3}});
+  for (const auto& [method, h] : {std::pair{"rk4", 2e-3}, {"stable-fluids", 1.0 / 32}, {"stable-fluids", 4.0 / 32}}) {
+    const Measured m = run_and_measure(*model, method, whole(StepControl::fixed(h)), 1.0, h);
+    ASSERT_EQ(m.result.status, Status::ok) << method;
+    double before = *model->energy(model->initial_state());
+    double largest_rise = -1;
+    for (const auto& y : m.result.trajectory.y) {
+      const double e = *model->energy(y);
+      largest_rise = std::max(largest_rise, e / before - 1);
+      before = e;
+    }
+    std::cout << method << " at h = " << h << ": largest rise of the energy between outputs " << largest_rise << " (relative)\n";
+    EXPECT_LE(largest_rise, tolerance::energy_sum_roundoff) << method << " at h = " << h;
+  }
+}
+
+// the smoke's density total under Stable Fluids: the source adds 2 pi r^2 a second (its grid sum is the integral
+// to round-off at r >= 1.3 d), implicit diffusion and projection keep the mean; advection by interpolation moves
+// it, by at most the interpolation's error summed over the grid each step (tolerances.hpp), and by an amount that
+// falls at first order as grid and step are refined together (an O(d^2) error a step, 1/h = n steps)
+TEST(Fluid, StableFluidsDensityTotalStaysWithinTheInterpolationBoundAndConvergesAtFirstOrder) {
+  const double r = 0.04, t = 1.0, source = two_pi * r * r * t;
+  double previous = 0;
+  for (const int n : {32, 64, 128}) {
+    const double h = 1.0 / n, d = 1.0 / n;
+    const auto smoke = make_model("smoke", {{"size", n}, {"source_radius", r}, {"source_rate", 1.0}});
+    const Measured m = run_and_measure(*smoke, "stable-fluids", whole(StepControl::fixed(h)), t, h);
+    ASSERT_EQ(m.result.status, Status::ok);
+    double bound = 0;
+    for (size_t s = 0; s + 1 < m.result.trajectory.y.size(); ++s) {
+      const double* rho = m.result.trajectory.y[s].data() + 2 * n * n;
+      // each point's bound, (d^2 / 8)(|rho_xx| + |rho_yy|) from its second differences, times its area d^2
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          const double c = rho[i * n + j];
+          const double xx = std::abs(rho[i * n + (j + 1) % n] - 2 * c + rho[i * n + (j + n - 1) % n]);
+          const double yy = std::abs(rho[((i + 1) % n) * n + j] - 2 * c + rho[((i + n - 1) % n) * n + j]);
+          bound += d * d / 8 * (xx + yy);
+        }
+    }
+    const double drift = std::abs(summary_value(*smoke, m.result.trajectory.y.back(), "density_total") - source);
+    std::cout << "stable-fluids smoke on " << n << "^2: the density total drifts by " << drift / source << " of the source's " << source
+              << "; the interpolation bound " << bound / source << '\n';
+    EXPECT_LE(drift, tolerance::semi_lagrangian_mass_bound * bound) << n;
+    if (previous > 0) {
+      EXPECT_LT(drift, previous / tolerance::first_order_refinement) << n;
+    }
+    previous = drift;
+  }
+}
+
 }  // namespace
 }  // namespace stepwise
