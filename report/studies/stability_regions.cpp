@@ -15,7 +15,8 @@ StudyOutput stability_regions(const StudyContext& ctx) {
   // the standing wave's grid from a random field (every mode excited) and the cloth's stability sheet from rest
   std::vector<SpectrumScene> scenes;
   {
-    const auto scene = ode_scenes().back();
+    const auto all = ode_scenes();
+    const auto scene = *std::find_if(all.begin(), all.end(), [](const StudyScene& s) { return s.label == "standing-wave"; });
     std::shared_ptr<const Model> model = make_model(scene.model, scene.params);
     const WaveGridView grid = *model->as<WaveGridView>();
     scenes.push_back({scene.label, model, model->initial_state(), [grid](std::string_view method, double dt) {
