@@ -2,6 +2,7 @@
 
 #include "particle_common.hpp"
 #include "solvers/capabilities/fluid_grid.hpp"
+#include "solvers/capabilities/imex_split.hpp"
 #include "solvers/periodic_fft.hpp"
 
 #include <fmt/format.h>
@@ -104,7 +105,14 @@ class Fluid final : public Model {
       fft_.forward(source_.data(), source_modes_.data());
     }
     density_ = flow == Flow::smoke;
+    split_.stiff = "the viscosity and the density's diffusion";
+    split_.linear = true;
+    split_.implicit_part = [this](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) { terms(y, f, false, true); };
+    split_.explicit_part = [this](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) { terms(y, f, true, false); };
+    split_.implicit_solve = [this](double gamma, Eigen::Ref<Eigen::VectorXd> x) { implicit_solve(gamma, x); };
   }
+  Fluid(const Fluid&) = delete;  // its capabilities hold `this`
+  Fluid& operator=(const Fluid&) = delete;
 
   std::string_view name() const override {
     switch (flow_) {
@@ -117,7 +125,7 @@ class Fluid final : public Model {
   }
   int size() const override { return static_cast<int>(3 * cells_); }
   bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return offer(type, grid_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, grid_, split_); }
 
   std::vector<std::string> state_names() const override {
     std::vector<std::string> names;
@@ -151,7 +159,13 @@ class Fluid final : public Model {
     return y;
   }
 
-  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override { terms(y, dydt, true, true); }
+
+ private:
+  // f's terms: with `advective`, advection, buoyancy and the source (the IMEX split's explicit part); with
+  // `viscous`, viscosity and the density's diffusion (its implicit part); with both, f. Every term is projected
+  // and de-aliased with the rest, so the parts add up to f
+  void terms(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt, bool advective, bool viscous) const {
     const int M = fft_.modes();
     const Eigen::Index P = cells_;
     thread_local Scratch scratch;
@@ -175,31 +189,43 @@ class Fluid final : public Model {
         tmp[m] = derivative == 0 ? a[m] : derivative == 1 ? fft_.d_dx(m, a[m]) : fft_.d_dy(m, a[m]);
       fft_.inverse(tmp.data(), out);
     };
-    to_grid(U, 0, u), to_grid(V, 0, v), to_grid(U, 1, ux), to_grid(U, 2, uy), to_grid(V, 1, vx), to_grid(V, 2, vy);
-    // (u . grad) u and (u . grad) v, in place of the derivatives they no longer need
-    for (Eigen::Index k = 0; k < P; ++k) {
-      ux[k] = u[k] * ux[k] + v[k] * uy[k];
-      vx[k] = u[k] * vx[k] + v[k] * vy[k];
+    if (advective) {
+      to_grid(U, 0, u), to_grid(V, 0, v), to_grid(U, 1, ux), to_grid(U, 2, uy), to_grid(V, 1, vx), to_grid(V, 2, vy);
+      // (u . grad) u and (u . grad) v, in place of the derivatives they no longer need
+      for (Eigen::Index k = 0; k < P; ++k) {
+        ux[k] = u[k] * ux[k] + v[k] * uy[k];
+        vx[k] = u[k] * vx[k] + v[k] * vy[k];
+      }
+      fft_.forward(ux, A.data());
+      fft_.forward(vx, B.data());
     }
-    fft_.forward(ux, A.data());
-    fft_.forward(vx, B.data());
     const double nu = grid_.viscosity;
     for (int m = 0; m < M; ++m) {
-      A[m] = -A[m] - nu * fft_.k2(m) * U[m];
-      B[m] = -B[m] - nu * fft_.k2(m) * V[m];
+      A[m] = advective ? -A[m] : Complex(0);
+      B[m] = advective ? -B[m] : Complex(0);
+      if (viscous) {
+        A[m] -= nu * fft_.k2(m) * U[m];
+        B[m] -= nu * fft_.k2(m) * V[m];
+      }
     }
     if (density_) {
       double* rx = vy + P;
       double* ry = rx + P;
       fft_.forward(y.data() + 2 * P, R.data());
       fft_.dealias(R.data());
-      to_grid(R, 1, rx), to_grid(R, 2, ry);
-      for (Eigen::Index k = 0; k < P; ++k) rx[k] = u[k] * rx[k] + v[k] * ry[k];
-      fft_.forward(rx, C.data());
+      if (advective) {
+        to_grid(R, 1, rx), to_grid(R, 2, ry);
+        for (Eigen::Index k = 0; k < P; ++k) rx[k] = u[k] * rx[k] + v[k] * ry[k];
+        fft_.forward(rx, C.data());
+      }
       const double kappa = grid_.diffusivity, b = grid_.buoyancy;
       for (int m = 0; m < M; ++m) {
-        C[m] = -C[m] - kappa * fft_.k2(m) * R[m] + source_modes_[m];
-        if (m != 0) B[m] += b * R[m];  // the mean density lifts nothing (Boussinesq about it)
+        C[m] = advective ? -C[m] : Complex(0);
+        if (viscous) C[m] -= kappa * fft_.k2(m) * R[m];
+        if (advective) {
+          C[m] += source_modes_[m];
+          if (m != 0) B[m] += b * R[m];  // the mean density lifts nothing (Boussinesq about it)
+        }
       }
       fft_.dealias(C.data());
       fft_.inverse(C.data(), dydt.data() + 2 * P);
@@ -213,6 +239,41 @@ class Fluid final : public Model {
     fft_.inverse(B.data(), dydt.data() + P);
   }
 
+  // x <- (1 - gamma df_I/dy)^-1 x for the implicit part, linear: in Fourier space df_I/dy is -nu |k|^2 Q with Q
+  // the projection (Leray after the 2/3 rule; the 2/3 rule alone for the density, with kappa), so with QX and
+  // X - QX apart, X = B - (gamma nu |k|^2 / (1 + gamma nu |k|^2)) Q B
+  void implicit_solve(double gamma, Eigen::Ref<Eigen::VectorXd> x) const {
+    const int M = fft_.modes();
+    const Eigen::Index P = cells_;
+    thread_local Scratch scratch;
+    scratch.size_for(M, P);
+    Modes &U = scratch.U, &V = scratch.V, &A = scratch.A, &B = scratch.B;
+    const auto shrink = [&](Modes& full, const Modes& projected, double diffusivity) {
+      for (int m = 0; m < M; ++m) {
+        const double c = gamma * diffusivity * fft_.k2(m);
+        full[m] -= c / (1 + c) * projected[m];
+      }
+    };
+    fft_.forward(x.data(), U.data());
+    fft_.forward(x.data() + P, V.data());
+    A = U, B = V;
+    fft_.dealias(A.data());
+    fft_.dealias(B.data());
+    fft_.project(A.data(), B.data());
+    shrink(U, A, grid_.viscosity);
+    shrink(V, B, grid_.viscosity);
+    fft_.inverse(U.data(), x.data());
+    fft_.inverse(V.data(), x.data() + P);
+    if (density_) {
+      fft_.forward(x.data() + 2 * P, U.data());
+      A = U;
+      fft_.dealias(A.data());
+      shrink(U, A, grid_.diffusivity);
+      fft_.inverse(U.data(), x.data() + 2 * P);
+    }
+  }
+
+ public:
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
     return 0.5 * fft_.spacing() * fft_.spacing() * y.head(2 * cells_).squaredNorm();
   }
@@ -288,6 +349,7 @@ class Fluid final : public Model {
   Eigen::Index cells_;
   PeriodicFft fft_;
   FluidGridView grid_;
+  ImexSplit split_;
   bool density_ = false;       // the density is carried (smoke): its transforms are done
   int mode_ = 0;
   double amplitude_ = 0, width_ = 0, perturbation_ = 0;

@@ -10,7 +10,9 @@
 //   of degree 5, so interpolated outputs would cap Verner 6(5) and Fehlberg 8(7) below their order.
 // - DIRK: f all implicit, Newton with dense LU (analytic or difference-quotient Jacobian) or KLU on the
 //   system's sparse Jacobian. IMEX: the model's split (capabilities/imex_split.hpp), its stiff part
-//   implicit with KLU on df_I/dy, the rest explicit; a call of either part counts as one call of f.
+//   implicit with KLU on df_I/dy or, where the model solves (1 - gamma df_I/dy) x = b itself (the fluid's
+//   viscosity, by FFT), with that solve as a matrix-embedded linear solver; the rest explicit; a call of either
+//   part counts as one call of f.
 // - Events use ARKODE's rootfinding, as CVODE's do (sundials::output_loop).
 #include "solvers/method.hpp"
 
@@ -64,6 +66,35 @@ constexpr double fixed_newton_rtol = 1e-10, fixed_newton_atol = 1e-12;
 constexpr int fixed_newton_iterations = 10;
 
 struct ArkodeFree { void operator()(void* mem) const { ARKStepFree(&mem); } };
+
+// An IMEX run's Newton systems (1 - gamma df_I/dy) x = b solved by the model's own direct solve
+// (ImexSplit::implicit_solve): a SUNDIALS "matrix-embedded" linear solver, gamma read from ARKStep at each solve
+struct EmbeddedSolve {
+  void* arkode = nullptr;
+  const ImexSplit* split = nullptr;
+};
+
+SUNLinearSolver embedded_solver(EmbeddedSolve* content, SUNContext context) {
+  SUNLinearSolver s = SUNLinSolNewEmpty(context);
+  if (!s) return nullptr;
+  s->content = content;
+  s->ops->gettype = [](SUNLinearSolver) { return SUNLINEARSOLVER_MATRIX_EMBEDDED; };
+  s->ops->solve = [](SUNLinearSolver self, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) {
+    const auto* e = static_cast<const EmbeddedSolve*>(self->content);
+    sunrealtype gamma = 0;
+    if (ARKStepGetCurrentGamma(e->arkode, &gamma) != ARK_SUCCESS) return static_cast<int>(SUNLS_MEM_NULL);
+    N_VScale(1.0, b, x);
+    Eigen::Map<Eigen::VectorXd> v(N_VGetArrayPointer(x), N_VGetLength(x));
+    e->split->implicit_solve(gamma, v);
+    return static_cast<int>(SUNLS_SUCCESS);
+  };
+  s->ops->free = [](SUNLinearSolver self) {
+    self->content = nullptr;  // not SUNDIALS' to free
+    SUNLinSolFreeEmpty(self);
+    return static_cast<int>(SUNLS_SUCCESS);
+  };
+  return s;
+}
 
 std::string flag_name(long flag) {
   char* name = ARKStepGetReturnFlagName(flag);
@@ -124,10 +155,16 @@ class ArkodeIntegrator final : public Integrator {
       if (const int code = ARKStepSetMaxStep(m, max_step)) return setup_failed("ARKStepSetMaxStep", code);
     }
 
-    // Newton's linear systems: KLU on the sparse pattern (df_I/dy for IMEX), else dense LU
+    // Newton's linear systems: the model's own solve (IMEX, where it has one), KLU on the sparse pattern
+    // (df_I/dy for IMEX), else dense LU
     MatrixPtr matrix;
+    EmbeddedSolve embedded{m, callbacks.split};
     LinSolPtr linear;
-    if (implicit && (imex || system.has_sparse_jacobian())) {
+    if (imex && callbacks.split->implicit_solve) {
+      linear.reset(embedded_solver(&embedded, context.get()));
+      if (!linear) return setup_failed("SUNLinSolNewEmpty", ARK_MEM_FAIL);
+      if (const int code = ARKStepSetLinearSolver(m, linear.get(), nullptr)) return setup_failed("ARKStepSetLinearSolver", code);
+    } else if (implicit && (imex || system.has_sparse_jacobian())) {
       initial_pattern(callbacks, t0, y0);
       matrix.reset(sparse_matrix(callbacks, context.get()));
       linear.reset(SUNLinSol_KLU(y.get(), matrix.get(), context.get()));
