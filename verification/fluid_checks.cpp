@@ -12,12 +12,16 @@
 
 namespace stepwise {
 
+std::unique_ptr<Model> unit_taylor_green(int n, double nu) {
+  return make_model("taylor-green", {{"size", n}, {"viscosity", nu}, {"length", 1}, {"mode", 1}, {"amplitude", 1}});
+}
+
 double taylor_green_effective_viscosity(const Model& model, double k, const Eigen::VectorXd& y0, const Eigen::VectorXd& y, double t) {
   return -std::log(*model.energy(y) / *model.energy(y0)) / (4 * k * k * t);
 }
 
 double taylor_green_viscosity(std::string_view method, int n, double nu, double h, double t_end) {
-  const auto model = make_model("taylor-green", {{"size", n}, {"viscosity", nu}, {"length", 1}, {"mode", 1}, {"amplitude", 1}});
+  const auto model = unit_taylor_green(n, nu);
   StepControl control = StepControl::fixed(h);
   control.observe = [](const Eigen::VectorXd& y) { return y; };
   const Measured m = run_and_measure(*model, method, control, t_end, t_end);
@@ -35,7 +39,7 @@ std::optional<FluidStepLimits> fluid_step_limits(std::string_view method, int n,
 }
 
 double taylor_green_measured_stable_dt(std::string_view method, int n, double nu, long steps, double predicted) {
-  const auto model = make_model("taylor-green", {{"size", n}, {"viscosity", nu}, {"length", 1}, {"mode", 1}, {"amplitude", 1}});
+  const auto model = unit_taylor_green(n, nu);
   Eigen::VectorXd y0 = model->initial_state();
   std::mt19937_64 rng(17);
   std::uniform_real_distribution<double> u(-1e-3, 1e-3);

@@ -5,10 +5,14 @@
 
 #include "models/model.hpp"
 
+#include <memory>
 #include <optional>
 #include <string_view>
 
 namespace stepwise {
+
+// The Taylor-Green vortex these checks and the report's fluid section use: L = 1 m, mode 1 (k = 2 pi), A = 1 m/s
+std::unique_ptr<Model> unit_taylor_green(int n, double nu);
 
 // The viscosity the Taylor-Green vortex's energy decay implies between y0 (t = 0) and y (t):
 // E(t) = E(0) e^(-4 nu k^2 t), k = 2 pi m / L

@@ -78,7 +78,7 @@ StudyOutput work_precision(const StudyContext& ctx) {
   std::vector<double> rtols;
   for (int e = 2; e <= 12; e += ctx.quick ? 2 : 1) rtols.push_back(std::pow(10.0, -e));
 
-  const auto scenes = work_precision_scenes();
+  const auto scenes = work_precision_scenes(ctx.quick);
   // the reference states of the scenes without an exact solution
   std::map<const StudyScene*, Eigen::VectorXd> reference;
   for (const auto& scene : scenes)
