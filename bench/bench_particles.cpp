@@ -12,6 +12,7 @@
 #include "models/cell_list.hpp"
 #include "models/model.hpp"
 #include "ratio_reporter.hpp"
+#include "stream_triad.hpp"
 #include "solvers/method_table.hpp"
 
 #include <random>
@@ -38,20 +39,7 @@ void BM_particle_step(benchmark::State& state) {
 BENCHMARK(BM_particle_step)->Args({100000, 0})->Args({4000000, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // a[i] = b[i] + s c[i] over arrays as large together as n particles' working set
-void BM_triad(benchmark::State& state) {
-  const auto length = static_cast<Eigen::Index>(state.range(0)) * 5;
-  Eigen::VectorXd a = Eigen::VectorXd::Zero(length), b = Eigen::VectorXd::Constant(length, 1.0), c = Eigen::VectorXd::Constant(length, 2.0);
-  const double s = 3.0;
-  for (auto _ : state) {
-    for (int k = 0; k < 20; ++k) {
-      a = b + s * c;
-      benchmark::DoNotOptimize(a.data());
-      benchmark::ClobberMemory();
-    }
-  }
-  state.counters["bytes"] = benchmark::Counter(24.0 * static_cast<double>(length) * 20 * static_cast<double>(state.iterations()),
-                                               benchmark::Counter::kIsRate);
-}
+void BM_triad(benchmark::State& state) { stepwise::bench::stream_triad(state, static_cast<Eigen::Index>(state.range(0)) * 5, 20); }
 BENCHMARK(BM_triad)->Arg(100000)->Arg(4000000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // with the repulsion on: the pairs dominate, and the cell list keeps them O(N)

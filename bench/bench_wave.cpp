@@ -12,6 +12,7 @@
 // its rows in cache, so it passes the streaming rate again; it is bitwise the plain loop (test_wave).
 #include "models/height_field.hpp"
 #include "ratio_reporter.hpp"
+#include "stream_triad.hpp"
 #include "solvers/gpu/gpu_wave.hpp"
 #include "solvers/wave_step.hpp"
 #include "run/measure.hpp"
@@ -80,19 +81,7 @@ void BM_gpu_wave(benchmark::State& state) {
 }
 
 // a[i] = b[i] + s c[i] over three arrays of range(0)^2, eight times an iteration
-void BM_triad(benchmark::State& state) {
-  const auto length = state.range(0) * state.range(0);
-  Eigen::VectorXd a = Eigen::VectorXd::Zero(length), b = Eigen::VectorXd::Constant(length, 1.0), c = Eigen::VectorXd::Constant(length, 2.0);
-  for (auto _ : state) {
-    for (int k = 0; k < steps; ++k) {
-      a = b + 3.0 * c;
-      benchmark::DoNotOptimize(a.data());
-      benchmark::ClobberMemory();
-    }
-  }
-  state.counters["bytes"] = benchmark::Counter(24.0 * static_cast<double>(length) * steps * static_cast<double>(state.iterations()),
-                                               benchmark::Counter::kIsRate);
-}
+void BM_triad(benchmark::State& state) { stepwise::bench::stream_triad(state, state.range(0) * state.range(0), steps); }
 
 // every grid with one and two threads
 void grids(benchmark::internal::Benchmark* b) {

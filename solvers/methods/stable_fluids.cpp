@@ -103,8 +103,11 @@ class StableFluids final : public FixedStepper {
   double sample(const double* q, double x, double y, double* lo = nullptr, double* hi = nullptr) const {
     const double fx = std::floor(x), fy = std::floor(y);
     const double ax = x - fx, ay = y - fy;
-    const auto wrap = [n = n_](double c) {
-      const long w = static_cast<long>(c) % n;
+    const auto wrap = [n = n_](double c) {  // the division only for points more than a period away
+      long w = static_cast<long>(c);
+      if (w >= 0 && w < n) return static_cast<Eigen::Index>(w);
+      if (w >= -n && w < 0) return static_cast<Eigen::Index>(w + n);
+      w %= n;
       return static_cast<Eigen::Index>(w < 0 ? w + n : w);
     };
     const Eigen::Index j0 = wrap(fx), j1 = j0 + 1 == n_ ? 0 : j0 + 1, i0 = wrap(fy), i1 = i0 + 1 == n_ ? 0 : i0 + 1;
