@@ -3,6 +3,7 @@
 // and diffusive by an amount that falls as grid and step are refined.
 #include "models/model.hpp"
 #include "run/measure.hpp"
+#include "run/scene.hpp"
 #include "solvers/periodic_fft.hpp"
 #include "solvers/capabilities/imex_split.hpp"
 #include "verification/fluid_checks.hpp"
@@ -124,6 +125,43 @@ TEST(Fluid, WithoutViscosityTheDealiasedMethodOfLinesConservesEnergyAndDensity) 
   const double total = summary_value(*smoke, s.result.trajectory.y.back(), "density_total");
   std::cout << "smoke: density total " << total << " after " << t << " s, the source's " << two_pi * r * r * t << '\n';
   EXPECT_NEAR(total / (two_pi * r * r * t), 1.0, tolerance::spectral_divergence);
+}
+
+// The double shear layer has no exact solution; its reference is a converged run, in both senses:
+//  - in space, the scene's own flow (scenes/shear-layer.toml, rolled up to its t_end) on finer and finer grids:
+//    a Fourier method on an analytic flow converges faster than any power of 1/n, so the enstrophy's change
+//    from one grid to the next falls by more than a fourth-order method's would (the differences of C n^-4);
+//  - in time, the work-precision study's reference (gsl-rk8pd at rtol 1e-13 on 24^2 over 0.25 s) against an
+//    independent code at the same tolerance, CVODE's Adams: two adaptive codes agree to a small multiple of rtol.
+TEST(Fluid, TheShearLayersReferenceIsConvergedInSpaceAndInTime) {
+  const Scene scene = load_scene(scenes_directory() + "/shear-layer.toml");
+  ASSERT_TRUE(scene.t_end && scene.dt);
+  const std::vector<int> grids{64, 96, 128};
+  std::vector<double> enstrophy;
+  for (const int n : grids) {
+    Params p = scene.parameters;
+    p["size"] = n;
+    const auto model = make_model("shear-layer", p);
+    const Measured m = run_and_measure(*model, "rk4", whole(StepControl::fixed(*scene.dt)), *scene.t_end, *scene.t_end);
+    ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+    enstrophy.push_back(summary_value(*model, m.result.trajectory.y.back(), "enstrophy"));
+  }
+  const double fall = std::abs(enstrophy[0] - enstrophy[1]) / std::abs(enstrophy[1] - enstrophy[2]);
+  const auto power = [&](int i) { return std::pow(grids[i], -4.0); };
+  const double fourth_order_fall = (power(0) - power(1)) / (power(1) - power(2));
+  std::cout << "shear layer at t = " << *scene.t_end << " s: enstrophy " << enstrophy[0] << ", " << enstrophy[1] << ", " << enstrophy[2]
+            << " on 64, 96, 128^2; the change falls " << fall << "x (fourth order: " << fourth_order_fall << "x)\n";
+  EXPECT_GT(fall, fourth_order_fall);
+
+  const double rtol = 1e-13, t = 0.25;
+  const auto model = make_model("shear-layer", {{"size", 24}});
+  const Measured a = run_and_measure(*model, "gsl-rk8pd", StepControl::adaptive(rtol, 1e-3 * rtol), t, t);
+  const Measured b = run_and_measure(*model, "cvode-adams", StepControl::adaptive(rtol, 1e-3 * rtol), t, t);
+  ASSERT_EQ(a.result.status, Status::ok) << a.result.message;
+  ASSERT_EQ(b.result.status, Status::ok) << b.result.message;
+  const double size = a.result.y_stop.lpNorm<Eigen::Infinity>(), gap = (a.result.y_stop - b.result.y_stop).lpNorm<Eigen::Infinity>();
+  std::cout << "shear layer 24^2 at " << t << " s: gsl-rk8pd and cvode-adams at rtol " << rtol << " differ by " << gap << " (max |y| " << size << ")\n";
+  EXPECT_LE(gap, tolerance::adaptive_agreement_factor * rtol * size);
 }
 
 // the viscosity the Taylor-Green decay implies (verification/fluid_checks.hpp)
