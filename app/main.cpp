@@ -2,6 +2,7 @@
 #include "render_command.hpp"
 #include "run_command.hpp"
 #include "run/interrupt.hpp"
+#include "run/ranks.hpp"
 #include "run/message.hpp"
 #include "run/scene.hpp"
 
@@ -17,6 +18,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 namespace {
 
@@ -145,6 +147,13 @@ int run(int argc, char** argv) {
 // the user gave) is exit 2, anything else a failed run, exit 1; either way one line, and the outputs as the
 // commands leave them (temporaries removed as their guards unwind; the previous outputs untouched)
 int main(int argc, char** argv) {
+  std::optional<stepwise::ranks::Session> mpi;  // MPI under mpirun only (run/ranks.hpp)
+  try {
+    mpi.emplace(argc, argv);
+  } catch (const std::exception& e) {
+    stepwise::print_error("", e.what());
+    return 1;
+  }
   stepwise::interrupt::install();
   try {
     return run(argc, argv);

@@ -1,12 +1,14 @@
 #include "render_command.hpp"
 
 #include "run/message.hpp"
+#include "run/ranks.hpp"
 
 #include <fmt/format.h>
 
 namespace stepwise {
 
 int render_command(const RenderOptions& options) {
+  if (ranks::idle_here("render")) return 0;  // under mpirun, rank 0 draws
   try {
     const RenderedRun drawn = render_scene(options);
     if (drawn.status != Status::ok) {

@@ -4,6 +4,7 @@
 #include "run/interrupt.hpp"
 #include "run/measure.hpp"
 #include "run/message.hpp"
+#include "run/ranks.hpp"
 #include "run/run_outputs.hpp"
 
 #include <fmt/format.h>
@@ -15,6 +16,8 @@
 namespace stepwise {
 
 int run_command(const RunOptions& options) {
+  // under mpirun: no model is distributed yet, so rank 0 runs the scene as one process would (docs/usage.md)
+  if (ranks::idle_here("run")) return 0;
   PreparedRun p;
   std::unique_ptr<RunOutputs> outputs;
   try {

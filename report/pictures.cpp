@@ -41,6 +41,7 @@ const QuickChange* quick_change(const std::string& scene, bool quick) {
 struct Drawn {
   std::string scene;
   nlohmann::json summary;
+  static auto fields(auto& s) { return std::tie(s.scene, s.summary); }
 };
 
 }  // namespace

@@ -5,6 +5,8 @@
 #include "run/process.hpp"
 #include "run/message.hpp"
 #include "run/interrupt.hpp"
+#include "run/provenance.hpp"
+#include "run/ranks.hpp"
 #include "studies.hpp"
 #include "solvers/method_table.hpp"
 
@@ -38,20 +40,40 @@ const Study* find_study(const std::string& name) {
   return nullptr;
 }
 
-// run one study, write its CSVs into dir, add its figures to the list; return its Markdown section
+// run one study, write its CSVs into dir (rank 0: the others compute their share and write nothing), add its
+// figures to the list; return its Markdown section
 std::string run_study(const Study& study, const StudyContext& ctx, const fs::path& dir, std::vector<Figure>& figures) {
   const auto start = std::chrono::steady_clock::now();
-  ctx.progress->begin_study(fmt::format("{}{}", study.name, ctx.quick ? " (quick)" : ""));
+  if (ctx.progress) ctx.progress->begin_study(fmt::format("{}{}", study.name, ctx.quick ? " (quick)" : ""));
   StudyOutput output = study.run(ctx);
   std::string md = fmt::format("## {}\n\n{}", study.title, output.markdown);
   md += "Data: ";
   for (const auto& [stem, table] : output.tables) {
-    write_file_atomic(dir / (stem + ".csv"), to_csv(table));
+    if (ranks::rank() == 0) write_file_atomic(dir / (stem + ".csv"), to_csv(table));
     md += fmt::format("[{0}.csv]({0}.csv) ", stem);
   }
   figures.insert(figures.end(), output.figures.begin(), output.figures.end());
-  ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  if (ctx.progress) ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return md + "\n\n";
+}
+
+// provenance.json into dir: what ran, where, when, and how the ranks shared the sweeps
+void write_provenance(const fs::path& dir, std::string command, const StudyContext& ctx, std::chrono::system_clock::time_point start) {
+  write_file_atomic(dir / "provenance.json",
+                    provenance_json({std::move(command), ctx.threads, start, std::chrono::system_clock::now(), ctx.load ? ctx.load->seconds : std::vector<double>{}}));
+}
+
+// Under mpirun every rank runs the command and the sweeps' points are shared among them (report/sweep.hpp);
+// rank 0 alone checks the output directory and writes. A failure every rank sees alike (a point that failed:
+// SweepError; a check of rank 0's that every rank is told of) ends each rank normally; one only this rank
+// sees would leave the others waiting for it at the next sweep, so it stops them all (MPI_Abort), after rank 0
+// has put its outputs back as they were. `together`: the sweeps are not over (after them rank 0 writes alone).
+int fail(const char* command, const std::exception& e, bool together) {
+  const bool shared = dynamic_cast<const SweepError*>(&e) != nullptr;
+  if (ranks::rank() == 0) print_error(command, e.what());
+  else if (!shared) print_error(command, fmt::format("rank {}: {}", ranks::rank(), e.what()));
+  if (ranks::size() > 1 && together && !shared) ranks::abort_all(1);
+  return 1;
 }
 
 // the figures' list for plot.py (figures.csv), then plot.py drawing them, and with `html` report.md as index.html
@@ -128,37 +150,49 @@ int threads_or_default(int requested) { return requested > 0 ? requested : stati
 }  // namespace
 
 int study_command(const std::string& name, bool quick, int threads, const std::string& out) {
+  const bool writer = ranks::rank() == 0;
   const Study* study = find_study(name);
   if (!study) {
-    print_error("study", fmt::format("unknown study '{}' (one of {})", name, study_names()));
+    if (writer) print_error("study", fmt::format("unknown study '{}' (one of {})", name, study_names()));
     return 2;
   }
+  bool usable = true;
+  if (writer) try {
+      ensure_writable_directory(out);
+      interrupt::remove_stale(out);
+    } catch (const std::runtime_error& e) {
+      print_error("study", e.what());
+      usable = false;
+    }
+  if (!ranks::all_agree(usable)) return 2;
+  bool together = true;
   try {
-    ensure_writable_directory(out);
-    interrupt::remove_stale(out);
-  } catch (const std::runtime_error& e) {
-    print_error("study", e.what());
-    return 2;
-  }
-  try {
+    const auto start = std::chrono::system_clock::now();
     Progress progress;
-    const StudyContext ctx{quick, threads_or_default(threads), &progress};
+    RankLoad load;
+    StudyContext ctx{quick, threads_or_default(threads), writer ? &progress : nullptr};
+    ctx.load = &load;
     std::vector<Figure> figures;
-    write_file_atomic(fs::path(out) / (name + ".md"), run_study(*study, ctx, out, figures));
+    const std::string md = run_study(*study, ctx, out, figures);
+    together = false;
+    if (!writer) return 0;
+    write_file_atomic(fs::path(out) / (name + ".md"), md);
     draw_figures(figures, out, false);
-  } catch (const std::runtime_error& e) {
-    print_error("study", e.what());
-    return 1;
+    write_provenance(out, fmt::format("study {}{}", name, quick ? " --quick" : ""), ctx, start);
+  } catch (const std::exception& e) {
+    return fail("study", e, together);
   }
   return 0;
 }
 
 int report_command(bool quick, int threads, const std::string& out, const std::string& scenes_dir) {
+  const bool writer = ranks::rank() == 0;
   const fs::path target = fs::absolute(out).lexically_normal();
   const fs::path parent = target.parent_path();
   fs::path staging;
   std::unique_ptr<interrupt::Temporary> staging_guard;
-  try {
+  bool usable = true;
+  if (writer) try {
     // the old report is replaced, never a directory that is something else (a source folder, a home)
     if (fs::exists(target) && !(fs::is_directory(target) && (fs::is_empty(target) || fs::exists(target / report_marker))))
       throw std::runtime_error(fmt::format("{}: exists and is not a stepwise report (no {} listing what a report wrote); refusing to "
@@ -175,28 +209,40 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
     fs::permissions(staging, static_cast<fs::perms>(default_mode(true)));
   } catch (const std::runtime_error& e) {
     print_error("report", fmt::format("--out: {}", e.what()));
-    return 2;
+    usable = false;
   }
+  if (!ranks::all_agree(usable)) return 2;
 
   const auto start = std::chrono::steady_clock::now();
+  const auto started = std::chrono::system_clock::now();
   Progress progress;
-  const StudyContext ctx{quick, threads_or_default(threads), &progress};
+  RankLoad load;
+  StudyContext ctx{quick, threads_or_default(threads), writer ? &progress : nullptr};
+  ctx.load = &load;
   std::string md = fmt::format("# stepwise report{}\n\n", quick ? " (quick)" : "");
   md += "Every table and figure below is computed by this run from the CSV files named under it, in this directory.\n\n";
   std::vector<Figure> figures;
   std::error_code ec;
+  bool together = true;
   try {
     for (const auto& study : studies()) md += run_study(study, ctx, staging, figures);
-    md += pictures_section(staging, scenes_dir, ctx);
+    together = false;
+    if (!writer) return 0;
+    // the pictures on rank 0 alone: each is a directory of frames, drawn where the report is written
+    StudyContext here = ctx;
+    here.distribute = false;
+    md += pictures_section(staging, scenes_dir, here);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    md += fmt::format("---\nStudies run in {:.1f} s of wall time on {} threads.\n", seconds, ctx.threads);
+    md += ranks::size() == 1 ? fmt::format("---\nStudies run in {:.1f} s of wall time on {} threads.\n", seconds, ctx.threads)
+                             : fmt::format("---\nStudies run in {:.1f} s of wall time on {} MPI ranks of {} threads (the pictures on rank 0).\n",
+                                           seconds, ranks::size(), ctx.threads);
     write_file_atomic(staging / "report.md", md);
     draw_figures(figures, staging, true);
+    write_provenance(staging, quick ? "report --quick" : "report", ctx, started);
     write_report_marker(staging);
   } catch (const std::exception& e) {
-    fs::remove_all(staging, ec);
-    print_error("report", e.what());
-    return 1;
+    if (writer) fs::remove_all(staging, ec);
+    return fail("report", e, together);
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   swap_report(staging, target);

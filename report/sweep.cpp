@@ -1,5 +1,7 @@
 #include "sweep.hpp"
 
+#include "run/ranks.hpp"
+
 #include <fmt/format.h>
 
 #include <unistd.h>
@@ -94,35 +96,112 @@ void Progress::end_study(double seconds) {
   else fmt::print(stderr, "stepwise: study {} done in {:.1f} s\n", study_, seconds);
 }
 
-void StudyContext::run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point,
-                              const std::vector<double>& costs, const std::vector<std::string>& groups) const {
-  const std::vector<double> weights = costs.empty() ? std::vector<double>(labels.size(), 1.0) : costs;
-  // the order the points are taken in: the costliest first
-  std::vector<size_t> order(labels.size());
+std::vector<std::vector<size_t>> share_by_cost(const std::vector<double>& costs, int ranks) {
+  std::vector<size_t> order(costs.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return weights[a] > weights[b]; });
-  const size_t n = std::min(labels.size(), static_cast<size_t>(std::max(threads, 1)));
-  if (progress) progress->begin_sweep(weights, groups, static_cast<int>(n), !costs.empty());
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return costs[a] > costs[b]; });
+  std::vector<std::vector<size_t>> shares(static_cast<size_t>(std::max(ranks, 1)));
+  std::vector<double> load(shares.size(), 0.0);
+  for (const size_t i : order) {
+    const size_t r = static_cast<size_t>(std::min_element(load.begin(), load.end()) - load.begin());
+    shares[r].push_back(i);
+    load[r] += costs[i];
+  }
+  return shares;
+}
+
+void StudyContext::run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point,
+                              const std::vector<double>& costs, const std::vector<std::string>& groups,
+                              const std::function<void(size_t, pack::Writer&)>& put, const std::function<void(size_t, pack::Reader&)>& get) const {
+  const std::vector<double> weights = costs.empty() ? std::vector<double>(labels.size(), 1.0) : costs;
+  const int ranks = distribute ? ranks::size() : 1, me = distribute ? ranks::rank() : 0;
+  // this rank's points, the costliest first
+  const std::vector<size_t> mine = share_by_cost(weights, ranks)[static_cast<size_t>(me)];
+  const size_t n = std::min(mine.size(), static_cast<size_t>(std::max(threads, 1)));
+  if (progress) {
+    std::vector<double> my_weights;
+    std::vector<std::string> my_groups;
+    for (const size_t i : mine) {
+      my_weights.push_back(weights[i]);
+      if (!groups.empty()) my_groups.push_back(groups[i]);
+    }
+    progress->begin_sweep(my_weights, my_groups, static_cast<int>(std::max<size_t>(n, 1)), !costs.empty());
+  }
+  const auto start = std::chrono::steady_clock::now();
   std::atomic<size_t> next{0};
   std::vector<std::exception_ptr> errors(labels.size());
   auto worker = [&] {
-    for (size_t k = next++; k < labels.size(); k = next++) {
-      const size_t i = order[k];
-      const auto start = std::chrono::steady_clock::now();
+    for (size_t k = next++; k < mine.size(); k = next++) {
+      const size_t i = mine[k];
+      const auto begun = std::chrono::steady_clock::now();
       try {
         point(i);
       } catch (...) {
         errors[i] = std::current_exception();
       }
-      if (progress) progress->point_done(i, labels[i], std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      if (progress) progress->point_done(k, labels[i], std::chrono::duration<double>(std::chrono::steady_clock::now() - begun).count());
     }
   };
   std::vector<std::jthread> pool;
   for (size_t k = 1; k < n; ++k) pool.emplace_back(worker);
   worker();
   pool.clear();
-  for (const auto& e : errors)
-    if (e) std::rethrow_exception(e);
+  const double busy = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (ranks == 1) {
+    if (load) {
+      load->seconds.resize(std::max<size_t>(load->seconds.size(), 1));
+      load->seconds[0] += busy;
+    }
+    for (const auto& e : errors)
+      if (e) std::rethrow_exception(e);
+    return;
+  }
+
+  // hand this rank's results to every rank: its busy time, then each point's index, whether it failed, and
+  // the error's message or the result
+  const auto message = [](const std::exception_ptr& e) {
+    try {
+      std::rethrow_exception(e);
+    } catch (const std::exception& x) {
+      return std::string(x.what());
+    } catch (...) {
+      return std::string("an unknown exception");
+    }
+  };
+  pack::Writer w;
+  pack::put(w, busy);
+  for (const size_t i : mine) {
+    pack::put(w, i);
+    pack::put(w, errors[i] != nullptr);
+    if (errors[i]) pack::put(w, message(errors[i]));
+    else put(i, w);
+  }
+  const std::vector<std::string> all = ranks::all_gather(w.bytes());
+  std::map<size_t, std::string> failed;  // point -> "rank r, point label: message", in point order
+  std::vector<double> seconds(static_cast<size_t>(ranks));
+  for (int r = 0; r < ranks; ++r) {
+    pack::Reader reader(all[static_cast<size_t>(r)]);
+    pack::get(reader, seconds[static_cast<size_t>(r)]);
+    while (!reader.done()) {
+      size_t i = 0;
+      bool error = false;
+      pack::get(reader, i);
+      pack::get(reader, error);
+      if (i >= labels.size()) throw std::runtime_error(fmt::format("rank {} handed over point {} of a sweep of {}: the ranks run different sweeps", r, i, labels.size()));
+      if (error) {
+        std::string what;
+        pack::get(reader, what);
+        failed[i] = fmt::format("rank {}, point {}: {}", r, labels[i], what);
+      } else {
+        get(i, reader);  // this rank's own too: every rank's results come through the same bytes
+      }
+    }
+  }
+  if (load) {
+    load->seconds.resize(std::max(load->seconds.size(), seconds.size()));
+    for (size_t r = 0; r < seconds.size(); ++r) load->seconds[r] += seconds[r];
+  }
+  if (!failed.empty()) throw SweepError(failed.begin()->second);
 }
 
 }  // namespace stepwise

@@ -1,5 +1,8 @@
-// A study's sweep: independent points run on a pool of threads, results kept in point order, progress shown.
+// A study's sweep: independent points run on a pool of threads, results kept in point order, progress shown;
+// under mpirun the points are shared among the ranks too, by expected cost, and every rank gets every result.
 #pragma once
+
+#include "report/pack.hpp"
 
 #include <chrono>
 #include <cstddef>
@@ -43,29 +46,53 @@ class Progress {
   std::chrono::steady_clock::time_point last_line_time_;
 };
 
+// how the sweeps' points were shared among the ranks: each rank's busy seconds (its points' wall time until it
+// handed them over), summed over the sweeps
+struct RankLoad {
+  std::vector<double> seconds;
+};
+
+// a point that failed, on whichever rank: the same on every rank, so every rank stops the same way
+struct SweepError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 // what a study runs with: the sweep size and the pool its points share
 struct StudyContext {
   bool quick = false;
   int threads = 1;
   Progress* progress = nullptr;
+  // share the points among the MPI ranks (every rank runs the same sweeps in the same order): off for a sweep
+  // only rank 0 runs (the pictures, drawn where they are written)
+  bool distribute = true;
+  RankLoad* load = nullptr;
 
   // task(i) for each i < labels.size(), on up to `threads` threads; results in index order, whatever the
   // thread count (a point never reads another's result). An exception from any point is rethrown here.
   // `costs`, where given, are the points' expected CPU times in nanoseconds: the costliest run first (so that no
-  // thread is left with one long point at the end) and the time left is estimated from them
-  template <class R>
+  // thread is left with one long point at the end) and the time left is estimated from them.
   // `groups` name which points cost alike relative to their expected costs (the time-left estimate learns
-  // each group's ratio from its points done)
+  // each group's ratio from its points done).
+  // Under mpirun each rank runs a share of the points, chosen by cost (the costliest point to the rank with
+  // the least cost so far), and every rank gets every result (R is packed: report/pack.hpp); a point's
+  // exception becomes a SweepError naming its rank and label, on every rank.
+  template <class R>
   std::vector<R> sweep(const std::vector<std::string>& labels, const std::function<R(size_t)>& task, const std::vector<double>& costs = {},
                        const std::vector<std::string>& groups = {}) const {
     std::vector<R> results(labels.size());
-    run_points(labels, [&](size_t i) { results[i] = task(i); }, costs, groups);
+    run_points(labels, [&](size_t i) { results[i] = task(i); }, costs, groups, [&](size_t i, pack::Writer& w) { pack::put(w, results[i]); },
+               [&](size_t i, pack::Reader& r) { pack::get(r, results[i]); });
     return results;
   }
 
  private:
   void run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point, const std::vector<double>& costs,
-                  const std::vector<std::string>& groups) const;
+                  const std::vector<std::string>& groups, const std::function<void(size_t, pack::Writer&)>& put,
+                  const std::function<void(size_t, pack::Reader&)>& get) const;
 };
+
+// the points each of `ranks` ranks runs, in the order it runs them (the costliest first): each point in turn,
+// costliest first, to the rank whose share costs least so far (lowest rank on a tie); the same on every rank
+std::vector<std::vector<size_t>> share_by_cost(const std::vector<double>& costs, int ranks);
 
 }  // namespace stepwise

@@ -6,6 +6,7 @@
 #include "solvers/method_table.hpp"
 
 #include <optional>
+#include <tuple>
 #include <vector>
 
 namespace stepwise {
@@ -14,6 +15,7 @@ struct Measured {
   std::vector<double> t_out;     // requested output times (t0 excluded)
   RunResult result;
   std::optional<double> error;   // max-norm error against the exact solution at t_end; empty if none or not ok
+  static auto fields(auto& s) { return std::tie(s.t_out, s.result, s.error); }
 };
 
 // output times t0 + k * output_dt up to t_end, t_end always last

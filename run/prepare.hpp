@@ -37,6 +37,7 @@ struct PreparedRun {
   double t_end = 0;
   double output_dt = 0;
   double output_bytes = 0;  // the trajectory's size, estimated from its rows and columns
+  int ranks = 1;            // the MPI ranks the run uses: no model is distributed yet, so one (under mpirun, rank 0)
 };
 
 // the options checked against the scene, its model and the method; InputError (or BadMethod) naming the

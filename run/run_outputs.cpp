@@ -38,6 +38,7 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m) {
   j["projections"] = r.stats.projections;
   j["contact_sweeps"] = r.stats.contact_sweeps;
   j["cpu_seconds"] = r.stats.cpu_seconds;
+  j["ranks"] = p.ranks;
   const auto names = sample_names(*p.model);
   const Eigen::VectorXd final_sample = p.model->summary(r.y_stop);
   j["final_state"] = nlohmann::json::object();

@@ -5,6 +5,7 @@
 #include "ode_system.hpp"
 
 #include <functional>
+#include <tuple>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -61,6 +62,11 @@ struct Stats {
   long projections = 0;     // projections onto the system's manifold (OdeSystem::project)
   long contact_sweeps = 0;  // Gauss-Seidel sweeps over contacts (solvers/contact_solve.hpp)
   double cpu_seconds = 0;   // thread CPU time of the integration
+  // the members, to copy a result between processes (report/pack.hpp)
+  static auto fields(auto& s) {
+    return std::tie(s.steps, s.rejected, s.rhs_evals, s.jac_evals, s.linear_solves, s.factorizations, s.events, s.projections, s.contact_sweeps,
+                    s.cpu_seconds);
+  }
 };
 
 enum class Status { ok, diverged, failed };
@@ -70,6 +76,7 @@ std::string_view to_string(Status status);
 struct Trajectory {
   std::vector<double> t;
   std::vector<Eigen::VectorXd> y;
+  static auto fields(auto& s) { return std::tie(s.t, s.y); }
 };
 
 struct EventRecord {
@@ -78,6 +85,7 @@ struct EventRecord {
   size_t event = 0;  // which of the system's events; none of them (by_method) for what the method handled
                      // itself (a contact method's impacts)
   static constexpr size_t by_method = static_cast<size_t>(-1);
+  static auto fields(auto& s) { return std::tie(s.t, s.kind, s.event); }
 };
 
 struct RunResult {
@@ -88,6 +96,7 @@ struct RunResult {
   Trajectory trajectory;
   Stats stats;
   std::vector<EventRecord> events;
+  static auto fields(auto& s) { return std::tie(s.status, s.message, s.t_stop, s.y_stop, s.trajectory, s.stats, s.events); }
 };
 
 // this machine's physical memory, the bound memory checks (a method's dense matrices, a particle count) are made against

@@ -59,6 +59,8 @@ const Plans& plans_for(int n) {
 
 }  // namespace
 
+std::string PeriodicFft::library_version() { return fftw_version; }
+
 PeriodicFft::PeriodicFft(int n, double length) : n_(n), half_(n / 2 + 1), length_(length) {
   if (n < 2) throw std::invalid_argument("PeriodicFft: at least 2 points per side");
   const double unit = 2 * std::numbers::pi / length;

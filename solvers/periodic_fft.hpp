@@ -14,6 +14,7 @@
 #pragma once
 
 #include <complex>
+#include <string>
 #include <vector>
 
 namespace stepwise {
@@ -23,6 +24,9 @@ class PeriodicFft {
   using Complex = std::complex<double>;
 
   PeriodicFft(int n, double length);
+
+  // FFTW's version ("fftw-3.3.10-sse2-avx"), for the record of what ran
+  static std::string library_version();
 
   int n() const { return n_; }
   double length() const { return length_; }

@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 
 #include <complex>
+#include <tuple>
 
 namespace stepwise {
 
@@ -33,6 +34,7 @@ double symplectic_euler_oscillator_dt(double omega, double damping);
 struct StiffestMode {
   double omega = 0;    // rad/s
   double damping = 0;  // 1/s
+  static auto fields(auto& s) { return std::tie(s.omega, s.damping); }
 };
 StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::VectorXd& y);
 

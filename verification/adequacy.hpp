@@ -7,6 +7,8 @@
 
 #include <Eigen/Dense>
 
+#include <tuple>
+
 namespace stepwise {
 
 // phase error (rad) of the small-angle model after n_periods periods of the true pendulum at amplitude theta0
@@ -34,6 +36,7 @@ struct LinearWaveDeparture {
   double relative = 0;         // |eta - z| / |z| over the grid at t_end (2-norm)
   double relative_max = 0;     // the same in the max-norm, against max |z|
   Eigen::VectorXd wave, shallow;  // z and eta at t_end (size^2 each)
+  static auto fields(auto& s) { return std::tie(s.relative, s.relative_max, s.wave, s.shallow); }
 };
 // for a dent (A < 0) or a bump of |A| = |amplitude_over_depth| H
 LinearWaveDeparture linear_wave_departure(double amplitude_over_depth, const LinearWaveSetup& setup = {});

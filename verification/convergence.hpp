@@ -4,6 +4,7 @@
 #include "run/measure.hpp"
 
 #include <vector>
+#include <tuple>
 
 namespace stepwise {
 
@@ -13,6 +14,7 @@ struct ConvergenceSweep {
   std::vector<Measured> runs;       // one run per dt
   std::vector<double> fit_dt, fit_error;  // the points in the asymptotic range above round-off, which the slope is fitted to
   double observed_order = 0;        // least-squares slope of log error against log dt
+  static auto fields(auto& s) { return std::tie(s.dt, s.runs, s.fit_dt, s.fit_error, s.observed_order); }
 };
 
 // the coarsest step of a sweep for a method of this order, for a scene whose fastest time scale is

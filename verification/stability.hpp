@@ -7,6 +7,7 @@
 #include "solvers/stability.hpp"
 
 #include <complex>
+#include <tuple>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -38,6 +39,7 @@ double seeds_wave_condition(const WaveGridView& grid);
 std::function<bool(double dt)> wave_stays_bounded(std::string_view method, int points, double spacing, double c, double mu, long steps);
 struct WaveStability {
   double measured = 0, derived = 0, seeds = 0;
+  static auto fields(auto& s) { return std::tie(s.measured, s.derived, s.seeds); }
 };
 WaveStability wave_stability(std::string_view method, int points, double spacing, double c, double mu, long steps);
 

@@ -26,6 +26,16 @@
 namespace stepwise {
 namespace {
 
+// one step size's measurements of the two scenes
+struct Row {
+  size_t tumble_impacts = 0, collapse_impacts = 0;
+  double rest = 0, sink = 0, creep = 0, slide_error = 0, rate = 0, kept = 0;
+  bool ok = false;
+  static auto fields(auto& s) {
+    return std::tie(s.tumble_impacts, s.collapse_impacts, s.rest, s.sink, s.creep, s.slide_error, s.rate, s.kept, s.ok);
+  }
+};
+
 StudyOutput contacts(const StudyContext& ctx) {
   const bool quick = ctx.quick;
   // per step: the tumbling box (the model's defaults, the scene's drop), a box resting on a slope inside its friction cone and
@@ -46,11 +56,6 @@ StudyOutput contacts(const StudyContext& ctx) {
       rest_time, collapse_time);
   double worst_creep = 0, worst_slide = 0, fewest_kept = 1, most_kept = 0;
   std::pair<size_t, size_t> impacts{std::numeric_limits<size_t>::max(), 0};
-  struct Row {
-    size_t tumble_impacts = 0, collapse_impacts = 0;
-    double rest = 0, sink = 0, creep = 0, slide_error = 0, rate = 0, kept = 0;
-    bool ok = false;
-  };
   const std::vector<double> dts{4e-3, 2e-3, 1e-3, 5e-4};
   std::vector<std::string> labels;
   for (const double dt : dts) labels.push_back(fmt::format("dt {:g}", dt));

@@ -92,6 +92,12 @@ StudyOutput numerical_viscosity(const StudyContext& ctx, std::string& md, std::v
   return {{{"fluid_viscosity", std::move(table)}}, "", {}};
 }
 
+// one method's step limit on one viscosity: from the spectrum, the flow's own growth rate, measured
+struct Found {
+  double spectrum = 0, growth = 0, measured = 0;
+  static auto fields(auto& s) { return std::tie(s.spectrum, s.growth, s.measured); }
+};
+
 StudyOutput step_limits(const StudyContext& ctx, std::string& md, std::vector<Figure>&) {
   // the Taylor-Green vortex on 16^2 points (512 unknowns: the Jacobian's spectrum is a dense eigenproblem), from
   // nearly inviscid (the advective limit binds) to strongly viscous (the viscous one does)
@@ -117,9 +123,6 @@ StudyOutput step_limits(const StudyContext& ctx, std::string& md, std::vector<Fi
     const auto model = unit_taylor_green(n, viscosities[i]);
     return Eigen::VectorXcd(jacobian_spectrum(*model, 0, model->initial_state()));
   });
-  struct Found {
-    double spectrum = 0, growth = 0, measured = 0;
-  };
   const auto found = ctx.sweep<Found>(labels, [&](size_t i) {
     const Point& p = plan[i];
     const Eigen::VectorXcd& eigenvalues = spectra[i / explicit_methods.size()];

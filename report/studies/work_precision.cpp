@@ -20,6 +20,15 @@ Measured timed_run(const Model& model, std::string_view method, const StepContro
   return best;
 }
 
+// what a point measured (the plan says what it ran)
+struct Outcome {
+  std::optional<double> error;
+  double rhs_evals = 0, cpu_seconds = 0;
+  long steps = 0;
+  Status status = Status::ok;
+  static auto fields(auto& s) { return std::tie(s.error, s.rhs_evals, s.cpu_seconds, s.steps, s.status); }
+};
+
 // one point of a work-precision sweep
 struct WorkPoint {
   const StudyScene* scene = nullptr;
@@ -125,18 +134,23 @@ StudyOutput work_precision(const StudyContext& ctx) {
     costs.push_back(expected_cost(p, sizes.at(p.scene), repeats));
     groups.push_back(fmt::format("{} {}", p.scene->label, p.method->name));
   }
-  const auto runs = ctx.sweep<WorkPoint>(labels, [&](size_t i) {
-    WorkPoint p = plan[i];
+  const auto outcomes = ctx.sweep<Outcome>(labels, [&](size_t i) {
+    const WorkPoint& p = plan[i];
     const auto model = make_model(p.scene->model, p.scene->params);
     const Measured m = timed_run(*model, p.method->name, p.control, p.scene->t_end, repeats);
-    p.error = m.error;
-    if (!model->has_exact() && m.result.status == Status::ok) p.error = max_norm_error(m.result.y_stop, reference.at(p.scene));
-    p.rhs_evals = static_cast<double>(m.result.stats.rhs_evals);
-    p.cpu_seconds = m.result.stats.cpu_seconds;
-    p.steps = m.result.stats.steps;
-    p.status = m.result.status;
-    return p;
+    Outcome o{m.error, static_cast<double>(m.result.stats.rhs_evals), m.result.stats.cpu_seconds, m.result.stats.steps, m.result.status};
+    if (!model->has_exact() && m.result.status == Status::ok) o.error = max_norm_error(m.result.y_stop, reference.at(p.scene));
+    return o;
   }, costs, groups);
+  std::vector<WorkPoint> runs = plan;
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const Outcome& o = outcomes[i];
+    runs[i].error = o.error;
+    runs[i].rhs_evals = o.rhs_evals;
+    runs[i].cpu_seconds = o.cpu_seconds;
+    runs[i].steps = o.steps;
+    runs[i].status = o.status;
+  }
 
   Table points{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}};
   Table fronts{{"scene", "cost", "method", "setting", "error", "rhs_evals", "cpu_seconds"}, {}};

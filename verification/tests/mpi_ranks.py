@@ -1,0 +1,192 @@
+#!/usr/bin/env python3
+"""MPI ranks (issue 24): the same outputs as one process, and a rank that dies fails the run cleanly.
+
+usage: mpi_ranks.py STEPWISE SCENES_DIR TOLERANCES_HPP [SERIAL_QUICK_REPORT]
+
+- `study NAME --quick` for two untimed studies under `mpirun -np 2` and `-np 3`: every CSV byte for byte the
+  one-process run's; provenance.json says how many ranks ran and what each was busy for.
+- `run` under mpirun: rank 0 runs the scene alone (no model is distributed yet), says so in one line, and the
+  summary is the one-process run's (cpu_seconds aside) with `ranks` 1.
+- `report --quick` under `-np 2` and `-np 3` against the one-process report given (the report_quick test's):
+  every CSV's non-timing columns alike (the cloth's to implicit-euler's kept-factor reproducibility, read from
+  verification/tolerances.hpp; the rows chosen by CPU time, the recommendations and Pareto fronts, not
+  compared).
+- a rank killed in the middle of `report --quick` over a previous report: exit status non-zero, the rank named,
+  the previous report intact and no staging directory left.
+Skipped (exit 77) where mpirun is missing, with the line that installs it."""
+import csv
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+failures = []
+# columns that are CPU or wall times, or rates and ratios of them
+TIMING = {"cpu_seconds", "cpu_per_simulated_second", "draw_ms_per_frame", "collapse_steps_per_second", "runner_up_cpu_seconds",
+          "runner_up_over_best"}
+# tables whose rows are chosen by CPU time (the cheapest method for an error, the fronts, the real-time verdicts)
+CHOSEN_BY_TIME = {"recommendations.csv", "work_precision_pareto.csv", "cloth_realtime_verdicts.csv"}
+# tables of implicit-euler's cloth, and the rows of implicit-euler's methods elsewhere, reproducible to its
+# kept-factor residual
+KEPT_FACTOR = {"cloth_families.csv", "cloth_momentum.csv", "cloth_realtime.csv"}
+KEPT_FACTOR_METHODS = {"implicit-euler", "implicit-euler-newton"}
+
+
+def expect(condition, what):
+    if not condition:
+        failures.append(what)
+        print("FAIL", what)
+
+
+def mpirun(n):
+    args = ["mpirun", "--oversubscribe", "-np", str(n)]
+    if os.geteuid() == 0:
+        args.append("--allow-run-as-root")
+    return args
+
+
+def run(args, **kw):
+    return subprocess.run(args, capture_output=True, text=True, timeout=900, **kw)
+
+
+def numbers_agree(a, b, rel):
+    try:
+        x, y = float(a), float(b)
+    except ValueError:
+        return a == b
+    if x == y or (x != x and y != y):
+        return True
+    # relative to the value, absolute below 1: a round-off quantity (a momentum error of 1e-15) differs by round-off
+    return abs(x - y) <= rel * max(abs(x), abs(y), 1.0)
+
+
+def compare_tables(serial, ranked, label, rel):
+    names = sorted(n for n in os.listdir(serial) if n.endswith(".csv"))
+    expect(names == sorted(n for n in os.listdir(ranked) if n.endswith(".csv")), f"{label}: the same CSV files")
+    compared = 0
+    for name in names:
+        if name in CHOSEN_BY_TIME or not os.path.exists(os.path.join(ranked, name)):
+            continue
+        a = list(csv.reader(open(os.path.join(serial, name))))
+        b = list(csv.reader(open(os.path.join(ranked, name))))
+        if not a or a[0] != (b[0] if b else None) or len(a) != len(b):
+            expect(False, f"{label}: {name}: header or row count differs")
+            continue
+        keep = [i for i, h in enumerate(a[0]) if h not in TIMING]
+        method = a[0].index("method") if "method" in a[0] else None
+        for ra, rb in zip(a[1:], b[1:]):
+            tolerant = name in KEPT_FACTOR or (method is not None and ra[method] in KEPT_FACTOR_METHODS)
+            same = all(numbers_agree(ra[i], rb[i], rel) for i in keep) if tolerant else all(ra[i] == rb[i] for i in keep)
+            if not same:
+                expect(False, f"{label}: {name}: row {ra} against {rb}")
+                break
+        compared += 1
+    print(f"{label}: {compared} CSV files compared with the one-process run's")
+
+
+def main():
+    binary, scenes, tolerances = (os.path.abspath(a) for a in sys.argv[1:4])
+    serial_report = os.path.abspath(sys.argv[4]) if len(sys.argv) > 4 else None
+    if not shutil.which("mpirun"):
+        print("mpirun not found: install Open MPI's launcher (sudo apt-get install openmpi-bin) to run the MPI tests")
+        return 77
+    rel = float(re.search(r"kept_factor_reproducibility\s*=\s*([0-9.eE+-]+)", open(tolerances).read()).group(1))
+    d = tempfile.mkdtemp(prefix="stepwise-mpi-")
+    try:
+        # studies, byte for byte
+        for study, files in [("convergence", ["convergence.csv", "convergence_orders.csv"]),
+                             ("stability-regions", ["stability_spectrum.csv", "stability_limits.csv"])]:
+            one = os.path.join(d, f"{study}-1")
+            r = run([binary, "study", study, "--quick", "--out", one])
+            expect(r.returncode == 0, f"study {study}: exit {r.returncode}: {r.stderr[-300:]}")
+            for n in (2, 3):
+                out = os.path.join(d, f"{study}-{n}")
+                r = run(mpirun(n) + [binary, "study", study, "--quick", "--threads", "1", "--out", out])
+                expect(r.returncode == 0, f"study {study} on {n} ranks: exit {r.returncode}: {r.stderr[-500:]}")
+                for f in files:
+                    same = open(os.path.join(one, f), "rb").read() == open(os.path.join(out, f), "rb").read()
+                    expect(same, f"study {study} on {n} ranks: {f} differs from one process's")
+                p = json.load(open(os.path.join(out, "provenance.json")))
+                expect(p["ranks"] == n and len(p["rank_busy_seconds"]) == n, f"study {study} on {n} ranks: provenance.json says {p['ranks']} ranks")
+                print(f"study {study} on {n} ranks: CSVs as one process's; ranks busy {p['rank_busy_seconds']}")
+            p = json.load(open(os.path.join(one, "provenance.json")))
+            expect(p["ranks"] == 1, "one process: provenance.json says 1 rank")
+
+        # run: rank 0 alone, one line, the same summary
+        one, two = os.path.join(d, "run-1"), os.path.join(d, "run-2")
+        scene = os.path.join(scenes, "pendulum.toml")
+        r1 = run([binary, "run", scene, "--t-end", "2", "--out", one])
+        r2 = run(mpirun(2) + [binary, "run", scene, "--t-end", "2", "--out", two])
+        expect(r1.returncode == 0 and r2.returncode == 0, f"run: exit {r1.returncode} and {r2.returncode} on 2 ranks: {r2.stderr[-300:]}")
+        lines = [l for l in r2.stderr.splitlines() if "rank 0 alone" in l]
+        expect(len(lines) == 1, f"run on 2 ranks: one line saying rank 0 runs it alone (stderr: {r2.stderr!r})")
+        s1, s2 = (json.load(open(os.path.join(x, "summary.json"))) for x in (one, two))
+        expect(s1["ranks"] == 1 and s2["ranks"] == 1, "run: summary.json's ranks is 1")
+        for s in (s1, s2):
+            s.pop("cpu_seconds")
+        expect(s1 == s2, "run on 2 ranks: summary.json as one process's (cpu_seconds aside)")
+        expect(open(os.path.join(one, "trajectory.csv"), "rb").read() == open(os.path.join(two, "trajectory.csv"), "rb").read(),
+               "run on 2 ranks: trajectory.csv as one process's")
+
+        # the quick report on 2 and 3 ranks against one process's
+        if serial_report:
+            for n in (2, 3):
+                out = os.path.join(d, f"report-{n}")
+                start = time.time()
+                r = run(mpirun(n) + [binary, "report", "--quick", "--threads", "1", "--out", out])
+                expect(r.returncode == 0, f"report on {n} ranks: exit {r.returncode}: {r.stderr[-500:]}")
+                if r.returncode == 0:
+                    compare_tables(serial_report, out, f"report --quick on {n} ranks ({time.time() - start:.0f} s)", rel)
+                    p = json.load(open(os.path.join(out, "provenance.json")))
+                    print(f"report on {n} ranks: busy {p['rank_busy_seconds']}, busiest over mean {p['rank_busiest_over_mean']:.3f}")
+
+        # a rank killed in the middle: the run fails naming it, the previous report intact, nothing left over
+        prev = os.path.join(d, "prev")
+        r = run([binary, "study", "convergence", "--quick", "--out", os.path.join(d, "scratch")])
+        os.makedirs(prev)
+        with open(os.path.join(prev, ".stepwise-report.json"), "w") as f:
+            json.dump({"written_by": "stepwise report", "files": ["report.md"]}, f)
+        with open(os.path.join(prev, "report.md"), "w") as f:
+            f.write("the previous report\n")
+        p = subprocess.Popen(mpirun(2) + [binary, "report", "--quick", "--threads", "1", "--out", prev], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, text=True)
+        victim = None
+        for _ in range(200):
+            time.sleep(0.1)
+            for pid in (x for x in os.listdir("/proc") if x.isdigit()):
+                try:
+                    env = open(f"/proc/{pid}/environ", "rb").read().split(b"\0")
+                    exe = os.readlink(f"/proc/{pid}/exe")
+                except OSError:
+                    continue
+                if os.path.basename(exe) == "stepwise" and b"OMPI_COMM_WORLD_RANK=1" in env:
+                    victim = int(pid)
+            if victim:
+                break
+        expect(victim is not None, "killed rank: rank 1 found")
+        if victim:
+            time.sleep(3)
+            os.kill(victim, signal.SIGKILL)
+        _, err = p.communicate(timeout=120)
+        expect(p.returncode != 0, f"killed rank: exit status {p.returncode}, not 0")
+        expect(re.search(r"rank 1\b", err) is not None, f"killed rank: the message names rank 1 (stderr: {err[-600:]!r})")
+        expect(open(os.path.join(prev, "report.md")).read() == "the previous report\n", "killed rank: the previous report intact")
+        left = [n for n in os.listdir(d) if n.startswith(".prev")]
+        expect(not left, f"killed rank: staging left: {left}")
+        print(f"killed rank 1: exit {p.returncode}; last lines: {err.strip().splitlines()[-3:] if err.strip() else []}")
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+    if failures:
+        print(f"{len(failures)} failure(s)")
+        return 1
+    print("all held")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
