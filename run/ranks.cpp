@@ -1,8 +1,7 @@
 #include "run/ranks.hpp"
 
-// MPI's C interface only (Open MPI's mpi.h also declares the deprecated C++ bindings, in another library)
-#define OMPI_SKIP_MPICXX 1
-#define MPICH_SKIP_MPICXX 1
+#include "solvers/mpi_support.hpp"
+
 #include <mpi.h>
 
 #include <cstdio>
@@ -26,13 +25,6 @@ bool launched() {
   return false;
 }
 
-void check(int code, const char* call) {
-  if (code == MPI_SUCCESS) return;
-  char text[MPI_MAX_ERROR_STRING];
-  int length = 0;
-  MPI_Error_string(code, text, &length);
-  throw std::runtime_error(fmt::format("{} failed with code {}: {}", call, code, std::string_view(text, static_cast<size_t>(length))));
-}
 
 }  // namespace
 
@@ -40,11 +32,11 @@ Session::Session(int& argc, char**& argv) {
   if (!launched()) return;
   // the sweeps' threads never call MPI: the calling thread does, between sweeps
   int provided = 0;
-  check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  mpi_check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
   started = true;
   MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
-  check(MPI_Comm_rank(MPI_COMM_WORLD, &my_rank), "MPI_Comm_rank");
-  check(MPI_Comm_size(MPI_COMM_WORLD, &world_size), "MPI_Comm_size");
+  mpi_check(MPI_Comm_rank(MPI_COMM_WORLD, &my_rank), "MPI_Comm_rank");
+  mpi_check(MPI_Comm_size(MPI_COMM_WORLD, &world_size), "MPI_Comm_size");
 }
 
 Session::~Session() {
@@ -59,7 +51,7 @@ std::vector<std::string> all_gather(std::string_view mine) {
   if (mine.size() > static_cast<size_t>(INT32_MAX)) throw std::runtime_error(fmt::format("rank {}: {} bytes of results, more than one MPI message takes", my_rank, mine.size()));
   const int length = static_cast<int>(mine.size());
   std::vector<int> lengths(static_cast<size_t>(world_size)), offsets(static_cast<size_t>(world_size));
-  check(MPI_Allgather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
+  mpi_check(MPI_Allgather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
   long total = 0;
   for (int r = 0; r < world_size; ++r) {
     offsets[static_cast<size_t>(r)] = static_cast<int>(total);
@@ -67,16 +59,23 @@ std::vector<std::string> all_gather(std::string_view mine) {
   }
   if (total > INT32_MAX) throw std::runtime_error(fmt::format("{} bytes of results from {} ranks, more than one MPI message takes", total, world_size));
   std::string all(static_cast<size_t>(total), '\0');
-  check(MPI_Allgatherv(mine.data(), length, MPI_BYTE, all.data(), lengths.data(), offsets.data(), MPI_BYTE, MPI_COMM_WORLD), "MPI_Allgatherv");
+  mpi_check(MPI_Allgatherv(mine.data(), length, MPI_BYTE, all.data(), lengths.data(), offsets.data(), MPI_BYTE, MPI_COMM_WORLD), "MPI_Allgatherv");
   std::vector<std::string> out;
   for (int r = 0; r < world_size; ++r) out.push_back(all.substr(static_cast<size_t>(offsets[static_cast<size_t>(r)]), static_cast<size_t>(lengths[static_cast<size_t>(r)])));
   return out;
 }
 
+double max_over_ranks(double mine) {
+  if (world_size == 1) return mine;
+  double all = 0;
+  mpi_check(MPI_Allreduce(&mine, &all, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+  return all;
+}
+
 bool all_agree(bool mine) {
   if (world_size == 1) return mine;
   int yes = mine ? 1 : 0, all = 0;
-  check(MPI_Allreduce(&yes, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD), "MPI_Allreduce");
+  mpi_check(MPI_Allreduce(&yes, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD), "MPI_Allreduce");
   return all != 0;
 }
 

@@ -25,6 +25,9 @@ int size();  // the number of ranks, 1 without mpirun
 // every rank's bytes, in rank order, on every rank (collective: every rank calls it, in the same order)
 std::vector<std::string> all_gather(std::string_view mine);
 
+// the largest of every rank's value, on every rank (collective)
+double max_over_ranks(double mine);
+
 // whether every rank says yes (collective); without mpirun, `mine`
 bool all_agree(bool mine);
 

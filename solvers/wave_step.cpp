@@ -145,6 +145,15 @@ RowKernel row_kernel_for(int n) {
 
 }  // namespace
 
+void wave_step_rows(const WaveCoefficients& k, int stride, int rows, int first, int last, double* z_prev, const double* z) {
+  // the kernel for a grid as large as the block's two levels
+  const RowKernel row_kernel = row_kernel_for(static_cast<int>(std::sqrt(static_cast<double>(stride) * rows)));
+  for (int a = 0; a < rows; ++a) {
+    const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(a) * stride;
+    row_kernel(k, stride, first, last, z_prev + row, z + row);
+  }
+}
+
 void wave_step(const WaveCoefficients& k, int n, double* z_prev, const double* z, int threads) {
   const RowKernel row_kernel = row_kernel_for(n);
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)

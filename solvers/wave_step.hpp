@@ -66,6 +66,11 @@ inline T wave_cell(const BasicWaveCoefficients<T>& k, T z, T z_prev, T neighbour
 // write (a third stream). Memory-bound on grids past the caches (bench_wave)
 void wave_step(const WaveCoefficients& k, int n, double* z_prev, const double* z, int threads = 1);
 
+// cells [first, last) of `rows` consecutive rows of a grid stored with row stride `stride` (the row above a
+// row's cell is `stride` before it; z_prev and z point at the first row's cell 0): the update of wave_step,
+// by the same kernels, for a grid held otherwise (a rank's block inside its halo: solvers/distributed_wave)
+void wave_step_rows(const WaveCoefficients& k, int stride, int rows, int first, int last, double* z_prev, const double* z);
+
 // `steps` steps in one pass over the grid by temporal blocking: a wavefront sweeps the rows, taking row
 // i to level 1, row i-1 to level 2, ..., row i-steps+1 to level `steps`, so the steps+2 rows it works on
 // stay in cache (4096 x 4096: 10 rows of each grid, 640 KB) and each grid is read and written once per

@@ -1,0 +1,60 @@
+// The seeds' three-level scheme (wave_step.hpp) on a grid split among MPI ranks: a 2D Cartesian decomposition
+// (MPI_Dims_create, MPI_Cart_create) of a rows x cols grid, boundary included and held still as in one process,
+// each rank holding its block inside one layer of halo. A step exchanges that layer of z^k with the four
+// neighbours (non-blocking, a row as it lies, a column as a strided MPI datatype) and updates the block by the
+// same row kernels as one process (wave_step_rows), so every cell gets the same bits whoever owns it. With
+// `overlap` the block's inner cells, which need no halo, are updated while the messages are in flight and the
+// block's edge cells after them. Blocks differ by at most one row or column (any grid, any rank count, down to
+// one row and one column a rank). MPI's types stay in distributed_wave.cpp; MPI must have been started
+// (run/ranks.hpp), or with one process it need not be.
+#pragma once
+
+#include "wave_step.hpp"
+
+#include <array>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+namespace stepwise {
+
+// more ranks along a side than the grid has rows or columns there: the message names both numbers
+struct DecompositionError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class DistributedWave {
+ public:
+  struct Block {
+    int row0 = 0, rows = 0, col0 = 0, cols = 0;  // global rows [row0, row0 + rows), columns likewise
+  };
+  // the halo a rank exchanges per step: messages it sends (as many as it receives) and their bytes
+  struct Halo {
+    int messages = 0;
+    long bytes = 0;
+  };
+
+  // every rank of the world (`alone`: this rank by itself, the whole grid its block), on a rows x cols grid
+  // (each at least 3); DecompositionError if a side has more ranks than points
+  DistributedWave(int rows, int cols, const WaveCoefficients& k, bool alone = false);
+  ~DistributedWave();
+  DistributedWave(const DistributedWave&) = delete;
+  DistributedWave& operator=(const DistributedWave&) = delete;
+
+  std::array<int, 2> dims() const;  // ranks along the rows and the columns
+  Block block() const;              // this rank's
+  Halo halo() const;                // this rank's per step
+
+  // the two levels z^{k-1} and z^k of this rank's block, from whole-grid arrays (row-major, rows x cols)
+  void set(const double* z_prev, const double* z);
+  // `steps` steps
+  void step(int steps, bool overlap);
+  // z^k of the whole grid on rank 0 (row-major); empty on the others
+  std::vector<double> gather() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stepwise

@@ -1,0 +1,108 @@
+// The seeds' three-level scheme on a grid split among MPI ranks (solvers/distributed_wave.hpp) gives the same
+// bits as one process: a cell's arithmetic does not depend on who owns it. Run under mpirun on 1-4 ranks
+// (CTest's mpi_distributed_wave_N); rank 0 gathers and checks, every rank's result decides the exit status.
+#include "models/model.hpp"
+#include "run/ranks.hpp"
+#include "solvers/capabilities/wave_grid.hpp"
+#include "solvers/distributed_wave.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
+namespace stepwise {
+namespace {
+
+// one process, as wave-fd steps (solvers/methods/wave_fd.cpp): the formula cell by cell into a new level
+std::vector<double> one_process(const WaveCoefficients& k, int rows, int cols, std::vector<double> z_prev, std::vector<double> z, int steps) {
+  std::vector<double> next = z;
+  for (int s = 0; s < steps; ++s) {
+    for (int i = 1; i < rows - 1; ++i)
+      for (int j = 1; j < cols - 1; ++j) {
+        const std::ptrdiff_t c = static_cast<std::ptrdiff_t>(i) * cols + j;
+        next[c] = wave_cell(k, z[c], z_prev[c], (z[c - cols] + z[c + cols]) + (z[c - 1] + z[c + 1]));
+      }
+    z_prev.swap(z);
+    z.swap(next);
+  }
+  return z;
+}
+
+// a drop-like dent off the centre and a wave moving away from it, zero on the boundary
+std::pair<std::vector<double>, std::vector<double>> levels(int rows, int cols) {
+  std::vector<double> z_prev(static_cast<size_t>(rows) * cols, 0.0), z = z_prev;
+  for (int i = 1; i < rows - 1; ++i)
+    for (int j = 1; j < cols - 1; ++j) {
+      const double x = (j - 0.37 * cols) / cols, y = (i - 0.58 * rows) / rows, r2 = x * x + y * y;
+      z[static_cast<size_t>(i) * cols + j] = -0.01 * std::exp(-r2 / 0.004) + 1e-3 * std::sin(std::numbers::pi * i / (rows - 1)) * std::sin(2 * std::numbers::pi * j / (cols - 1));
+      z_prev[static_cast<size_t>(i) * cols + j] = 0.98 * z[static_cast<size_t>(i) * cols + j];
+    }
+  return {z_prev, z};
+}
+
+void expect_same_bits(int rows, int cols, const WaveCoefficients& k, int steps) {
+  const auto [z_prev, z] = levels(rows, cols);
+  const std::vector<double> reference = one_process(k, rows, cols, z_prev, z, steps);
+  for (const bool overlap : {false, true}) {
+    DistributedWave grid(rows, cols, k);
+    grid.set(z_prev.data(), z.data());
+    grid.step(steps, overlap);
+    const std::vector<double> gathered = grid.gather();
+    if (ranks::rank() != 0) continue;
+    ASSERT_EQ(gathered.size(), reference.size());
+    size_t differ = 0;
+    for (size_t c = 0; c < reference.size(); ++c) differ += gathered[c] != reference[c];  // bits: no tolerance
+    EXPECT_EQ(differ, 0u) << rows << " x " << cols << " on " << grid.dims()[0] << " x " << grid.dims()[1] << " ranks, overlap " << overlap;
+    std::cout << rows << " x " << cols << ", " << steps << " steps on " << grid.dims()[0] << " x " << grid.dims()[1] << " ranks (overlap " << overlap
+              << "): " << differ << " cells differ from one process\n";
+  }
+}
+
+TEST(DistributedWave, AGridNoRankCountDividesGivesOneProcesssBits) {
+  // 97 x 61 (prime and 61): no decomposition divides it; the seeds' coefficients at half the stable step
+  const WaveGridView grid{97, 0.02, 1.0, 0.2};
+  expect_same_bits(97, 61, wave_coefficients(grid, 0.5 * wave_stable_dt(grid)), 200);
+}
+
+TEST(DistributedWave, ThePoolsGridGivesOneProcesssBits) {
+  const auto pool = make_model("pool", {{"size", 128}});  // scenes/pool.toml's grid
+  const WaveGridView& grid = *pool->as<WaveGridView>();
+  expect_same_bits(grid.points, grid.points, wave_coefficients(grid, 5e-3), 400);  // pool.toml's dt, 2 s
+}
+
+TEST(DistributedWave, TheHaloIsOneLayerAcrossEachInnerEdgeOfTheDecomposition) {
+  const int rows = 97, cols = 61;
+  const DistributedWave grid(rows, cols, WaveCoefficients{});
+  const auto halo = grid.halo();
+  const auto block = grid.block();
+  EXPECT_LE(halo.messages, 4);
+  // over all ranks: each inner edge between block rows carries its columns both ways, likewise across
+  const std::string all = [&] {
+    std::string mine(reinterpret_cast<const char*>(&halo.bytes), sizeof halo.bytes);
+    return mine;
+  }();
+  long total = 0;
+  for (const auto& bytes : ranks::all_gather(all)) {
+    long b = 0;
+    std::memcpy(&b, bytes.data(), sizeof b);
+    total += b;
+  }
+  const auto [d0, d1] = grid.dims();
+  EXPECT_EQ(total, 8L * 2 * (static_cast<long>(cols) * (d0 - 1) + static_cast<long>(rows) * (d1 - 1)));
+  // blocks differ by at most one row or column
+  EXPECT_LE(std::abs(block.rows - rows / d0), 1);
+  EXPECT_LE(std::abs(block.cols - cols / d1), 1);
+}
+
+}  // namespace
+}  // namespace stepwise
+
+int main(int argc, char** argv) {
+  stepwise::ranks::Session mpi(argc, argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  if (stepwise::ranks::rank() != 0) delete ::testing::UnitTest::GetInstance()->listeners().Release(::testing::UnitTest::GetInstance()->listeners().default_result_printer());
+  const int result = RUN_ALL_TESTS();
+  return stepwise::ranks::all_agree(result == 0) ? 0 : 1;
+}
