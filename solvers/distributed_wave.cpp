@@ -152,6 +152,20 @@ std::vector<double> DistributedWave::gather() const {
   mine.reserve(static_cast<size_t>(m.block.rows) * static_cast<size_t>(m.block.cols));
   for (int a = 1; a <= m.block.rows; ++a)
     for (int b = 1; b <= m.block.cols; ++b) mine.push_back(m.z[static_cast<size_t>(a) * static_cast<size_t>(m.stride) + static_cast<size_t>(b)]);
+  return gather(mine);
+}
+
+double* DistributedWave::level() { return impl_->z.data(); }
+int DistributedWave::stride() const { return impl_->stride; }
+
+void DistributedWave::exchange() {
+  MPI_Request requests[8];
+  impl_->exchange(requests);
+  mpi_check(MPI_Waitall(8, requests, MPI_STATUSES_IGNORE), "MPI_Waitall");
+}
+
+std::vector<double> DistributedWave::gather(const std::vector<double>& mine) const {
+  const Impl& m = *impl_;
   int rank = 0, size = 1;
   mpi_check(MPI_Comm_rank(m.cart, &rank), "MPI_Comm_rank");
   mpi_check(MPI_Comm_size(m.cart, &size), "MPI_Comm_size");

@@ -51,6 +51,15 @@ class DistributedWave {
   void step(int steps, bool overlap);
   // z^k of the whole grid on rank 0 (row-major); empty on the others
   std::vector<double> gather() const;
+  // any field of this rank's block (rows x cols, row-major) gathered into the whole grid on rank 0
+  std::vector<double> gather(const std::vector<double>& block) const;
+
+  // z^k inside its halo ((rows + 2) x stride(), the block's cell (a, b) at (a + 1) stride() + b + 1), and its
+  // halo filled from the neighbours (blocking): where a right-hand side on this grid reads the heights
+  // around its block (solvers/distributed_lines)
+  double* level();
+  int stride() const;
+  void exchange();
 
  private:
   struct Impl;

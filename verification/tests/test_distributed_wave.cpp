@@ -1,10 +1,15 @@
 // The seeds' three-level scheme on a grid split among MPI ranks (solvers/distributed_wave.hpp) gives the same
 // bits as one process: a cell's arithmetic does not depend on who owns it. Run under mpirun on 1-4 ranks
 // (CTest's mpi_distributed_wave_N); rank 0 gathers and checks, every rank's result decides the exit status.
+#include "models/height_field.hpp"
 #include "models/model.hpp"
 #include "run/ranks.hpp"
 #include "solvers/capabilities/wave_grid.hpp"
+#include "run/measure.hpp"
+#include "solvers/distributed_lines.hpp"
 #include "solvers/distributed_wave.hpp"
+#include "verification/tolerances.hpp"
+#include "verification/wave_modes.hpp"
 
 #include <gtest/gtest.h>
 
@@ -94,6 +99,48 @@ TEST(DistributedWave, TheHaloIsOneLayerAcrossEachInnerEdgeOfTheDecomposition) {
   // blocks differ by at most one row or column
   EXPECT_LE(std::abs(block.rows - rows / d0), 1);
   EXPECT_LE(std::abs(block.cols - cols / d1), 1);
+}
+
+// the water issue's check of the scheme against its exact discrete mode (test_wave's), on the state the ranks
+// hold, gathered at the end: z^k = a_k sin sin with a_k the three-level recurrence's closed form
+TEST(DistributedWave, TheGatheredStateIsTheSchemesExactDiscreteMode) {
+  const int n = 33, m = 3, mode_n = 2;
+  const WaveGridView grid{n, 0.03, 1.0, 0.5};
+  const double dt = 0.9 * wave_stable_dt(grid);
+  const long steps = 1000;
+  const double lambda = laplacian_eigenvalue(n - 1, grid.spacing, m, mode_n);
+  const double a0 = 0.01, a1 = a0 * (1 - 0.5 * dt * dt * grid.c * grid.c * lambda);  // z^1 by Taylor from rest
+  const Eigen::VectorXd shape = wave_mode(n, m, mode_n);
+  const Eigen::VectorXd z0 = a0 * shape, z1 = a1 * shape;
+  DistributedWave distributed(n, n, wave_coefficients(grid, dt));
+  distributed.set(z0.data(), z1.data());
+  distributed.step(static_cast<int>(steps - 1), false);  // z^1 -> z^steps
+  const std::vector<double> z = distributed.gather();
+  if (ranks::rank() != 0) return;
+  const Eigen::VectorXd expected = scheme_mode_amplitude(scheme_mode(grid, dt, lambda), a0, a1, steps) * shape;
+  const double error = (Eigen::Map<const Eigen::VectorXd>(z.data(), n * n) - expected).lpNorm<Eigen::Infinity>() / expected.lpNorm<Eigen::Infinity>();
+  std::cout << "mode (3, 2) after " << steps << " steps on " << ranks::size() << " rank(s): relative error against the exact discrete mode " << error << '\n';
+  EXPECT_LT(error, tolerance::wave_modal);
+}
+
+// CVODE on the parallel vector against cvode-adams in one process: the same f cell for cell, but CVODE's
+// weighted norms summed rank by rank and then across ranks, so its step sizes differ in their last bits and
+// the two runs agree as two adaptive runs at one tolerance do: within adaptive_agreement_factor rtol |y|
+TEST(DistributedWave, CvodeOnTheParallelVectorAgreesWithOneProcessToTheTolerancesOrder) {
+  const auto model = make_model("standing-wave", {{"size", 41}});
+  const WaveGridView& grid = *model->as<WaveGridView>();
+  const double rtol = 1e-8, atol = 1e-11, t = 0.5;
+  const DistributedLinesRun distributed = cvode_adams_distributed(grid, model->initial_state(), t, rtol, atol);
+  ASSERT_TRUE(distributed.failure.empty()) << distributed.failure;
+  if (ranks::rank() != 0) return;
+  const Measured serial = run_and_measure(*model, "cvode-adams", StepControl::adaptive(rtol, atol), t, t);
+  ASSERT_EQ(serial.result.status, Status::ok) << serial.result.message;
+  const Eigen::Map<const Eigen::VectorXd> y(distributed.y.data(), static_cast<Eigen::Index>(distributed.y.size()));
+  ASSERT_EQ(y.size(), serial.result.y_stop.size());
+  const double size = serial.result.y_stop.lpNorm<Eigen::Infinity>(), gap = (y - serial.result.y_stop).lpNorm<Eigen::Infinity>();
+  std::cout << "standing wave 41^2 to " << t << " s, rtol " << rtol << ": " << ranks::size() << " rank(s) " << distributed.steps << " steps, one process "
+            << serial.result.stats.steps << "; they differ by " << gap << " (max |y| " << size << ")\n";
+  EXPECT_LE(gap, tolerance::adaptive_agreement_factor * rtol * size);
 }
 
 }  // namespace
