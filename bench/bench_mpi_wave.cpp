@@ -13,8 +13,7 @@
 // the compute with the cell cost t_cell measured here on one rank (cache effects aside: a block past the caches
 // streams from memory, as measured at 4096^2), and the halo in the slowest direction of the four, alpha and beta
 // measured here by a ping-pong between two ranks on this machine (shared memory), and for a cluster taken from
-// the interconnect's figures: NVIDIA ConnectX-6 (HDR InfiniBand), "200Gb/s ... sub-600ns latency" (ConnectX-6
-// user manual, docs.nvidia.com/networking/display/ConnectX6EN/Introduction): alpha = 0.6 us, beta = 1 / 25 GB/s.
+// the interconnect's figures (connectx6_alpha, connectx6_beta: distributed_wave.hpp, with the model, HaloModel).
 // The halo begins to dominate where m (alpha + beta b) > (n^2 / P) t_cell.
 #include "run/ranks.hpp"
 #include "solvers/distributed_wave.hpp"
@@ -173,30 +172,28 @@ int main(int argc, char** argv) {
   if (P == 2)
     for (const int n : {1024, 2048, 4096}) {
       const double t_n = per_step(fmt::format("BM_step_one_rank/{}/iterations:5/manual_time", n)) / (static_cast<double>(n) * n);
-      const double model = static_cast<double>(n) * n / 2 * t_n + alpha + beta * 8.0 * n;
+      // two blocks of n/2 rows: one neighbour, one message of a row (a quarter of HaloModel's four)
+      const stepwise::HaloModel here{t_n, alpha, beta};
+      const double model = here.compute_seconds(2, n) + alpha + beta * 8.0 * n;
       const double measured = per_step(fmt::format("BM_step/{}/0/iterations:5/manual_time", n));
       std::printf("model here, %d^2 on 2 ranks: %.3f ms a step (halo %.1f us), measured %.3f: ratio measured / model %.2f\n", n, model * 1e3,
                   (alpha + beta * 8.0 * n) * 1e6, measured * 1e3, measured / model);
     }
   std::printf("cell cost t_cell (one rank, 4096^2): %.3f ns\n", t_cell * 1e9);
-  const double cluster_alpha = 0.6e-6, cluster_beta = 1 / 25e9;
-  std::printf("model for a cluster (alpha %.1f us, beta 1/%.0f GB/s, ConnectX-6 HDR), time a step in ms [halo share]:\n", cluster_alpha * 1e6,
-              1e-9 / cluster_beta);
+  const stepwise::HaloModel cluster{t_cell, stepwise::connectx6_alpha, stepwise::connectx6_beta};
+  std::printf("model for a cluster (alpha %.1f us, beta 1/%.0f GB/s, ConnectX-6 HDR), time a step in ms [halo share]:\n", cluster.alpha * 1e6,
+              1e-9 / cluster.beta);
   std::printf("%10s", "n \\ P");
   for (const int p : {64, 256, 1024, 4096}) std::printf("%22d", p);
   std::printf("\n");
   for (const int n : {4096, 16384, 65536}) {
     std::printf("%10d", n);
-    for (const int p : {64, 256, 1024, 4096}) {
-      const double compute = static_cast<double>(n) * n / p * t_cell, halo = 4 * (cluster_alpha + cluster_beta * 8.0 * n / std::sqrt(p));
-      std::printf("%14.4f [%4.0f%%]", (compute + halo) * 1e3, 100 * halo / (compute + halo));
-    }
+    for (const int p : {64, 256, 1024, 4096})
+      std::printf("%14.4f [%4.0f%%]", cluster.step_seconds(p, n) * 1e3, 100 * cluster.halo_seconds(p, n) / cluster.step_seconds(p, n));
     std::printf("\n");
   }
   for (const int n : {4096, 16384, 65536}) {
-    // the rank count where the halo's time reaches the compute's
-    double p = 1;
-    while (p < 1e9 && 4 * (cluster_alpha + cluster_beta * 8.0 * n / std::sqrt(p)) < static_cast<double>(n) * n / p * t_cell) p *= 1.01;
+    const double p = cluster.crossover_ranks(n);
     std::printf("%d^2: the halo reaches the compute at about %.0f ranks (blocks of %.0f^2)\n", n, p, n / std::sqrt(p));
   }
   return 0;

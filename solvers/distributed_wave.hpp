@@ -12,6 +12,7 @@
 #include "wave_step.hpp"
 
 #include <array>
+#include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <vector>
@@ -22,6 +23,31 @@ namespace stepwise {
 struct DecompositionError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+// The time of a distributed step (Hockney's model): P ranks on an n x n grid, blocks of (n/sqrt P)^2 cells,
+// each exchanging 4 messages of 8 n/sqrt(P) bytes a step (a block with four neighbours: the slowest):
+//     T(P, n) = (n^2 / P) t_cell + 4 (alpha + beta 8 n / sqrt P)
+// with t_cell a cell's update on one rank, alpha a message's latency and beta its time per byte. The one
+// formula bench_mpi_wave and the report's scaling section both use.
+struct HaloModel {
+  double t_cell = 0, alpha = 0, beta = 0;  // s, s, s/byte
+
+  double compute_seconds(double ranks, double n) const { return n * n / ranks * t_cell; }
+  double halo_seconds(double ranks, double n) const { return 4 * (alpha + beta * 8 * n / std::sqrt(ranks)); }
+  double step_seconds(double ranks, double n) const { return compute_seconds(ranks, n) + halo_seconds(ranks, n); }
+  // the rank count where the halo's time reaches the compute's (a 1% search from one rank)
+  double crossover_ranks(double n) const {
+    double p = 1;
+    while (p < 1e12 && halo_seconds(p, n) < compute_seconds(p, n)) p *= 1.01;
+    return p;
+  }
+};
+
+// a cluster's interconnect, from its maker's figures: NVIDIA ConnectX-6 (HDR InfiniBand), "200Gb/s ... sub-600ns
+// latency" (ConnectX-6 user manual, docs.nvidia.com/networking/display/ConnectX6EN/Introduction): 0.6 us, 25 GB/s.
+// An MPI message costs somewhat more than the adapter's latency, so the model is a lower bound on the halo
+inline constexpr double connectx6_alpha = 0.6e-6;
+inline constexpr double connectx6_beta = 1 / 25e9;
 
 class DistributedWave {
  public:
