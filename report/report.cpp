@@ -231,6 +231,7 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
     // the pictures on rank 0 alone: each is a directory of frames, drawn where the report is written
     StudyContext here = ctx;
     here.distribute = false;
+    here.load = nullptr;  // the ranks' shares are the sweeps'; the pictures are rank 0's alone
     md += pictures_section(staging, scenes_dir, here);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     md += ranks::size() == 1 ? fmt::format("---\nStudies run in {:.1f} s of wall time on {} threads.\n", seconds, ctx.threads)
