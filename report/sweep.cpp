@@ -115,50 +115,61 @@ void StudyContext::run_points(const std::vector<std::string>& labels, const std:
                               const std::function<void(size_t, pack::Writer&)>& put, const std::function<void(size_t, pack::Reader&)>& get) const {
   const std::vector<double> weights = costs.empty() ? std::vector<double>(labels.size(), 1.0) : costs;
   const int ranks = distribute ? ranks::size() : 1, me = distribute ? ranks::rank() : 0;
-  // this rank's points, the costliest first
-  const std::vector<size_t> mine = share_by_cost(weights, ranks)[static_cast<size_t>(me)];
-  const size_t n = std::min(mine.size(), static_cast<size_t>(std::max(threads, 1)));
-  if (progress) {
-    std::vector<double> my_weights;
-    std::vector<std::string> my_groups;
-    for (const size_t i : mine) {
-      my_weights.push_back(weights[i]);
-      if (!groups.empty()) my_groups.push_back(groups[i]);
-    }
-    progress->begin_sweep(my_weights, my_groups, static_cast<int>(std::max<size_t>(n, 1)), !costs.empty());
-  }
-  const auto start = std::chrono::steady_clock::now();
-  std::atomic<size_t> next{0};
   std::vector<std::exception_ptr> errors(labels.size());
-  auto worker = [&] {
-    for (size_t k = next++; k < mine.size(); k = next++) {
-      const size_t i = mine[k];
-      const auto begun = std::chrono::steady_clock::now();
-      try {
-        point(i);
-      } catch (...) {
-        errors[i] = std::current_exception();
+  std::vector<double> took(labels.size(), 0.0);  // each point's seconds (every rank's, once handed over)
+
+  // these points (the costliest first) on this rank's threads; the seconds until the last is done
+  const auto run_here = [&](const std::vector<size_t>& mine) {
+    const size_t n = std::min(mine.size(), static_cast<size_t>(std::max(threads, 1)));
+    if (progress) {
+      std::vector<double> my_weights;
+      std::vector<std::string> my_groups;
+      for (const size_t i : mine) {
+        my_weights.push_back(weights[i]);
+        if (!groups.empty()) my_groups.push_back(groups[i]);
       }
-      if (progress) progress->point_done(k, labels[i], std::chrono::duration<double>(std::chrono::steady_clock::now() - begun).count());
+      progress->begin_sweep(my_weights, my_groups, static_cast<int>(std::max<size_t>(n, 1)), !costs.empty());
     }
+    const auto start = std::chrono::steady_clock::now();
+    std::atomic<size_t> next{0};
+    auto worker = [&] {
+      for (size_t k = next++; k < mine.size(); k = next++) {
+        const size_t i = mine[k];
+        const auto begun = std::chrono::steady_clock::now();
+        try {
+          point(i);
+        } catch (...) {
+          errors[i] = std::current_exception();
+        }
+        took[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - begun).count();
+        if (progress) progress->point_done(k, labels[i], took[i]);
+      }
+    };
+    std::vector<std::jthread> pool;
+    for (size_t k = 1; k < n; ++k) pool.emplace_back(worker);
+    worker();
+    pool.clear();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  std::vector<std::jthread> pool;
-  for (size_t k = 1; k < n; ++k) pool.emplace_back(worker);
-  worker();
-  pool.clear();
-  const double busy = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto add_load = [&](const std::vector<double>& seconds) {
+    if (!load) return;
+    load->seconds.resize(std::max(load->seconds.size(), seconds.size()));
+    for (size_t r = 0; r < seconds.size(); ++r) load->seconds[r] += seconds[r];
+  };
+
+  std::vector<size_t> all(labels.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
   if (ranks == 1) {
-    if (load) {
-      load->seconds.resize(std::max<size_t>(load->seconds.size(), 1));
-      load->seconds[0] += busy;
-    }
+    std::stable_sort(all.begin(), all.end(), [&](size_t a, size_t b) { return weights[a] > weights[b]; });
+    add_load({run_here(all)});
     for (const auto& e : errors)
       if (e) std::rethrow_exception(e);
     return;
   }
 
-  // hand this rank's results to every rank: its busy time, then each point's index, whether it failed, and
-  // the error's message or the result
+  // Under mpirun: hand this rank's results to every rank (its busy time, then for each point its index, its
+  // seconds, whether it failed, and the error's message or the result) and take theirs
+  std::map<size_t, std::string> failed;  // point -> "rank r, point label: message", in point order
   const auto message = [](const std::exception_ptr& e) {
     try {
       std::rethrow_exception(e);
@@ -168,39 +179,83 @@ void StudyContext::run_points(const std::vector<std::string>& labels, const std:
       return std::string("an unknown exception");
     }
   };
-  pack::Writer w;
-  pack::put(w, busy);
-  for (const size_t i : mine) {
-    pack::put(w, i);
-    pack::put(w, errors[i] != nullptr);
-    if (errors[i]) pack::put(w, message(errors[i]));
-    else put(i, w);
-  }
-  const std::vector<std::string> all = ranks::all_gather(w.bytes());
-  std::map<size_t, std::string> failed;  // point -> "rank r, point label: message", in point order
-  std::vector<double> seconds(static_cast<size_t>(ranks));
-  for (int r = 0; r < ranks; ++r) {
-    pack::Reader reader(all[static_cast<size_t>(r)]);
-    pack::get(reader, seconds[static_cast<size_t>(r)]);
-    while (!reader.done()) {
-      size_t i = 0;
-      bool error = false;
-      pack::get(reader, i);
-      pack::get(reader, error);
-      if (i >= labels.size()) throw std::runtime_error(fmt::format("rank {} handed over point {} of a sweep of {}: the ranks run different sweeps", r, i, labels.size()));
-      if (error) {
-        std::string what;
-        pack::get(reader, what);
-        failed[i] = fmt::format("rank {}, point {}: {}", r, labels[i], what);
-      } else {
-        get(i, reader);  // this rank's own too: every rank's results come through the same bytes
+  const auto hand_over = [&](const std::vector<size_t>& mine, double busy) {
+    pack::Writer w;
+    pack::put(w, busy);
+    for (const size_t i : mine) {
+      pack::put(w, i);
+      pack::put(w, took[i]);
+      pack::put(w, errors[i] != nullptr);
+      if (errors[i]) pack::put(w, message(errors[i]));
+      else put(i, w);
+    }
+    const std::vector<std::string> bytes = ranks::all_gather(w.bytes());
+    std::vector<double> seconds(static_cast<size_t>(ranks));
+    for (int r = 0; r < ranks; ++r) {
+      pack::Reader reader(bytes[static_cast<size_t>(r)]);
+      pack::get(reader, seconds[static_cast<size_t>(r)]);
+      while (!reader.done()) {
+        size_t i = 0;
+        bool error = false;
+        pack::get(reader, i);
+        if (i >= labels.size()) throw std::runtime_error(fmt::format("rank {} handed over point {} of a sweep of {}: the ranks run different sweeps", r, i, labels.size()));
+        pack::get(reader, took[i]);
+        pack::get(reader, error);
+        if (error) {
+          std::string what;
+          pack::get(reader, what);
+          failed[i] = fmt::format("rank {}, point {}: {}", r, labels[i], what);
+        } else {
+          get(i, reader);  // this rank's own too: every rank's results come through the same bytes
+        }
       }
     }
+    add_load(seconds);
+  };
+  // `points` shared by these costs (one per point), run, handed over
+  const auto round = [&](const std::vector<size_t>& points, const std::vector<double>& by) {
+    const auto shares = share_by_cost(by, ranks);  // kept: a range-for over a temporary's element would dangle
+    std::vector<size_t> mine;
+    for (const size_t k : shares[static_cast<size_t>(me)]) mine.push_back(points[k]);
+    hand_over(mine, run_here(mine));
+  };
+
+  // Where the sweep has cost models and groups (points that cost alike relative to their model), each group's
+  // cheapest point runs first, and the rest are shared by their model's cost times what their group's first
+  // point took per unit of it (the whole first round's ratio for a group it did not reach): the models err by
+  // group (measured: a rank 1.2 times the mean on the quick report with the models alone), and the first round
+  // costs little. The seconds are handed over with the results, so every rank computes the same shares.
+  std::vector<size_t> rest = all;
+  std::vector<double> cost_of(weights);
+  if (!costs.empty() && !groups.empty()) {
+    std::map<std::string, size_t> cheapest;
+    for (const size_t i : all)
+      if (const auto it = cheapest.find(groups[i]); it == cheapest.end() || weights[i] < weights[it->second]) cheapest[groups[i]] = i;
+    std::vector<size_t> first;
+    for (const auto& [group, i] : cheapest) first.push_back(i);
+    std::sort(first.begin(), first.end());
+    std::vector<double> first_costs;
+    for (const size_t i : first) first_costs.push_back(weights[i]);
+    round(first, first_costs);
+    double seconds = 0, expected = 0;
+    std::map<std::string, double> ratio;
+    for (const size_t i : first) {
+      seconds += took[i];
+      expected += weights[i];
+      if (weights[i] > 0) ratio[groups[i]] = took[i] / weights[i];
+    }
+    const double overall = expected > 0 ? seconds / expected : 1;
+    rest.clear();
+    for (const size_t i : all)
+      if (!std::binary_search(first.begin(), first.end(), i)) {
+        rest.push_back(i);
+        const auto it = ratio.find(groups[i]);
+        cost_of[i] = weights[i] * (it != ratio.end() && it->second > 0 ? it->second : overall);
+      }
   }
-  if (load) {
-    load->seconds.resize(std::max(load->seconds.size(), seconds.size()));
-    for (size_t r = 0; r < seconds.size(); ++r) load->seconds[r] += seconds[r];
-  }
+  std::vector<double> rest_costs;
+  for (const size_t i : rest) rest_costs.push_back(cost_of[i]);
+  round(rest, rest_costs);
   if (!failed.empty()) throw SweepError(failed.begin()->second);
 }
 
