@@ -1,10 +1,11 @@
 // The height field's method of lines (models/height_field.cpp's f: dz/dt = v, dv/dt = c^2 Lap z - mu v on
 // the interior, the boundary still) on the grid split among the MPI ranks (distributed_wave.hpp), integrated
-// by CVODE's Adams method with fixed-point iteration (as `cvode-adams`) on SUNDIALS' parallel vector: each
+// by CVODE's Adams method with fixed-point iteration (as `cvode-adams`) or ARKODE's Dormand-Prince 5(4) (as
+// `arkode-erk-dormand-prince54`) on SUNDIALS' parallel vector: each
 // rank's N_Vector_Parallel holds its block's z and v, f exchanges z's halo and computes each cell by the same
 // kernel as one process (kernels/wave_acceleration.hpp), and CVODE's norms and dot products are sums over the
 // ranks (MPI_Allreduce inside the vector). Those sums add in another order than one process's, so the step
-// sizes CVODE picks differ in their last bits and the solutions by the tolerance's order, not by bits.
+// sizes the integrator picks differ in their last bits and the solutions by the tolerance's order, not by bits.
 // SUNDIALS' and MPI's types stay in distributed_lines.cpp.
 #pragma once
 
@@ -13,6 +14,7 @@
 #include <Eigen/Core>
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace stepwise {
@@ -20,10 +22,12 @@ namespace stepwise {
 struct DistributedLinesRun {
   std::vector<double> y;  // (z, v) of the whole grid at t_end, on rank 0 (empty on the others)
   long steps = 0, rhs_evals = 0;
-  std::string failure;    // the failing CVODE call and its code; empty when it reached t_end
+  std::string failure;    // the failing SUNDIALS call and its code, or a method not run this way; empty when it reached t_end
 };
 
-// from y0 = (z, v) of the whole grid (every rank passes it; each takes its block) to t_end
-DistributedLinesRun cvode_adams_distributed(const WaveGridView& grid, const Eigen::VectorXd& y0, double t_end, double rtol, double atol);
+// `method` ("cvode-adams" or "arkode-erk-dormand-prince54") from y0 = (z, v) of the whole grid (every rank
+// passes it; each takes its block) to t_end
+DistributedLinesRun lines_distributed(std::string_view method, const WaveGridView& grid, const Eigen::VectorXd& y0, double t_end, double rtol,
+                                      double atol);
 
 }  // namespace stepwise

@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <string>
 #include <numbers>
 
 namespace stepwise {
@@ -123,24 +124,27 @@ TEST(DistributedWave, TheGatheredStateIsTheSchemesExactDiscreteMode) {
   EXPECT_LT(error, tolerance::wave_modal);
 }
 
-// CVODE on the parallel vector against cvode-adams in one process: the same f cell for cell, but CVODE's
-// weighted norms summed rank by rank and then across ranks, so its step sizes differ in their last bits and
-// the two runs agree as two adaptive runs at one tolerance do: within adaptive_agreement_factor rtol |y|
-TEST(DistributedWave, CvodeOnTheParallelVectorAgreesWithOneProcessToTheTolerancesOrder) {
+// CVODE and ARKODE on the parallel vector against the same methods in one process: the same f cell for cell,
+// but the weighted norms summed rank by rank and then across ranks, so the step sizes differ in their last bits
+// and the runs agree as two adaptive runs at one tolerance do: within adaptive_agreement_factor rtol |y|
+TEST(DistributedWave, SundialsOnTheParallelVectorAgreesWithOneProcessToTheTolerancesOrder) {
   const auto model = make_model("standing-wave", {{"size", 41}});
   const WaveGridView& grid = *model->as<WaveGridView>();
   const double rtol = 1e-8, atol = 1e-11, t = 0.5;
-  const DistributedLinesRun distributed = cvode_adams_distributed(grid, model->initial_state(), t, rtol, atol);
-  ASSERT_TRUE(distributed.failure.empty()) << distributed.failure;
-  if (ranks::rank() != 0) return;
-  const Measured serial = run_and_measure(*model, "cvode-adams", StepControl::adaptive(rtol, atol), t, t);
-  ASSERT_EQ(serial.result.status, Status::ok) << serial.result.message;
-  const Eigen::Map<const Eigen::VectorXd> y(distributed.y.data(), static_cast<Eigen::Index>(distributed.y.size()));
-  ASSERT_EQ(y.size(), serial.result.y_stop.size());
-  const double size = serial.result.y_stop.lpNorm<Eigen::Infinity>(), gap = (y - serial.result.y_stop).lpNorm<Eigen::Infinity>();
-  std::cout << "standing wave 41^2 to " << t << " s, rtol " << rtol << ": " << ranks::size() << " rank(s) " << distributed.steps << " steps, one process "
-            << serial.result.stats.steps << "; they differ by " << gap << " (max |y| " << size << ")\n";
-  EXPECT_LE(gap, tolerance::adaptive_agreement_factor * rtol * size);
+  for (const std::string method : {"cvode-adams", "arkode-erk-dormand-prince54"}) {
+    const DistributedLinesRun distributed = lines_distributed(method, grid, model->initial_state(), t, rtol, atol);
+    ASSERT_TRUE(distributed.failure.empty()) << distributed.failure;
+    if (ranks::rank() != 0) continue;
+    const Measured serial = run_and_measure(*model, method, StepControl::adaptive(rtol, atol), t, t);
+    ASSERT_EQ(serial.result.status, Status::ok) << serial.result.message;
+    const Eigen::Map<const Eigen::VectorXd> y(distributed.y.data(), static_cast<Eigen::Index>(distributed.y.size()));
+    ASSERT_EQ(y.size(), serial.result.y_stop.size());
+    const double size = serial.result.y_stop.lpNorm<Eigen::Infinity>(), gap = (y - serial.result.y_stop).lpNorm<Eigen::Infinity>();
+    std::cout << method << ", standing wave 41^2 to " << t << " s, rtol " << rtol << ": " << ranks::size() << " rank(s) " << distributed.steps
+              << " steps, one process " << serial.result.stats.steps << "; they differ by " << gap << " (max |y| " << size << ")\n";
+    EXPECT_LE(gap, tolerance::adaptive_agreement_factor * rtol * size) << method;
+  }
+  EXPECT_FALSE(lines_distributed("rk4", grid, model->initial_state(), t, rtol, atol).failure.empty());  // not run this way: said
 }
 
 }  // namespace
