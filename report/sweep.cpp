@@ -1,5 +1,6 @@
 #include "sweep.hpp"
 
+#include "run/interrupt.hpp"
 #include "run/ranks.hpp"
 
 #include <fmt/format.h>
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <map>
+#include <optional>
 #include <cstdio>
 #include <thread>
 
@@ -217,6 +219,21 @@ void StudyContext::run_points(const std::vector<std::string>& labels, const std:
     const auto shares = share_by_cost(by, ranks);  // kept: a range-for over a temporary's element would dangle
     std::vector<size_t> mine;
     for (const size_t k : shares[static_cast<size_t>(me)]) mine.push_back(points[k]);
+    // a rank that dies (killed, out of memory) takes its point with it: mpirun names the rank and stops the
+    // others; rank 0's last words name the points each other rank had in hand, the one it was running among them
+    std::optional<interrupt::OnInterrupt> last_words;
+    if (me == 0)
+      last_words.emplace([&labels, &shares, &points, ranks] {
+        for (int r = 1; r < ranks; ++r) {
+          const auto& share = shares[static_cast<size_t>(r)];
+          std::string names;
+          for (size_t k = 0; k < std::min<size_t>(share.size(), 3); ++k) names += (k ? "; " : "") + labels[points[share[k]]];
+          std::fputs(fmt::format("stepwise: stopped while rank {} had {} point(s) of this sweep in hand{}{}{}{}\n", r, share.size(),
+                                 share.empty() ? "" : " (run costliest first: ", names, share.size() > 3 ? "; ..." : "", share.empty() ? "" : ")")
+                         .c_str(),
+                     stderr);
+        }
+      });
     hand_over(mine, run_here(mine));
   };
 

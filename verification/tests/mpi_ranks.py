@@ -11,8 +11,9 @@ usage: mpi_ranks.py STEPWISE SCENES_DIR TOLERANCES_HPP [SERIAL_QUICK_REPORT]
   every CSV's non-timing columns alike (the cloth's to implicit-euler's kept-factor reproducibility, read from
   verification/tolerances.hpp; the rows chosen by CPU time, the recommendations and Pareto fronts, not
   compared).
-- a rank killed in the middle of `report --quick` over a previous report: exit status non-zero, the rank named,
-  the previous report intact and no staging directory left.
+- a rank killed in the middle of `report --quick` over a previous report: exit status non-zero, the rank named
+  (by mpirun) with the points it had in hand (by rank 0), the previous report intact and no staging directory
+  left.
 Skipped (exit 77) where mpirun is missing, with the line that installs it."""
 import csv
 import json
@@ -172,11 +173,14 @@ def main():
                 break
         expect(victim is not None, "killed rank: rank 1 found")
         if victim:
-            time.sleep(3)
+            time.sleep(8)  # into the work-precision sweep (its reference runs come first)
             os.kill(victim, signal.SIGKILL)
         _, err = p.communicate(timeout=120)
         expect(p.returncode != 0, f"killed rank: exit status {p.returncode}, not 0")
         expect(re.search(r"rank 1\b", err) is not None, f"killed rank: the message names rank 1 (stderr: {err[-600:]!r})")
+        # rank 0 names the points rank 1 had in hand, the one it was running among them
+        expect(re.search(r"rank 1 had \d+ point\(s\) of this sweep in hand \(run costliest first: ", err) is not None,
+               f"killed rank: rank 0 names the points rank 1 had in hand (stderr: {err[-600:]!r})")
         expect(open(os.path.join(prev, "report.md")).read() == "the previous report\n", "killed rank: the previous report intact")
         left = [n for n in os.listdir(d) if n.startswith(".prev")]
         expect(not left, f"killed rank: staging left: {left}")
