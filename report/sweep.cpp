@@ -159,15 +159,14 @@ void StudyContext::run_points(const std::vector<std::string>& labels, const std:
     for (size_t r = 0; r < seconds.size(); ++r) load->seconds[r] += seconds[r];
   };
 
-  std::vector<size_t> all(labels.size());
-  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
   if (ranks == 1) {
-    std::stable_sort(all.begin(), all.end(), [&](size_t a, size_t b) { return weights[a] > weights[b]; });
-    add_load({run_here(all)});
+    add_load({run_here(share_by_cost(weights, 1)[0])});  // every point, the costliest first
     for (const auto& e : errors)
       if (e) std::rethrow_exception(e);
     return;
   }
+  std::vector<size_t> all(labels.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
 
   // Under mpirun: hand this rank's results to every rank (its busy time, then for each point its index, its
   // seconds, whether it failed, and the error's message or the result) and take theirs

@@ -39,7 +39,7 @@ struct ArkodeFree {
 struct Lines {
   DistributedWave* grid;
   DistributedWave::Block block;
-  int rows = 0, cols = 0;  // the whole grid
+  int n = 0;  // the whole grid's points per side
   double c2 = 0, mu = 0;
   long rhs_evals = 0;
 };
@@ -60,7 +60,7 @@ int rhs(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
   for (int a = 0; a < r; ++a)
     for (int b = 0; b < c; ++b) {
       const int i = L.block.row0 + a, j = L.block.col0 + b, k = a * c + b;
-      const bool interior = i > 0 && i < L.rows - 1 && j > 0 && j < L.cols - 1;
+      const bool interior = i > 0 && i < L.n - 1 && j > 0 && j < L.n - 1;
       dz[k] = v[k];
       dv[k] = interior ? wave_acceleration(L.c2, L.mu, neighbour_sum(halo, (a + 1) * s + b + 1, s), z[k], v[k]) : 0.0;
     }
@@ -73,7 +73,7 @@ DistributedLinesRun lines_distributed(std::string_view method, const WaveGridVie
                                       double atol) {
   const int n = view.points;
   DistributedWave grid(n, n, WaveCoefficients{});
-  Lines lines{&grid, grid.block(), n, n, view.c * view.c / (view.spacing * view.spacing), view.mu};
+  Lines lines{&grid, grid.block(), n, view.c * view.c / (view.spacing * view.spacing), view.mu};
   const auto& B = lines.block;
   const long local = 2L * B.rows * B.cols, global = 2L * n * n;
   DistributedLinesRun run;
