@@ -8,7 +8,7 @@
 namespace stepwise {
 
 int render_command(const RenderOptions& options) {
-  if (ranks::idle_here("render")) return 0;  // under mpirun, rank 0 draws
+  if (ranks::idle_here("render", "drawing is not split among ranks")) return 0;  // under mpirun, rank 0 draws
   try {
     const RenderedRun drawn = render_scene(options);
     if (drawn.status != Status::ok) {

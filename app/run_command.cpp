@@ -1,11 +1,13 @@
 #include "run_command.hpp"
 
 #include "run/atomic_write.hpp"
+#include "run/distributed_run.hpp"
 #include "run/interrupt.hpp"
 #include "run/measure.hpp"
 #include "run/message.hpp"
 #include "run/ranks.hpp"
 #include "run/run_outputs.hpp"
+#include "solvers/distributed_wave.hpp"
 
 #include <fmt/format.h>
 
@@ -16,30 +18,61 @@
 namespace stepwise {
 
 int run_command(const RunOptions& options) {
-  // under mpirun: no model is distributed yet, so rank 0 runs the scene as one process would (docs/usage.md)
-  if (ranks::idle_here("run")) return 0;
+  // under mpirun, every rank prepares the run; wave-fd on a water scene is split among them, anything else
+  // runs on rank 0 alone (run/distributed_run.hpp). Only rank 0 speaks and writes
+  const bool leader = ranks::rank() == 0;
+  const auto refuse = [leader](std::string_view message) {
+    if (leader) print_error("run", message);
+    return 2;
+  };
   PreparedRun p;
   std::unique_ptr<RunOutputs> outputs;
+  std::unique_ptr<DistributedRun> spread;
+  int refused = 0;
   try {
     p = prepare_run(options);
-    ensure_writable_directory(options.out);
-    check_output_fits(options.out, p);
-    interrupt::remove_stale(options.out);
-    outputs = std::make_unique<RunOutputs>(options.out, p);
+    if (ranks::size() > 1) {
+      if (const std::string why = not_distributed(p); !why.empty()) {
+        if (ranks::idle_here("run", why)) return 0;
+      } else {
+        spread = std::make_unique<DistributedRun>(p);
+        p.ranks = ranks::size();
+      }
+    }
+    if (leader) {
+      ensure_writable_directory(options.out);
+      check_output_fits(options.out, p);
+      interrupt::remove_stale(options.out);
+      outputs = std::make_unique<RunOutputs>(options.out, p);
+    }
   } catch (const InputError& e) {
-    print_error("run", e.what());
-    return 2;
+    refused = refuse(e.what());
   } catch (const BadMethod& e) {
-    print_error("run", fmt::format("--method: {}", e.what()));
-    return 2;
+    refused = refuse(fmt::format("--method: {}", e.what()));
+  } catch (const DecompositionError& e) {
+    refused = refuse(e.what());
   } catch (const std::runtime_error& e) {
-    print_error("run", fmt::format("--out: {}", e.what()));
-    return 2;
+    refused = refuse(fmt::format("--out: {}", e.what()));
   }
+  // rank 0's outputs may fail where the others' preparation did not: the ranks of a split run agree first.
+  // Rank 0 alone exits 2 (mpirun's status): a follower exiting non-zero first would have mpirun kill rank 0
+  if (spread ? !ranks::all_agree(refused == 0) : refused != 0) return leader ? 2 : 0;
 
-  // the rows go to the trajectory's file as they come
-  p.control.sink = [&outputs](double t, const Eigen::VectorXd& sample) { return outputs->sample(t, sample); };
-  Measured m = run_and_measure(*p.model, p.method, p.control, p.t_end, p.output_dt);
+  Measured m;
+  if (spread) {
+    try {
+      m = spread->run(p, [&outputs](double t, const Eigen::VectorXd& sample) { return outputs->sample(t, sample); });
+    } catch (const std::runtime_error& e) {
+      // an MPI call failed on this rank: the others would wait for it
+      print_error("run", fmt::format("rank {}: {}", ranks::rank(), e.what()));
+      ranks::abort_all(1);
+    }
+    if (!leader) return m.result.status == Status::ok ? 0 : 1;
+  } else {
+    // the rows go to the trajectory's file as they come
+    p.control.sink = [&outputs](double t, const Eigen::VectorXd& sample) { return outputs->sample(t, sample); };
+    m = run_and_measure(*p.model, p.method, p.control, p.t_end, p.output_dt);
+  }
   if (m.error && !std::isfinite(*m.error)) {
     m.result.status = Status::diverged;
     m.result.message = fmt::format("diverged at t = {:.9g}: the error against the exact solution overflowed ({})", p.t_end, *m.error);

@@ -15,8 +15,10 @@
 // measured here by a ping-pong between two ranks on this machine (shared memory), and for a cluster taken from
 // the interconnect's figures (connectx6_alpha, connectx6_beta: distributed_wave.hpp, with the model, HaloModel).
 // The halo begins to dominate where m (alpha + beta b) > (n^2 / P) t_cell.
+#include "models/model.hpp"
 #include "run/ranks.hpp"
 #include "solvers/distributed_wave.hpp"
+#include "solvers/method_table.hpp"
 
 #include <mpi.h>
 
@@ -79,6 +81,29 @@ void BM_step_one_rank(benchmark::State& state) {
   state.counters["cells"] = benchmark::Counter(static_cast<double>(n) * n * steps * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 
+// the run's path (what `mpirun -np N stepwise run scenes/pool.toml` does): wave-fd over run_steps steps of the pool
+// at n^2 (one drop, at t = 0), the fixed-step loop with its divergence test around the stepper. range(1):
+// 0 on every rank's block (wave_fd_distributed); 1 the same stepper on rank 0 alone, its block the whole grid;
+// 2 wave-fd as one process runs it (the table's method), on rank 0 alone
+constexpr int run_steps = 100;  // enough that the run's start (its state's first touch, a restart) is a few percent
+void BM_run(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0)), how = static_cast<int>(state.range(1));
+  const auto model = stepwise::make_model("pool", {{"size", n}, {"drops", 1}});
+  const auto& view = *model->as<stepwise::WaveGridView>();
+  const auto control = stepwise::StepControl::fixed(0.5 * stepwise::wave_stable_dt(view));
+  const std::vector<double> t_out{run_steps * *control.dt};
+  const bool rank0 = stepwise::ranks::rank() == 0;
+  std::unique_ptr<stepwise::DistributedWave> grid;
+  if (how == 0 || (how == 1 && rank0)) grid = std::make_unique<stepwise::DistributedWave>(n, n, stepwise::WaveCoefficients{}, how == 1);
+  long taken = 0;
+  for (auto _ : state)
+    state.SetIterationTime(slowest([&] {
+      if (grid) taken = stepwise::wave_fd_distributed(*grid, view, *model->as<stepwise::WaveBlocksView>(), control, t_out).stats.steps;
+      else if (how == 2 && rank0) taken = stepwise::make_integrator("wave-fd", control)->integrate(*model, 0.0, model->initial_state(), t_out).stats.steps;
+    }));
+  state.counters["steps"] = static_cast<double>(taken);
+}
+
 // a message of range(0) bytes from rank 0 to rank 1 and back, ten times an iteration: an iteration's time is
 // set to one message's (a twentieth)
 void BM_pingpong(benchmark::State& state) {
@@ -107,6 +132,7 @@ void grids(benchmark::internal::Benchmark* b) {
 }
 BENCHMARK(BM_step)->Apply(grids)->Iterations(5)->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_step_one_rank)->Arg(1024)->Arg(2048)->Arg(4096)->Iterations(5)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_run)->Args({2048, 0})->Args({2048, 1})->Args({2048, 2})->Iterations(3)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // rank 0's report; the other ranks print nothing
 class Quiet : public benchmark::BenchmarkReporter {
@@ -151,6 +177,13 @@ int main(int argc, char** argv) {
       std::printf("strong scaling %d^2%s: %.3f ms a step on %d rank(s), %.3f on one: speed-up %.2f (efficiency %.2f)\n", n,
                   overlap ? " (halo overlapped)" : "", many * 1e3, P, one * 1e3, one / many, one / many / P);
     }
+  }
+  {
+    const auto per_run_step = [&](int how) { return seconds[fmt::format("BM_run/2048/{}/iterations:3/manual_time", how)] / run_steps; };
+    const double blocks = per_run_step(0), alone = per_run_step(1), serial = per_run_step(2);
+    std::printf("run's path 2048^2 (pool, wave-fd, fixed-step loop): %.3f ms a step on %d rank(s), %.3f on one rank's block: speed-up %.2f;"
+                " wave-fd as one process %.3f (the blocks' stepper on one rank / it: %.2f)\n",
+                blocks * 1e3, P, alone * 1e3, alone / blocks, serial * 1e3, alone / serial);
   }
   if (P > 1) {
     const double one = per_step("BM_step_one_rank/2048/iterations:5/manual_time");

@@ -17,10 +17,16 @@ inline T neighbour_sum(const T* u, std::ptrdiff_t j, std::ptrdiff_t n) {
   return (u[j - n] + u[j + n]) + (u[j - 1] + u[j + 1]);
 }
 
-// dv/dt at a cell, c^2 Lap z - mu v, from the sum of its four neighbours, c2 = c^2 / d^2 (1/s^2)
+// c^2 Lap z at a cell from the sum of its four neighbours, c2 = c^2 / d^2 (1/s^2)
+template <class T>
+inline T wave_laplacian(T c2, T neighbours, T z) {
+  return c2 * (neighbours - 4 * z);
+}
+
+// dv/dt at a cell, c^2 Lap z - mu v, from the sum of its four neighbours
 template <class T>
 inline T wave_acceleration(T c2, T mu, T neighbours, T z, T v) {
-  return c2 * (neighbours - 4 * z) - mu * v;
+  return wave_laplacian(c2, neighbours, z) - mu * v;
 }
 
 }  // namespace stepwise

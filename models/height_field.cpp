@@ -20,14 +20,17 @@ double laplacian_eigenvalue(int intervals, double spacing, int m, int n) {
   return 4 / (spacing * spacing) * (sm * sm + sn * sn);
 }
 
-Eigen::VectorXd wave_mode(int points, int m, int n) {
+double wave_mode_at(int points, int m, int n, int i, int j) {
   const int intervals = points - 1;
+  // the boundary exactly zero (sin(m pi) is 1e-16, not 0)
+  if (i == 0 || j == 0 || i == intervals || j == intervals) return 0;
+  return std::sin(m * std::numbers::pi * i / intervals) * std::sin(n * std::numbers::pi * j / intervals);
+}
+
+Eigen::VectorXd wave_mode(int points, int m, int n) {
   Eigen::VectorXd s(static_cast<Eigen::Index>(points) * points);
   for (int i = 0; i < points; ++i)
-    for (int j = 0; j < points; ++j)
-      s[i * points + j] = std::sin(m * std::numbers::pi * i / intervals) * std::sin(n * std::numbers::pi * j / intervals);
-  // the boundary exactly zero (sin(m pi) is 1e-16, not 0)
-  for (int k = 0; k < points; ++k) s[k] = s[(points - 1) * points + k] = s[k * points] = s[k * points + points - 1] = 0;
+    for (int j = 0; j < points; ++j) s[i * points + j] = wave_mode_at(points, m, n, i, j);
   return s;
 }
 
@@ -40,12 +43,17 @@ void check_water_grid(const Params& p, int points, double spacing, bool drop) {
         throw BadParameter(key, fmt::format("parameter '{}' = {} m puts the drop outside the grid (0, {} m)", key, p.at(key), side));
 }
 
-void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z) {
-  for (int i = 1; i < points - 1; ++i)
-    for (int j = 1; j < points - 1; ++j) {
+void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z, const GridBlock& block) {
+  // the grid's interior within the block
+  for (int i = std::max(1, block.row0); i < std::min(points - 1, block.row0 + block.rows); ++i)
+    for (int j = std::max(1, block.col0); j < std::min(points - 1, block.col0 + block.cols); ++j) {
       const double r = std::hypot(i * spacing - x, j * spacing - y);
-      if (r < radius) z[i * points + j] += height * (1 + std::cos(std::numbers::pi * r / radius)) / 2;
+      if (r < radius) z[static_cast<std::ptrdiff_t>(i - block.row0) * block.cols + (j - block.col0)] += height * (1 + std::cos(std::numbers::pi * r / radius)) / 2;
     }
+}
+
+void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z) {
+  add_raised_cosine(points, spacing, x, y, radius, height, z, GridBlock{0, points, 0, points});
 }
 
 std::pair<double, double> mode_amplitude(double w2, double mu, double a0, double t) {
@@ -122,14 +130,10 @@ class HeightField final : public Model {
         drops_.push_back(d);
       }
       std::sort(drops_.begin(), drops_.end(), [](const Drop& a, const Drop& b) { return a.t < b.t; });
-      // a drop at a given time is an event on g = t - t_k (either direction: it fires once, going up)
-      for (const Drop& d : drops_)
-        events_.push_back(Event{"drop", 0, [t = d.t](double time, const Eigen::VectorXd&) { return time - t; },
-                                [this, d](double, Eigen::VectorXd& y) {
-                                  add_drop(d, y);
-                                  return std::string("drop");
-                                }});
+      events_ = block_events(GridBlock{0, n_, 0, n_});
     }
+    blocks_.initial_state = [this](const GridBlock& block) { return initial_state(block); };
+    blocks_.events = [this](const GridBlock& block) { return block_events(block); };
     second_order_.positions = static_cast<int>(cells_);
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
     // IMEX: z' = v and the Laplacian implicit (linear, constant), the damping explicit
@@ -158,7 +162,7 @@ class HeightField final : public Model {
   }
   int size() const override { return static_cast<int>(2 * cells_); }
   bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, grid_, split_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, grid_, split_, blocks_); }
   std::span<const Event> events() const override { return events_; }
 
   std::vector<std::string> state_names() const override {
@@ -169,12 +173,32 @@ class HeightField final : public Model {
     return names;
   }
 
-  Eigen::VectorXd initial_state() const override {
-    Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
-    if (scene_ == Scene::standing) y.head(cells_) = amplitude_ * wave_mode(n_, m_, mode_n_);
+  Eigen::VectorXd initial_state() const override { return initial_state(GridBlock{0, n_, 0, n_}); }
+
+  // (z, v) on one block of the grid: at rest, the standing wave's mode or the drops that fall at t = 0
+  Eigen::VectorXd initial_state(const GridBlock& block) const {
+    const Eigen::Index cells = static_cast<Eigen::Index>(block.rows) * block.cols;
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(2 * cells);
+    if (scene_ == Scene::standing)
+      for (int i = 0; i < block.rows; ++i)
+        for (int j = 0; j < block.cols; ++j) y[i * block.cols + j] = amplitude_ * wave_mode_at(n_, m_, mode_n_, block.row0 + i, block.col0 + j);
     for (const Drop& d : drops_)
-      if (d.t == 0) add_drop(d, y);
+      if (d.t == 0) add_drop(d, y, block);
     return y;
+  }
+
+  // a pool's drops, each at its time an event on g = t - t_k (either direction: it fires once, going up),
+  // adding its shape to a state of this block
+  std::vector<Event> block_events(const GridBlock& block) const {
+    std::vector<Event> events;
+    if (scene_ == Scene::pool)
+      for (const Drop& d : drops_)
+        events.push_back(Event{"drop", 0, [t = d.t](double time, const Eigen::VectorXd&) { return time - t; },
+                               [this, d, block](double, Eigen::VectorXd& y) {
+                                 add_drop(d, y, block);
+                                 return std::string("drop");
+                               }});
+    return events;
   }
 
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
@@ -254,7 +278,9 @@ class HeightField final : public Model {
   }
 
  private:
-  void add_drop(const Drop& d, Eigen::VectorXd& y) const { add_raised_cosine(n_, grid_.spacing, d.x, d.y, radius_, height_, y.data()); }
+  void add_drop(const Drop& d, Eigen::VectorXd& y, const GridBlock& block) const {
+    add_raised_cosine(n_, grid_.spacing, d.x, d.y, radius_, height_, y.data(), block);
+  }
 
   Scene scene_;
   int n_;                       // grid points per side
@@ -262,6 +288,7 @@ class HeightField final : public Model {
   WaveGridView grid_;
   SecondOrderView second_order_;  // y = (z, v), with the acceleration below
   ImexSplit split_;
+  WaveBlocksView blocks_;         // the model on one block of the grid (a rank's, under MPI)
   std::vector<Drop> drops_;     // the drop (water-drop) or the drops in time order (pool)
   double radius_ = 0, height_ = 0;
   int m_ = 0, mode_n_ = 0;      // standing wave's mode

@@ -31,6 +31,7 @@
 
 #include "kernels/wave_acceleration.hpp"
 #include "model.hpp"
+#include "solvers/capabilities/wave_grid.hpp"
 
 namespace stepwise {
 
@@ -46,14 +47,18 @@ double laplacian_eigenvalue(int intervals, double spacing, int m, int n);
 
 // the mode s_mn on size^2 points, row-major (zero on the boundary)
 Eigen::VectorXd wave_mode(int points, int m, int n);
+// s_mn at point (i, j)
+double wave_mode_at(int points, int m, int n, int i, int j);
 
 // the checks every water model makes of its grid: at least 3 points per side and, with `drop`, the
 // scene's drop (drop_x, drop_y) strictly inside; BadParameter naming the key
 void check_water_grid(const Params& p, int points, double spacing, bool drop);
 
 // z += h (1 + cos(pi r / R)) / 2 within radius R of (x, y) on the interior of a points^2 grid of spacing d
-// (the water-drop's shape, shared with the shallow water model)
+// (the water-drop's shape, shared with the shallow water model); z holds the whole grid, or with `block` only
+// that block's points (rows x cols, row-major)
 void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z);
+void add_raised_cosine(int points, double spacing, double x, double y, double radius, double height, double* z, const GridBlock& block);
 
 // amplitude and rate (a, a') at time t of a'' + mu a' + w2 a = 0 from a(0) = a0, a'(0) = 0
 std::pair<double, double> mode_amplitude(double w2, double mu, double a0, double t);

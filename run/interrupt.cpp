@@ -1,5 +1,7 @@
 #include "interrupt.hpp"
 
+#include "ranks.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -50,7 +52,9 @@ const char* signal_name(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGT
       fs::remove_all(*it, ec);
       if (!ec) break;
     }
-  std::fprintf(stderr, "stepwise: interrupted (%s): its temporary files removed, earlier outputs left as they were\n", signal_name(sig));
+  // under mpirun rank 0 speaks for all (mpirun stops the others when one exits with an error)
+  if (ranks::rank() == 0)
+    std::fprintf(stderr, "stepwise: interrupted (%s): its temporary files removed, earlier outputs left as they were\n", signal_name(sig));
   std::fflush(stderr);
   ::_exit(128 + sig);
 }

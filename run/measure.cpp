@@ -26,8 +26,13 @@ Measured run_and_measure(const Model& model, std::string_view method, const Step
   // a large state is summarised at output times, not kept whole
   if (!model.summary_names().empty() && !c.observe) c.observe = [&model](const Eigen::VectorXd& y) { return model.summary(y); };
   m.result = make_integrator(method, c)->integrate(model, 0.0, model.initial_state(), m.t_out);
-  if (m.result.status == Status::ok && model.has_exact()) m.error = max_norm_error(m.result.y_stop, model.exact(t_end));
+  m.error = exact_error(model, m.result, t_end);
   return m;
+}
+
+std::optional<double> exact_error(const Model& model, const RunResult& result, double t_end) {
+  if (result.status != Status::ok || !model.has_exact()) return std::nullopt;
+  return max_norm_error(result.y_stop, model.exact(t_end));
 }
 
 }  // namespace stepwise

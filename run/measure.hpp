@@ -25,6 +25,9 @@ std::vector<double> output_times(double t_end, double output_dt);
 Measured run_and_measure(const Model& model, std::string_view method, const StepControl& control, double t_end,
                          double output_dt);
 
+// |y_stop - exact(t_end)|inf for a run that reached t_end on a model with an exact solution; empty otherwise
+std::optional<double> exact_error(const Model& model, const RunResult& result, double t_end);
+
 // |a - b|inf
 double max_norm_error(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 

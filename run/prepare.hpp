@@ -37,7 +37,7 @@ struct PreparedRun {
   double t_end = 0;
   double output_dt = 0;
   double output_bytes = 0;  // the trajectory's size, estimated from its rows and columns
-  int ranks = 1;            // the MPI ranks the run uses: no model is distributed yet, so one (under mpirun, rank 0)
+  int ranks = 1;            // the MPI ranks the run uses: 1, or under mpirun all of them for a split run (run/distributed_run.hpp)
 };
 
 // the options checked against the scene, its model and the method; InputError (or BadMethod) naming the

@@ -79,10 +79,10 @@ bool all_agree(bool mine) {
   return all != 0;
 }
 
-bool idle_here(std::string_view command) {
+bool idle_here(std::string_view command, std::string_view why) {
   if (world_size == 1) return false;
   if (my_rank == 0)
-    std::fputs(fmt::format("stepwise: {}: runs on rank 0 alone (no model is distributed yet); {} idle\n", command,
+    std::fputs(fmt::format("stepwise: {}: runs on rank 0 alone ({}); {} idle\n", command, why,
                            world_size == 2 ? std::string("rank 1") : fmt::format("ranks 1-{}", world_size - 1)).c_str(), stderr);
   return my_rank != 0;
 }

@@ -32,8 +32,8 @@ double max_over_ranks(double mine);
 bool all_agree(bool mine);
 
 // for a command that runs on rank 0 alone: true on the other ranks (they have nothing to do and return at
-// once); under mpirun rank 0 says so in one line
-bool idle_here(std::string_view command);
+// once); under mpirun rank 0 says so in one line, with `why`
+bool idle_here(std::string_view command, std::string_view why);
 
 // stop every rank now with this exit status (a rank that cannot go on alone: the others would wait for it)
 [[noreturn]] void abort_all(int status);

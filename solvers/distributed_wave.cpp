@@ -1,6 +1,8 @@
 #include "distributed_wave.hpp"
 
+#include "fixed_step.hpp"
 #include "mpi_support.hpp"
+#include "run_support.hpp"
 
 #include <mpi.h>
 
@@ -164,6 +166,24 @@ void DistributedWave::exchange() {
   mpi_check(MPI_Waitall(8, requests, MPI_STATUSES_IGNORE), "MPI_Waitall");
 }
 
+Eigen::VectorXd DistributedWave::gather_state(const Eigen::VectorXd& y) const {
+  const Impl& m = *impl_;
+  const auto cells = static_cast<std::ptrdiff_t>(m.block.rows) * m.block.cols;
+  const std::vector<double> z = gather(std::vector<double>(y.data(), y.data() + cells));
+  const std::vector<double> v = gather(std::vector<double>(y.data() + cells, y.data() + 2 * cells));
+  if (z.empty()) return {};
+  Eigen::VectorXd whole(static_cast<Eigen::Index>(z.size() + v.size()));
+  std::copy(z.begin(), z.end(), whole.data());
+  std::copy(v.begin(), v.end(), whole.data() + z.size());
+  return whole;
+}
+
+double DistributedWave::max_over_ranks(double mine) const {
+  double all = 0;
+  mpi_check(MPI_Allreduce(&mine, &all, 1, MPI_DOUBLE, MPI_MAX, impl_->cart), "MPI_Allreduce");
+  return all;
+}
+
 std::vector<double> DistributedWave::gather(const std::vector<double>& mine) const {
   const Impl& m = *impl_;
   int rank = 0, size = 1;
@@ -192,6 +212,146 @@ std::vector<double> DistributedWave::gather(const std::vector<double>& mine) con
                 grid.begin() + static_cast<std::ptrdiff_t>(row0 + a) * m.cols + col0);
   }
   return grid;
+}
+
+namespace {
+
+// a block's z (rows x cols) into the grid's level inside its halo, the halo filled from the neighbours
+void load_level(DistributedWave& grid, const double* z) {
+  const auto b = grid.block();
+  const int stride = grid.stride();
+  double* level = grid.level();
+  for (int a = 0; a < b.rows; ++a)
+    std::copy(z + static_cast<std::ptrdiff_t>(a) * b.cols, z + static_cast<std::ptrdiff_t>(a + 1) * b.cols,
+              level + static_cast<std::ptrdiff_t>(a + 1) * stride + 1);
+  grid.exchange();
+}
+
+// f(cell in the block, the same cell in the level inside its halo) for the block's cells on the grid's interior
+template <class F>
+void for_interior(const DistributedWave& grid, int points, F&& f) {
+  const auto b = grid.block();
+  const int stride = grid.stride();
+  const int a0 = std::max(0, 1 - b.row0), a1 = std::min(b.rows, points - 1 - b.row0);
+  const int c0 = std::max(0, 1 - b.col0), c1 = std::min(b.cols, points - 1 - b.col0);
+  for (int a = a0; a < a1; ++a)
+    for (int c = c0; c < c1; ++c) f(static_cast<std::ptrdiff_t>(a) * b.cols + c, static_cast<std::ptrdiff_t>(a + 1) * stride + c + 1);
+}
+
+// the water model on this rank's block: its state (z, v) of the block, its f by the model's formula with z's
+// halo from the neighbours (collective, like every call on the grid), its events the model's for the block
+class BlockSystem final : public OdeSystem {
+ public:
+  BlockSystem(DistributedWave& grid, const WaveGridView& view, const WaveBlocksView& blocks)
+      : grid_(grid), view_(view), cells_(static_cast<Eigen::Index>(grid.block().rows) * grid.block().cols), events_(blocks.events(grid.block())) {}
+  int size() const override { return static_cast<int>(2 * cells_); }
+  bool autonomous() const override { return true; }
+  std::span<const Event> events() const override { return events_; }
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    load_level(grid_, y.data());
+    const double* level = grid_.level();
+    const int stride = grid_.stride();
+    const double c2 = view_.c * view_.c / (view_.spacing * view_.spacing);
+    dydt.head(cells_) = y.tail(cells_);
+    dydt.tail(cells_).setZero();
+    for_interior(grid_, view_.points, [&](std::ptrdiff_t cell, std::ptrdiff_t at) {
+      dydt[cells_ + cell] = wave_acceleration(c2, view_.mu, neighbour_sum(level, at, stride), y[cell], y[cells_ + cell]);
+    });
+  }
+
+ private:
+  DistributedWave& grid_;
+  WaveGridView view_;
+  Eigen::Index cells_;
+  std::vector<Event> events_;
+};
+
+// wave-fd's stepper (three_level_wave.hpp) on the block: the same decisions (continue the scheme, or restart
+// by velocity Verlet), the same per-cell formulas
+class BlockWaveFd final : public FixedStepper {
+ public:
+  BlockWaveFd(DistributedWave& grid, const WaveGridView& view, const CountedSystem& system)
+      : grid_(grid), view_(view), system_(system), cells_(static_cast<Eigen::Index>(grid.block().rows) * grid.block().cols), z_prev_(cells_) {}
+
+  bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
+    ++system_.stats().rhs_evals;  // one Laplacian per step
+    const double* z = y.data();
+    const double* v = z + cells_;
+    double* z1 = y_next.data();
+    double* v1 = z1 + cells_;
+    // the grid's boundary holds still: z = v = 0 there, the rest is written below
+    const auto b = grid_.block();
+    const auto still = [&](int a, int c) { z1[static_cast<std::ptrdiff_t>(a) * b.cols + c] = v1[static_cast<std::ptrdiff_t>(a) * b.cols + c] = 0; };
+    for (const int edge : {0, view_.points - 1}) {
+      if (edge >= b.row0 && edge < b.row0 + b.rows)
+        for (int c = 0; c < b.cols; ++c) still(edge - b.row0, c);
+      if (edge >= b.col0 && edge < b.col0 + b.cols)
+        for (int a = 0; a < b.rows; ++a) still(a, edge - b.col0);
+    }
+    RunningNorm largest;  // of what is written below (the boundary's zeros change nothing)
+    load_level(grid_, z);
+    const double* level = grid_.level();
+    const int stride = grid_.stride(), points = view_.points;
+    const bool continuing = history_ && std::abs(h - h_) <= 1e-9 * h_ && std::abs(t - t_last_) <= 1e-9 * h_ && y.data() == last_;
+    if (continuing) {
+      for_interior(grid_, points, [&](std::ptrdiff_t j, std::ptrdiff_t at) {
+        z1[j] = wave_cell(k_, z[j], z_prev_[j], neighbour_sum(level, at, stride));
+        v1[j] = wave_velocity(h_, z1[j], z[j], z_prev_[j]);
+        z_prev_[j] = z[j];
+        largest.add(z1[j]);
+        largest.add(v1[j]);
+      });
+    } else {
+      const double c2 = view_.c * view_.c / (view_.spacing * view_.spacing);
+      for_interior(grid_, points, [&](std::ptrdiff_t j, std::ptrdiff_t at) {
+        const double a = wave_acceleration(c2, view_.mu, neighbour_sum(level, at, stride), z[j], v[j]);
+        z_prev_[j] = z[j];
+        const auto [zj, vj] = wave_restart_first(h, a, z[j], v[j]);
+        z1[j] = zj;
+        v1[j] = vj;
+        largest.add(zj);
+      });
+      load_level(grid_, z1);
+      for_interior(grid_, points, [&](std::ptrdiff_t j, std::ptrdiff_t at) {
+        v1[j] = wave_restart_second(h, view_.mu, v1[j], wave_laplacian(c2, neighbour_sum(level, at, stride), z1[j]));
+        largest.add(v1[j]);
+      });
+      h_ = h;
+      k_ = wave_coefficients(view_, h);
+    }
+    history_ = true;
+    t_last_ = t + h;
+    last_ = y_next.data();
+    norm_ = grid_.max_over_ranks(largest.value());
+    return true;
+  }
+  void reset() override { history_ = false; }
+  double norm(const Eigen::VectorXd& y) const override { return grid_.max_over_ranks(y.lpNorm<Eigen::Infinity>()); }
+
+ private:
+  DistributedWave& grid_;
+  WaveGridView view_;
+  const CountedSystem& system_;
+  Eigen::Index cells_;
+  Eigen::VectorXd z_prev_;  // z^{k-1} of the block, valid while history_
+  bool history_ = false;
+  double h_ = 0, t_last_ = 0;
+  const double* last_ = nullptr;
+  WaveCoefficients k_;
+};
+
+}  // namespace
+
+RunResult wave_fd_distributed(DistributedWave& grid, const WaveGridView& view, const WaveBlocksView& blocks, const StepControl& control,
+                              std::span<const double> t_out) {
+  static const Method method{.name = "wave-fd",
+                             .family = "wave-fd",
+                             .source = "hand-written",
+                             .description = "the seeds' three-level scheme on a rank's block of the grid",
+                             .stepping = Stepping::fixed};
+  const BlockSystem system(grid, view, blocks);
+  const FixedStepIntegrator integrator(method, control, [&](const CountedSystem& s) { return std::make_unique<BlockWaveFd>(grid, view, s); });
+  return integrator.integrate(system, 0.0, blocks.initial_state(grid.block()), t_out);
 }
 
 }  // namespace stepwise

@@ -9,6 +9,7 @@
 // (run/ranks.hpp), or with one process it need not be.
 #pragma once
 
+#include "integrator.hpp"
 #include "wave_step.hpp"
 
 #include <array>
@@ -51,9 +52,7 @@ inline constexpr double connectx6_beta = 1 / 25e9;
 
 class DistributedWave {
  public:
-  struct Block {
-    int row0 = 0, rows = 0, col0 = 0, cols = 0;  // global rows [row0, row0 + rows), columns likewise
-  };
+  using Block = GridBlock;
   // the halo a rank exchanges per step: messages it sends (as many as it receives) and their bytes
   struct Halo {
     int messages = 0;
@@ -79,6 +78,10 @@ class DistributedWave {
   std::vector<double> gather() const;
   // any field of this rank's block (rows x cols, row-major) gathered into the whole grid on rank 0
   std::vector<double> gather(const std::vector<double>& block) const;
+  // a state (z, v) of this rank's block gathered into the whole grid's (z, v) on rank 0; empty on the others
+  Eigen::VectorXd gather_state(const Eigen::VectorXd& block_state) const;
+  // the largest of every rank's value, on every rank
+  double max_over_ranks(double mine) const;
 
   // z^k inside its halo ((rows + 2) x stride(), the block's cell (a, b) at (a + 1) stride() + b + 1), and its
   // halo filled from the neighbours (blocking): where a right-hand side on this grid reads the heights
@@ -91,5 +94,16 @@ class DistributedWave {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// wave-fd on this rank's block of a water model's grid (split by `grid`): the fixed-step loop of one process
+// (fixed_step.hpp: steps landing on the output times, the events located and handled, the divergence test)
+// around a stepper on the block's state (z, v) that computes every cell by wave-fd's per-cell formulas
+// (wave_step.hpp: the scheme continuing, velocity Verlet on a restart) with z's halo exchanged once a step
+// (twice on a restart). The divergence test takes the whole grid's norms (MPI_Allreduce) and the events
+// depend on t alone (WaveBlocksView), so every rank takes the same steps, and every cell gets the same bits as
+// in one process. Collective: every rank calls it. control's observe and sink see the block's state at the
+// output times, on every rank; the result's y_stop is the block's.
+RunResult wave_fd_distributed(DistributedWave& grid, const WaveGridView& view, const WaveBlocksView& blocks, const StepControl& control,
+                              std::span<const double> t_out);
 
 }  // namespace stepwise

@@ -16,7 +16,7 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
   CountedSystem counted(system, result.stats);
   auto stepper = make_stepper_(counted);
   const double dt = *control_.dt;
-  const double bound = divergence_bound(control_, y0);
+  const double bound = divergence_bound(control_, stepper->norm(y0));
   // a step ending within this of an output time lands on it instead of leaving a sliver
   const double snap = 1e-9 * dt;
 

@@ -34,6 +34,9 @@ class FixedStepper {
   virtual bool handles_events() const { return false; }
   // forget any history: the next step starts afresh (after an event changed the state, or to re-step)
   virtual void reset() {}
+  // |y|inf of a state this stepper steps: the whole state's, or for a stepper on one rank's part of it
+  // (solvers/distributed_wave.hpp) the whole grid's over the ranks, so they agree on the divergence bound
+  virtual double norm(const Eigen::VectorXd& y) const { return y.lpNorm<Eigen::Infinity>(); }
 
  protected:
   double norm_ = -1;  // step()'s measure of |y_next|inf; negative: not measured

@@ -76,9 +76,10 @@ inline double max_adaptive_step(const StepControl& control, const OdeSystem& sys
   return std::min(control.max_step, 0.5 * system.event_free_interval());
 }
 
-// |y|inf above which a run has blown up: blowup * max(1, |y0|inf)
+// |y|inf above which a run has blown up: blowup * max(1, |y0|inf), from y0 or its norm
+inline double divergence_bound(const StepControl& control, double y0_norm) { return control.blowup * std::max(1.0, y0_norm); }
 inline double divergence_bound(const StepControl& control, const Eigen::VectorXd& y0) {
-  return control.blowup * std::max(1.0, y0.lpNorm<Eigen::Infinity>());
+  return divergence_bound(control, y0.lpNorm<Eigen::Infinity>());
 }
 
 inline bool has_diverged(const Eigen::VectorXd& y, double bound) {

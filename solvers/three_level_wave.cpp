@@ -28,23 +28,22 @@ bool ThreeLevelWaveStepper::step(double t, double h, const Eigen::VectorXd& y, E
     fresh_ = false;
     for (int i = 1; i < n_ - 1; ++i)
       for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j) {
-        v1[j] = (3 * z1[j] - 4 * z[j] + z_prev_[j]) / (2 * h_);
+        v1[j] = wave_velocity(h_, z1[j], z[j], z_prev_[j]);
         z_prev_[j] = z[j];
       }
   } else {
-    // velocity Verlet: z^1 = z + h v + h^2/2 a(z, v), v^1 = v + h/2 (a(z, v) + a(z^1, v^1)), the damping
-    // in a(z^1, v^1) solved for (a first-order v^1 = v + h a would make a restart at every step grow)
     const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
-    auto laplacian = [&](const double* u, int j) { return c2 * (neighbour_sum(u, j, n_) - 4 * u[j]); };
     for (int i = 1; i < n_ - 1; ++i)
       for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j) {
-        const double a = laplacian(z, j) - grid_.mu * v[j];
+        const double a = wave_acceleration(c2, grid_.mu, neighbour_sum(z, j, n_), z[j], v[j]);
         z_prev_[j] = z[j];
-        z1[j] = z[j] + h * v[j] + (h * h / 2) * a;
-        v1[j] = v[j] + (h / 2) * a;
+        const auto [zj, vj] = wave_restart_first(h, a, z[j], v[j]);
+        z1[j] = zj;
+        v1[j] = vj;
       }
     for (int i = 1; i < n_ - 1; ++i)
-      for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j) v1[j] = (v1[j] + (h / 2) * laplacian(z1, j)) / (1 + grid_.mu * h / 2);
+      for (int j = i * n_ + 1; j < (i + 1) * n_ - 1; ++j)
+        v1[j] = wave_restart_second(h, grid_.mu, v1[j], wave_laplacian(c2, neighbour_sum(z1, j, n_), z1[j]));
     // the boundary of z^{k-1}, as of z: held still
     on_boundary([&](Eigen::Index cell) { z_prev_[cell] = z[cell]; });
     h_ = h;

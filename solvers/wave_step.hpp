@@ -59,6 +59,21 @@ inline T wave_cell(const BasicWaveCoefficients<T>& k, T z, T z_prev, T neighbour
   return k.self * z + k.previous * z_prev + k.neighbours * neighbours;
 }
 
+// The three-level scheme on a state y = (z, v) (three_level_wave.hpp), per cell, shared by the stepper on
+// one process and the one on a rank's block (distributed_wave.hpp), so both give the same bits:
+// - v^{k+1} = (3 z^{k+1} - 4 z^k + z^{k-1}) / (2 dt), the second-order one-sided difference;
+inline double wave_velocity(double h, double z1, double z, double z_prev) { return (3 * z1 - 4 * z + z_prev) / (2 * h); }
+// - a restart by velocity Verlet: from a = c^2 Lap z - mu v, z^1 = z + h v + h^2/2 a and the first half of
+//   v^1, v + h/2 a; then v^1 = (that + h/2 c^2 Lap z^1) / (1 + mu h / 2), the damping in a(z^1, v^1) solved for
+//   (a first-order v^1 = v + h a would make a restart at every step grow)
+struct VerletStart {
+  double z1 = 0, v_half = 0;
+};
+inline VerletStart wave_restart_first(double h, double a, double z, double v) { return {z + h * v + (h * h / 2) * a, v + (h / 2) * a}; }
+inline double wave_restart_second(double h, double mu, double v_half, double laplacian_z1) {
+  return (v_half + (h / 2) * laplacian_z1) / (1 + mu * h / 2);
+}
+
 // one step in place: z_prev holds z^{k-1} on entry and z^{k+1} on exit (the interior; its boundary is left
 // as it is), z = z^k; the rows shared among `threads` OpenMP threads (the same bits for any count). A cell
 // needs z^{k-1} only where z^{k+1} goes, so two grids serve the three levels: the step reads two streams

@@ -6,6 +6,9 @@
 
 #include "solvers/ode_system.hpp"
 
+#include <functional>
+#include <vector>
+
 namespace stepwise {
 
 struct WaveGridView {
@@ -13,6 +16,21 @@ struct WaveGridView {
   double spacing = 0;   // d (m)
   double c = 0;         // wave speed (m/s)
   double mu = 0;        // damping (1/s)
+};
+
+// a rectangle of a grid's points: rows [row0, row0 + rows), columns [col0, col0 + cols) (a rank's block)
+struct GridBlock {
+  int row0 = 0, rows = 0, col0 = 0, cols = 0;
+};
+
+// What a grid split among MPI ranks (solvers/distributed_wave.hpp) needs of a water model besides the view
+// above: the model cut to one block, whose state is (z, v) of the block alone (rows x cols each, row-major):
+// its initial state there, and its events with their handlers applied to the block (a drop adds the cells of
+// its shape that fall in it). The events' g must depend on t alone (a drop's time), so that every rank finds
+// them at the same time without the others' states.
+struct WaveBlocksView {
+  std::function<Eigen::VectorXd(const GridBlock& block)> initial_state;
+  std::function<std::vector<Event>(const GridBlock& block)> events;
 };
 
 inline const Requirement needs_wave_grid = needs<WaveGridView>("a wave equation on a grid (a water scene)");

@@ -5,8 +5,10 @@ usage: mpi_ranks.py STEPWISE SCENES_DIR TOLERANCES_HPP [SERIAL_QUICK_REPORT]
 
 - `study NAME --quick` for two untimed studies under `mpirun -np 2` and `-np 3`: every CSV byte for byte the
   one-process run's; provenance.json says how many ranks ran and what each was busy for.
-- `run` under mpirun: rank 0 runs the scene alone (no model is distributed yet), says so in one line, and the
-  summary is the one-process run's (cpu_seconds aside) with `ranks` 1.
+- `run` under mpirun: the pool (wave-fd on the water's grid) split among 2, 3 and 4 ranks writes the one-process
+  run's trajectory.csv byte for byte and its summary.json (cpu_seconds aside) with `ranks` N; more ranks than the
+  grid has rows: exit 2 naming both numbers, nothing written; a model that is not split (the pendulum) runs on
+  rank 0 alone, which says so in one line, with `ranks` 1.
 - `report --quick` under `-np 2` and `-np 3` against the one-process report given (the report_quick test's):
   every CSV's non-timing columns alike (the cloth's to implicit-euler's kept-factor reproducibility, read from
   verification/tolerances.hpp; the rows chosen by CPU time, the recommendations and Pareto fronts, not
@@ -119,6 +121,33 @@ def main():
                 print(f"study {study} on {n} ranks: CSVs as one process's; ranks busy {p['rank_busy_seconds']}")
             p = json.load(open(os.path.join(one, "provenance.json")))
             expect(p["ranks"] == 1, "one process: provenance.json says 1 rank")
+
+        # run: the pool split among the ranks, the same bytes as one process
+        one = os.path.join(d, "pool-1")
+        pool = [os.path.join(scenes, "pool.toml"), "--set", "size=67", "--t-end", "3"]
+        r1 = run([binary, "run"] + pool + ["--out", one])
+        expect(r1.returncode == 0, f"pool in one process: exit {r1.returncode}: {r1.stderr[-300:]}")
+        for n in (2, 3, 4):
+            out = os.path.join(d, f"pool-{n}")
+            r = run(mpirun(n) + [binary, "run"] + pool + ["--out", out])
+            expect(r.returncode == 0 and "rank 0 alone" not in r.stderr, f"pool on {n} ranks: exit {r.returncode}, split: {r.stderr[-300:]}")
+            if r.returncode != 0:
+                continue
+            s1, sn = (json.load(open(os.path.join(x, "summary.json"))) for x in (one, out))
+            expect(s1["ranks"] == 1 and sn["ranks"] == n, f"pool on {n} ranks: summary.json's ranks {sn['ranks']}")
+            expect(len(sn["events"]) == len(s1["events"]) > 0, f"pool on {n} ranks: {len(sn['events'])} drops, one process {len(s1['events'])}")
+            for s in (s1, sn):
+                s.pop("cpu_seconds")
+                s.pop("ranks")
+            expect(s1 == sn, f"pool on {n} ranks: summary.json as one process's (cpu_seconds and ranks aside)")
+            expect(open(os.path.join(one, "trajectory.csv"), "rb").read() == open(os.path.join(out, "trajectory.csv"), "rb").read(),
+                   f"pool on {n} ranks: trajectory.csv as one process's, byte for byte")
+            print(f"run pool (67 x 67, 3 s, {len(s1['events'])} drops) on {n} ranks: trajectory.csv and summary.json as one process's")
+        out = os.path.join(d, "pool-too-many")
+        r = run(mpirun(5) + [binary, "run", os.path.join(scenes, "pool.toml"), "--set", "size=4", "--out", out])
+        expect(r.returncode == 2 and re.search(r"5 ranks make a 5 x 1 decomposition, more than the grid's 4 rows or 4 columns", r.stderr) is not None,
+               f"pool of 4 x 4 points on 5 ranks: exit {r.returncode} (2), naming both numbers: {r.stderr[-300:]}")
+        expect(not os.path.exists(out), "pool on too many ranks: nothing written")
 
         # run: rank 0 alone, one line, the same summary
         one, two = os.path.join(d, "run-1"), os.path.join(d, "run-2")

@@ -8,6 +8,7 @@
 #include "run/measure.hpp"
 #include "solvers/distributed_lines.hpp"
 #include "solvers/distributed_wave.hpp"
+#include "solvers/method_table.hpp"
 #include "verification/tolerances.hpp"
 #include "verification/wave_modes.hpp"
 
@@ -122,6 +123,63 @@ TEST(DistributedWave, TheGatheredStateIsTheSchemesExactDiscreteMode) {
   const double error = (Eigen::Map<const Eigen::VectorXd>(z.data(), n * n) - expected).lpNorm<Eigen::Infinity>() / expected.lpNorm<Eigen::Infinity>();
   std::cout << "mode (3, 2) after " << steps << " steps on " << ranks::size() << " rank(s): relative error against the exact discrete mode " << error << '\n';
   EXPECT_LT(error, tolerance::wave_modal);
+}
+
+// wave-fd run on the ranks' blocks (what `mpirun -np N stepwise run scenes/pool.toml` does) against wave-fd in
+// one process on a pool whose grid no rank count divides: drops falling inside steps (each located by re-stepping
+// from the step's start, then a velocity-Verlet restart), steps shortened onto output times, and every output's
+// whole state the same bits, for both ways of placing the events
+TEST(DistributedWave, ThePoolRunOnBlocksGivesOneProcesssBitsAtEveryOutputTime) {
+  const auto model = make_model("pool", {{"size", 61}, {"drops", 6}, {"interval", 0.25}, {"seed", 3}});
+  const std::vector<double> t_out = output_times(1.6, 0.07);  // 0.07 is not a multiple of dt: shortened steps
+  for (const EventLocation location : {EventLocation::linear, EventLocation::restep}) {
+    StepControl control = StepControl::fixed(4e-3);
+    control.event_location = location;
+    const int n = model->as<WaveGridView>()->points;
+    DistributedWave grid(n, n, WaveCoefficients{});
+    StepControl gathered = control;
+    gathered.observe = [&grid](const Eigen::VectorXd& block) { return grid.gather_state(block); };
+    const RunResult blocks = wave_fd_distributed(grid, *model->as<WaveGridView>(), *model->as<WaveBlocksView>(), gathered, t_out);
+    // (no fatal assertion before the loop's next collective call: a rank leaving early would leave the others waiting)
+    EXPECT_EQ(blocks.status, Status::ok) << blocks.message;
+    if (ranks::rank() != 0) continue;
+    const RunResult one = make_integrator("wave-fd", control)->integrate(*model, 0.0, model->initial_state(), t_out);
+    EXPECT_EQ(one.status, Status::ok) << one.message;
+    EXPECT_EQ(blocks.stats.steps, one.stats.steps);
+    // the first drop falls at t = 0, into the initial state; the other five inside steps
+    EXPECT_EQ(one.events.size(), 5u);
+    if (blocks.events.size() != one.events.size() || blocks.trajectory.y.size() != one.trajectory.y.size()) {
+      ADD_FAILURE() << blocks.events.size() << " drops and " << blocks.trajectory.y.size() << " outputs on blocks, " << one.events.size() << " and "
+                    << one.trajectory.y.size() << " in one process";
+      continue;
+    }
+    for (size_t e = 0; e < one.events.size(); ++e) EXPECT_EQ(blocks.events[e].t, one.events[e].t) << "drop " << e;
+    for (size_t k = 0; k < one.trajectory.y.size(); ++k) {
+      if (blocks.trajectory.y[k].size() != one.trajectory.y[k].size()) {
+        ADD_FAILURE() << "output " << k << ": " << blocks.trajectory.y[k].size() << " values on blocks, " << one.trajectory.y[k].size() << " in one process";
+        continue;
+      }
+      EXPECT_EQ(std::memcmp(blocks.trajectory.y[k].data(), one.trajectory.y[k].data(), sizeof(double) * static_cast<size_t>(one.trajectory.y[k].size())), 0)
+          << "output " << k << " at t = " << one.trajectory.t[k] << ": " << (blocks.trajectory.y[k] - one.trajectory.y[k]).lpNorm<Eigen::Infinity>();
+    }
+  }
+}
+
+// a blow-up is found on every rank at the same step (the norms are the whole grid's), as in one process
+TEST(DistributedWave, ARunOnBlocksDivergesWhereOneProcessDoes) {
+  const auto model = make_model("pool", {{"size", 45}, {"drops", 2}});
+  const WaveGridView& view = *model->as<WaveGridView>();
+  const StepControl control = StepControl::fixed(1.05 * wave_stable_dt(view));  // past the scheme's limit
+  const std::vector<double> t_out = output_times(60, 1);
+  DistributedWave grid(view.points, view.points, WaveCoefficients{});
+  const RunResult blocks = wave_fd_distributed(grid, view, *model->as<WaveBlocksView>(), control, t_out);
+  EXPECT_EQ(blocks.status, Status::diverged);
+  const double t_stop = ranks::max_over_ranks(blocks.t_stop);
+  EXPECT_EQ(t_stop, blocks.t_stop) << "every rank stops at the same step";
+  if (ranks::rank() != 0) return;
+  const RunResult one = make_integrator("wave-fd", control)->integrate(*model, 0.0, model->initial_state(), t_out);
+  EXPECT_EQ(one.status, Status::diverged);
+  EXPECT_EQ(blocks.t_stop, one.t_stop);
 }
 
 // CVODE and ARKODE on the parallel vector against the same methods in one process: the same f cell for cell,
