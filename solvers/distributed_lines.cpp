@@ -3,31 +3,24 @@
 #include "distributed_wave.hpp"
 #include "kernels/wave_acceleration.hpp"
 
+#include "sundials_support.hpp"
+
 #include <arkode/arkode_arkstep.h>
 #include <cvode/cvode.h>
 #include <mpi.h>
 #include <nvector/nvector_parallel.h>
-#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <fmt/format.h>
 
 #include <memory>
-#include <type_traits>
 
 namespace stepwise {
 
 namespace {
 
-struct ContextFree {
-  void operator()(SUNContext c) const { SUNContext_Free(&c); }
-};
-struct VectorFree {
-  void operator()(N_Vector v) const { N_VDestroy(v); }
-};
-struct SolverFree {
-  void operator()(SUNNonlinearSolver s) const { SUNNonlinSolFree(s); }
-};
+using sundials::ContextPtr, sundials::VectorPtr, sundials::LinSolPtr, sundials::NonlinSolPtr;
 struct CvodeFree {
   void operator()(void* mem) const { CVodeFree(&mem); }
 };
@@ -44,7 +37,9 @@ struct Lines {
   long rhs_evals = 0;
 };
 
-// local state: the block's z (rows x cols, row-major), then its v
+// f on the local state, the block's z (rows x cols, row-major) then its v, or a part of it as the model splits
+// it for IMEX (models/height_field.cpp): `stiff` z' = v and c^2 Lap z, `damping` -mu v; both: the whole f
+template <bool stiff, bool damping>
 int rhs(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
   Lines& L = *static_cast<Lines*>(user_data);
   ++L.rhs_evals;
@@ -54,15 +49,18 @@ int rhs(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
   double* dz = N_VGetArrayPointer(ydot);
   double* dv = dz + static_cast<std::ptrdiff_t>(r) * c;
   double* halo = L.grid->level();
-  for (int a = 0; a < r; ++a)
-    for (int b = 0; b < c; ++b) halo[(a + 1) * s + b + 1] = z[a * c + b];
-  L.grid->exchange();
+  if (stiff) {
+    for (int a = 0; a < r; ++a)
+      for (int b = 0; b < c; ++b) halo[(a + 1) * s + b + 1] = z[a * c + b];
+    L.grid->exchange();
+  }
+  const double c2 = stiff ? L.c2 : 0.0, mu = damping ? L.mu : 0.0;
   for (int a = 0; a < r; ++a)
     for (int b = 0; b < c; ++b) {
       const int i = L.block.row0 + a, j = L.block.col0 + b, k = a * c + b;
       const bool interior = i > 0 && i < L.n - 1 && j > 0 && j < L.n - 1;
-      dz[k] = v[k];
-      dv[k] = interior ? wave_acceleration(L.c2, L.mu, neighbour_sum(halo, (a + 1) * s + b + 1, s), z[k], v[k]) : 0.0;
+      dz[k] = stiff ? v[k] : 0.0;
+      dv[k] = interior ? wave_acceleration(c2, mu, stiff ? neighbour_sum(halo, (a + 1) * s + b + 1, s) : 0.0, z[k], v[k]) : 0.0;
     }
   return 0;
 }
@@ -81,14 +79,16 @@ DistributedLinesRun lines_distributed(std::string_view method, const WaveGridVie
     run.failure = fmt::format("{}: {} failed with code {}", method, call, code);
     return run;
   };
-  if (method != "cvode-adams" && method != "arkode-erk-dormand-prince54") {
-    run.failure = fmt::format("{}: not run on the distributed grid (cvode-adams and arkode-erk-dormand-prince54 are)", method);
+  const auto tables = sundials::arkode_tables(method);
+  const bool cvode = method == "cvode-adams" || method == "cvode-bdf";
+  if (!cvode && !tables) {
+    run.failure = fmt::format("{}: not run on the distributed grid (cvode-adams, cvode-bdf and the arkode-* methods are)", method);
     return run;
   }
   SUNContext raw_context = nullptr;
   if (const int code = SUNContext_Create(nullptr, &raw_context)) return failed("SUNContext_Create", code);
-  std::unique_ptr<std::remove_pointer_t<SUNContext>, ContextFree> context(raw_context);
-  std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorFree> y(N_VNew_Parallel(MPI_COMM_WORLD, local, global, context.get()));
+  ContextPtr context(raw_context);
+  VectorPtr y(N_VNew_Parallel(MPI_COMM_WORLD, local, global, context.get()));
   if (!y) return failed("N_VNew_Parallel", 0);
   double* yl = N_VGetArrayPointer(y.get());
   const Eigen::Index cells = static_cast<Eigen::Index>(n) * n;
@@ -98,40 +98,62 @@ DistributedLinesRun lines_distributed(std::string_view method, const WaveGridVie
       yl[a * B.cols + b] = y0[g];
       yl[static_cast<long>(B.rows) * B.cols + a * B.cols + b] = y0[cells + g];
     }
+  // Newton's linear systems: GMRES (SPGMR), matrix-free (J v by SUNDIALS' difference quotient, one f each),
+  // unpreconditioned; its dot products are sums over the ranks, as the norms are. One process uses KLU on the
+  // sparse Jacobian instead: the same method, another linear solver, so the runs agree to the tolerance
+  const auto gmres = [&]() { return LinSolPtr(SUNLinSol_SPGMR(y.get(), SUN_PREC_NONE, 0, context.get())); };
   double t = 0;
-  if (method == "cvode-adams") {
-    // as the cvode-adams method sets it up (solvers/methods/cvode.cpp): Adams, fixed-point iteration
-    std::unique_ptr<void, CvodeFree> mem(CVodeCreate(CV_ADAMS, context.get()));
+  if (cvode) {
+    // as cvode-adams and cvode-bdf set it up (solvers/methods/cvode.cpp): Adams with fixed-point iteration,
+    // BDF with Newton
+    const bool bdf = method == "cvode-bdf";
+    std::unique_ptr<void, CvodeFree> mem(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, context.get()));
     if (!mem) return failed("CVodeCreate", 0);
-    if (const int code = CVodeInit(mem.get(), rhs, 0.0, y.get())) return failed("CVodeInit", code);
+    if (const int code = CVodeInit(mem.get(), rhs<true, true>, 0.0, y.get())) return failed("CVodeInit", code);
     if (const int code = CVodeSetUserData(mem.get(), &lines)) return failed("CVodeSetUserData", code);
     if (const int code = CVodeSStolerances(mem.get(), rtol, atol)) return failed("CVodeSStolerances", code);
     if (const int code = CVodeSetMaxNumSteps(mem.get(), 5'000'000)) return failed("CVodeSetMaxNumSteps", code);
-    std::unique_ptr<std::remove_pointer_t<SUNNonlinearSolver>, SolverFree> fixed_point(SUNNonlinSol_FixedPoint(y.get(), 0, context.get()));
-    if (const int code = CVodeSetNonlinearSolver(mem.get(), fixed_point.get())) return failed("CVodeSetNonlinearSolver", code);
+    NonlinSolPtr fixed_point;
+    LinSolPtr linear;
+    if (bdf) {
+      linear = gmres();
+      if (!linear) return failed("SUNLinSol_SPGMR", 0);
+      if (const int code = CVodeSetLinearSolver(mem.get(), linear.get(), nullptr)) return failed("CVodeSetLinearSolver", code);
+    } else {
+      fixed_point.reset(SUNNonlinSol_FixedPoint(y.get(), 0, context.get()));
+      if (const int code = CVodeSetNonlinearSolver(mem.get(), fixed_point.get())) return failed("CVodeSetNonlinearSolver", code);
+    }
     if (const int code = CVode(mem.get(), t_end, y.get(), &t, CV_NORMAL); code < 0) return failed("CVode", code);
     CVodeGetNumSteps(mem.get(), &run.steps);
   } else {
-    // as the arkode-erk methods set it up (solvers/methods/arkode.cpp): ARKStep with no implicit part, the table
-    // by number (ERKStep mistakes some tables for first-same-as-last: docs/findings.md)
-    std::unique_ptr<void, ArkodeFree> mem(ARKStepCreate(rhs, nullptr, 0.0, y.get(), context.get()));
+    // as the arkode-* methods set it up (solvers/methods/arkode.cpp): ARKStep with the tables by number (ERKStep
+    // mistakes some tables for first-same-as-last: docs/findings.md); a DIRK method's implicit part the whole f,
+    // an IMEX method's the model's stiff part (z' = v and the Laplacian, linear: one Newton iteration a stage)
+    const bool explicit_only = tables->dirk == ARKODE_DIRK_NONE, implicit_only = tables->erk == ARKODE_ERK_NONE;
+    const ARKRhsFn fe = explicit_only ? rhs<true, true> : implicit_only ? nullptr : rhs<false, true>;
+    const ARKRhsFn fi = explicit_only ? nullptr : implicit_only ? rhs<true, true> : rhs<true, false>;
+    std::unique_ptr<void, ArkodeFree> mem(ARKStepCreate(fe, fi, 0.0, y.get(), context.get()));
     if (!mem) return failed("ARKStepCreate", 0);
     if (const int code = ARKStepSetUserData(mem.get(), &lines)) return failed("ARKStepSetUserData", code);
-    if (const int code = ARKStepSetTableNum(mem.get(), ARKODE_DIRK_NONE, ARKODE_DORMAND_PRINCE_7_4_5)) return failed("ARKStepSetTableNum", code);
+    if (const int code = ARKStepSetTableNum(mem.get(), tables->dirk, tables->erk)) return failed("ARKStepSetTableNum", code);
     if (const int code = ARKStepSStolerances(mem.get(), rtol, atol)) return failed("ARKStepSStolerances", code);
     if (const int code = ARKStepSetMaxNumSteps(mem.get(), 5'000'000)) return failed("ARKStepSetMaxNumSteps", code);
+    LinSolPtr linear;
+    if (!explicit_only) {
+      linear = gmres();
+      if (!linear) return failed("SUNLinSol_SPGMR", 0);
+      if (const int code = ARKStepSetLinearSolver(mem.get(), linear.get(), nullptr)) return failed("ARKStepSetLinearSolver", code);
+      if (!implicit_only)
+        if (const int code = ARKStepSetLinear(mem.get(), 0)) return failed("ARKStepSetLinear", code);
+    }
     // the step lands on the output time, as the adapter's do (ARKODE's interpolant is of lower order)
     if (const int code = ARKStepSetStopTime(mem.get(), t_end)) return failed("ARKStepSetStopTime", code);
     if (const int code = ARKStepEvolve(mem.get(), t_end, y.get(), &t, ARK_NORMAL); code < 0) return failed("ARKStepEvolve", code);
     ARKStepGetNumSteps(mem.get(), &run.steps);
   }
   run.rhs_evals = lines.rhs_evals;
-  std::vector<double> z(yl, yl + static_cast<long>(B.rows) * B.cols), v(yl + static_cast<long>(B.rows) * B.cols, yl + local);
-  std::vector<double> zg = grid.gather(z), vg = grid.gather(v);
-  if (!zg.empty()) {
-    run.y = std::move(zg);
-    run.y.insert(run.y.end(), vg.begin(), vg.end());
-  }
+  const Eigen::VectorXd whole = grid.gather_state(Eigen::Map<const Eigen::VectorXd>(yl, local));
+  run.y.assign(whole.data(), whole.data() + whole.size());
   return run;
 }
 

@@ -1,12 +1,14 @@
 // The height field's method of lines (models/height_field.cpp's f: dz/dt = v, dv/dt = c^2 Lap z - mu v on
 // the interior, the boundary still) on the grid split among the MPI ranks (distributed_wave.hpp), integrated
-// by CVODE's Adams method with fixed-point iteration (as `cvode-adams`) or ARKODE's Dormand-Prince 5(4) (as
-// `arkode-erk-dormand-prince54`) on SUNDIALS' parallel vector: each
-// rank's N_Vector_Parallel holds its block's z and v, f exchanges z's halo and computes each cell by the same
-// kernel as one process (kernels/wave_acceleration.hpp), and CVODE's norms and dot products are sums over the
-// ranks (MPI_Allreduce inside the vector). Those sums add in another order than one process's, so the step
-// sizes the integrator picks differ in their last bits and the solutions by the tolerance's order, not by bits.
-// SUNDIALS' and MPI's types stay in distributed_lines.cpp.
+// by CVODE (`cvode-adams`: Adams with fixed-point iteration; `cvode-bdf`: BDF with Newton) or ARKODE (any
+// `arkode-*` method: ERK, DIRK, or IMEX on the model's split, the Laplacian and z' = v implicit, the damping
+// explicit) on SUNDIALS' parallel vector, set up as the table's adapters set them up: each rank's
+// N_Vector_Parallel holds its block's z and v, f exchanges z's halo and computes each cell by the same kernel as
+// one process (kernels/wave_acceleration.hpp), and the norms and dot products are sums over the ranks
+// (MPI_Allreduce inside the vector). Newton's linear systems are solved by GMRES (SPGMR, matrix-free, J v by
+// difference quotients) where one process uses KLU on the sparse Jacobian. The sums add in another order than
+// one process's, so the step sizes the integrator picks differ in their last bits and the solutions by the
+// tolerance's order, not by bits. SUNDIALS' and MPI's types stay in distributed_lines.cpp.
 #pragma once
 
 #include "capabilities/wave_grid.hpp"
@@ -25,7 +27,7 @@ struct DistributedLinesRun {
   std::string failure;    // the failing SUNDIALS call and its code, or a method not run this way; empty when it reached t_end
 };
 
-// `method` ("cvode-adams" or "arkode-erk-dormand-prince54") from y0 = (z, v) of the whole grid (every rank
+// `method` (cvode-adams, cvode-bdf or an arkode-* method) from y0 = (z, v) of the whole grid (every rank
 // passes it; each takes its block) to t_end
 DistributedLinesRun lines_distributed(std::string_view method, const WaveGridView& grid, const Eigen::VectorXd& y0, double t_end, double rtol,
                                       double atol);

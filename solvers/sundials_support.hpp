@@ -1,11 +1,13 @@
 // What the two SUNDIALS adapters (methods/cvode.cpp, methods/arkode.cpp) share: RAII handles, the C
 // callbacks that reach the counted system, and the loop over output times with events. SUNDIALS' types
-// appear only here and in those two files.
+// appear only here, in those two files and in distributed_lines.cpp (the same methods on the parallel vector).
 #pragma once
 
 #include "capabilities/imex_split.hpp"
 #include "run_support.hpp"
 
+#include <arkode/arkode_butcher_dirk.h>
+#include <arkode/arkode_butcher_erk.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
@@ -14,6 +16,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <type_traits>
 
@@ -29,6 +32,15 @@ using VectorPtr = std::unique_ptr<_generic_N_Vector, VectorFree>;
 using MatrixPtr = std::unique_ptr<_generic_SUNMatrix, MatrixFree>;
 using LinSolPtr = std::unique_ptr<_generic_SUNLinearSolver, LinSolFree>;
 using NonlinSolPtr = std::unique_ptr<_generic_SUNNonlinearSolver, NonlinSolFree>;
+
+// an arkode-* method's Butcher tables, by its name in the table (ARKODE_ERK_NONE or ARKODE_DIRK_NONE for the
+// part it lacks): for a driver of ARKODE beside the table's adapter (solvers/distributed_lines); empty for
+// another name. Defined with the table, in methods/arkode.cpp
+struct ArkodeTables {
+  ARKODE_ERKTableID erk;
+  ARKODE_DIRKTableID dirk;
+};
+std::optional<ArkodeTables> arkode_tables(std::string_view method);
 
 // what the C callbacks reach through user_data
 struct Callbacks {

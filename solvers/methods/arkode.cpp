@@ -229,6 +229,12 @@ class ArkodeIntegrator final : public Integrator {
 
 }  // namespace
 
+std::optional<sundials::ArkodeTables> sundials::arkode_tables(std::string_view method) {
+  for (const Table& t : tables)
+    if (t.name == method) return ArkodeTables{t.erk, t.dirk};
+  return std::nullopt;
+}
+
 void register_arkode_methods(MethodTable& table) {
   for (const Table& t : tables) {
     table.add({
