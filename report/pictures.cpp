@@ -2,9 +2,12 @@
 
 #include "studies.hpp"
 
+#include "report/cost_model.hpp"
 #include "run/atomic_write.hpp"
 #include "run/csv.hpp"
+#include "run/prepare.hpp"
 #include "run/render_scene.hpp"
+#include "solvers/method_table.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -69,6 +72,27 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
 
   if (ctx.progress) ctx.progress->begin_study("pictures");
   const auto start = std::chrono::steady_clock::now();
+  // each scene's expected cost (report/cost_model.hpp): its run, and its frames by what they show
+  std::vector<double> costs;
+  for (const auto& scene : scenes) {
+    RunOptions run;
+    run.scene_file = (scenes_dir / (scene + ".toml")).string();
+    if (const QuickChange* change = quick_change(scene, ctx.quick)) run.sets = change->sets;
+    const PreparedRun p = prepare_run(run);
+    double balls = 0, water = 0, other = 0;
+    if (const auto shapes = p.model->shapes(p.model->initial_state())) {
+      balls = static_cast<double>(shapes->balls.size());
+      if (shapes->water) water = static_cast<double>(shapes->water->points) * shapes->water->points;
+      if (shapes->field) water += static_cast<double>(shapes->field->points) * shapes->field->points;
+      other = static_cast<double>(shapes->bodies.size() + shapes->lines.size());
+      for (const auto& sheet : shapes->surfaces) other += static_cast<double>(sheet.faces.rows());
+    }
+    // an adaptive run's steps from a time scale of a thousandth of the run (the scenes do not say theirs); a
+    // scene's fixed part ~1 s (its GL context and the set-up of its run and its animation: the quick report's
+    // cheapest scenes took ~1 s for 16 frames)
+    costs.push_back(1e9 + expected_run_ns(*find_method(p.method), p.control, p.t_end, p.t_end / 1000, p.model->size()) +
+                    frames * expected_frame_ns(balls, water, other));
+  }
   const auto drawn = ctx.sweep<Drawn>(scenes, [&](size_t i) {
     const std::string& scene = scenes[i];
     const fs::path out = dir / "pictures" / scene;
@@ -88,7 +112,7 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
     }
     std::ifstream in(out / "render.json");
     return Drawn{scene, nlohmann::json::parse(in)};
-  });
+  }, costs);
   if (ctx.progress) ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 
   Table table{{"scene", "model", "method", "frames", "t_end", "draw_ms_per_frame", "status", "renderer"}, {}};

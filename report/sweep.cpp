@@ -48,9 +48,15 @@ void Progress::begin_sweep(const std::vector<double>& costs, const std::vector<s
   total_ += costs.size();
 }
 
+void Progress::point_started(size_t point) {
+  std::lock_guard lock(mutex_);
+  running_[sweep_offset_ + point] = std::chrono::steady_clock::now();
+}
+
 void Progress::point_done(size_t point, const std::string& label, double seconds) {
   std::lock_guard lock(mutex_);
   const size_t i = sweep_offset_ + point;
+  running_.erase(i);
   Group& g = groups_[group_of_[i]];
   g.expected_left -= costs_[i];
   g.expected_done += costs_[i];
@@ -68,9 +74,14 @@ double Progress::seconds_left() const {
   // (the models overestimate: measured, the quick report's work-precision points took 0.4 of their expected
   // time, summed, with early estimates 2-2.6 times the truth at 1e-9 s a unit)
   const double prior = costs_given_ ? 0.4e-9 : expected > 0 ? seconds / expected : 0;
+  const auto ratio = [&](const Group& g) { return g.expected_done > 0 ? g.seconds_done / g.expected_done : prior; };
   double left = 0;
-  for (const Group& g : groups_) left += std::max(0.0, g.expected_left) * (g.expected_done > 0 ? g.seconds_done / g.expected_done : prior);
-  return left / threads_;
+  for (const Group& g : groups_) left += std::max(0.0, g.expected_left) * ratio(g);
+  // the points in hand are part done: a point that has run longer than expected is taken as about to finish
+  const auto now = std::chrono::steady_clock::now();
+  for (const auto& [i, since] : running_)
+    left -= std::min(std::chrono::duration<double>(now - since).count(), costs_[i] * ratio(groups_[group_of_[i]]));
+  return std::max(0.0, left) / threads_;
 }
 
 void Progress::draw(const std::string& label) {
@@ -138,6 +149,7 @@ void StudyContext::run_points(const std::vector<std::string>& labels, const std:
       for (size_t k = next++; k < mine.size(); k = next++) {
         const size_t i = mine[k];
         const auto begun = std::chrono::steady_clock::now();
+        if (progress) progress->point_started(k);
         try {
           point(i);
         } catch (...) {

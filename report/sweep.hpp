@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <exception>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -22,6 +23,7 @@ class Progress {
   // a sweep of points with their expected costs (CPU nanoseconds where given, else 1 each) and groups (points
   // of one group, one method on one scene, cost alike relative to their expectation), run on `threads` threads
   void begin_sweep(const std::vector<double>& costs, const std::vector<std::string>& groups, int threads, bool in_nanoseconds);
+  void point_started(size_t point);                                         // thread-safe
   void point_done(size_t point, const std::string& label, double seconds);  // thread-safe
   void end_study(double seconds);
 
@@ -31,8 +33,10 @@ class Progress {
   std::mutex mutex_;
   std::string study_;
   // the time left: the expected cost left in each group, times the seconds its done points took per unit of
-  // expected cost (the whole sweep's where the group has none done yet), over the threads
+  // expected cost (the whole sweep's where the group has none done yet), less what the points in hand have
+  // run so far (up to their own expectation), over the threads
   double seconds_left() const;
+  std::map<size_t, std::chrono::steady_clock::time_point> running_;  // the points in hand (index in costs_), since when
   size_t total_ = 0, done_ = 0, sweep_offset_ = 0;  // sweep_offset_: the running sweep's first point in costs_
   int threads_ = 1;
   bool costs_given_ = false;  // the running sweep's costs are expected nanoseconds
@@ -69,8 +73,10 @@ struct StudyContext {
 
   // task(i) for each i < labels.size(), on up to `threads` threads; results in index order, whatever the
   // thread count (a point never reads another's result). An exception from any point is rethrown here.
-  // `costs`, where given, are the points' expected CPU times in nanoseconds: the costliest run first (so that no
-  // thread is left with one long point at the end) and the time left is estimated from them.
+  // `costs`, where given, are the points' expected CPU times (report/cost_model.hpp): the costliest run first
+  // (so that no thread is left with one long point at the end) and the time left is estimated from them. In
+  // nanoseconds; or in any one unit for a sweep without groups, whose scale is learned from its points done (a
+  // group none of whose points is done yet is taken at the nanosecond scale).
   // `groups` name which points cost alike relative to their expected costs (the time-left estimate learns
   // each group's ratio from its points done).
   // Under mpirun each rank runs a share of the points, chosen by cost (the costliest point to the rank with

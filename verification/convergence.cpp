@@ -14,15 +14,21 @@ double coarse_dt(const Method& method, double time_scale) {
   return time_scale * fraction;
 }
 
-ConvergenceSweep convergence_sweep(const Model& model, const Method& method, double t_end, int halvings,
-                                   double coarse) {
-  ConvergenceSweep sweep;
+std::vector<double> convergence_steps(const Method& method, int halvings, double coarse) {
   // an eighth-order error falls 256-fold per halving: four halvings span more than the range between the
   // asymptotic ceiling and round-off, so high orders refine by sqrt(2) over the same range of dt
   const int per_halving = method.order.max > 5 ? 2 : 1;
-  for (int k = 0; k <= halvings * per_halving; ++k) {
+  std::vector<double> dts;
+  for (int k = 0; k <= halvings * per_halving; ++k) dts.push_back(coarse / std::pow(2.0, static_cast<double>(k) / per_halving));
+  return dts;
+}
+
+ConvergenceSweep convergence_sweep(const Model& model, const Method& method, double t_end, int halvings,
+                                   double coarse) {
+  ConvergenceSweep sweep;
+  for (const double dt : convergence_steps(method, halvings, coarse)) {
     StepControl control;
-    control.dt = coarse / std::pow(2.0, static_cast<double>(k) / per_halving);
+    control.dt = dt;
     sweep.dt.push_back(*control.dt);
     sweep.runs.push_back(run_and_measure(model, method.name, control, t_end, t_end));
     const auto& error = sweep.runs.back().error;

@@ -24,6 +24,10 @@ struct ConvergenceSweep {
 double coarse_dt(const Method& method, double time_scale);
 
 // run model with method from dt = coarse down to coarse / 2^halvings, to t_end
+// the steps a convergence sweep runs, from `coarse` down: halving `halvings` times, by sqrt(2) for a method of
+// order above 5 (its error would otherwise fall from the asymptotic range to round-off in a halving or two)
+std::vector<double> convergence_steps(const Method& method, int halvings, double coarse);
+
 ConvergenceSweep convergence_sweep(const Model& model, const Method& method, double t_end, int halvings,
                                    double coarse);
 

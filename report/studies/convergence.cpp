@@ -1,4 +1,5 @@
 // The report's study: convergence: error against dt for every fixed-step method, with the fitted order.
+#include "report/cost_model.hpp"
 #include "report/studies/study_scenes.hpp"
 
 namespace stepwise {
@@ -31,15 +32,26 @@ StudyOutput convergence(const StudyContext& ctx) {
   const auto scenes = ode_scenes();
   std::vector<Point> plan;
   std::vector<std::string> labels;
-  for (const auto& scene : scenes)
+  // each point's expected cost (report/cost_model.hpp): its runs at the coarse step and each halving of it
+  // (grouped by scene: the time-left estimate learns each scene's ratio of seconds to expected cost on its own)
+  std::vector<double> costs;
+  std::vector<std::string> groups;
+  for (const auto& scene : scenes) {
+    const double n = make_model(scene.model, scene.params)->size();
     for (const Method* method : scene_methods(scene, true)) {
       plan.push_back({&scene, method});
       labels.push_back(fmt::format("{} {}", scene.label, method->name));
+      double cost = 0;
+      for (const double dt : convergence_steps(*method, halvings, coarse_dt(*method, scene.time_scale)))
+        cost += expected_run_ns(*method, StepControl::fixed(dt), scene.t_end, scene.time_scale, n);
+      costs.push_back(cost);
+      groups.push_back(scene.label);
     }
+  }
   const auto sweeps = ctx.sweep<ConvergenceSweep>(labels, [&](size_t i) {
     const auto model = make_model(plan[i].scene->model, plan[i].scene->params);
     return convergence_sweep(*model, *plan[i].method, plan[i].scene->t_end, halvings, coarse_dt(*plan[i].method, plan[i].scene->time_scale));
-  });
+  }, costs, groups);
 
   std::vector<const StudyScene*> shown;  // the scenes in the plan's order
   for (size_t i = 0; i < plan.size(); ++i) {

@@ -1,4 +1,5 @@
 // The report's study: work-precision: error against cost for every method, the Pareto fronts, the recommendations.
+#include "report/cost_model.hpp"
 #include "report/studies/study_scenes.hpp"
 
 namespace stepwise {
@@ -64,20 +65,9 @@ const WorkPoint* cheapest_reaching(const std::vector<const WorkPoint*>& front, d
   return nullptr;
 }
 
-// a point's expected CPU time in nanoseconds, for the sweep's order and its time-left estimate (within a
-// factor of a few per point, which the sums over a sweep average out): steps (t_end / dt, or for an
-// order-p method at rtol about 10 rtol^(-1/(p+1)) per time scale) times a step's cost (a fixed part, and
-// ~10 ns per entry and stage, the stages ~ the order; five times that for an implicit method's Newton
-// iterations; ~10 us more for a GPU pass's round trip through OpenGL), the runs repeated when short
+// a point's expected CPU time in nanoseconds (report/cost_model.hpp), the runs repeated when short
 double expected_cost(const WorkPoint& p, double n, int repeats) {
-  const double order = std::max(1, p.method->order.max);
-  const double steps = p.control.dt ? p.scene->t_end / *p.control.dt
-                                    : 10 * p.scene->t_end / p.scene->time_scale * std::pow(p.control.rtol, -1 / (order + 1));
-  const bool implicit = p.method->dense != DenseMatrices::none || p.method->needs.type == needs_mass_spring.type ||
-                        p.method->needs.type == needs_imex_split.type;
-  const bool gpu = p.method->source == "OpenGL shader";
-  const double per_step = 200 + 10 * n * std::min(order, 8.0) * (implicit ? 5 : 1) + (gpu ? 1e4 : 0);
-  const double once = steps * per_step;
+  const double once = expected_run_ns(*p.method, p.control, p.scene->t_end, p.scene->time_scale, n);
   return once < long_run_seconds * 1e9 ? once * (1 + repeats) : once;
 }
 
@@ -104,9 +94,7 @@ StudyOutput work_precision(const StudyContext& ctx) {
       WorkPoint point{&scene, method, {}, {}, 0, 0, 0, Status::ok, false};
       if (method->fixed_step())
         for (int k = 0; k <= halvings; ++k) {
-          const bool implicit = method->dense != DenseMatrices::none || method->needs.type == needs_mass_spring.type ||
-                                method->needs.type == needs_imex_split.type;
-          const double coarse = implicit && scene.implicit_dt > 0 ? scene.implicit_dt : coarse_dt(*method, scene.time_scale);
+          const double coarse = solves_newton_systems(*method) && scene.implicit_dt > 0 ? scene.implicit_dt : coarse_dt(*method, scene.time_scale);
           point.control = StepControl::fixed(coarse / std::pow(2.0, k));
           point.coarsest = k == 0;
           plan.push_back(point);
