@@ -1,5 +1,7 @@
 #include "prepare.hpp"
 
+#include "ranks.hpp"
+
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/method_table.hpp"
 #include "solvers/stability.hpp"
@@ -134,15 +136,17 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   p.t_end = o.t_end.value_or(s.t_end.value_or(10.0));
   if (p.control.dt && *p.control.dt > p.t_end)
     throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.t_end));
-  // a step past the method's stability limit is the user's to try: said, then run, and reported diverged
+  // a step past the method's stability limit is the user's to try: said (once: by rank 0 under mpirun), then
+  // run, and reported diverged
+  const bool speaks = ranks::rank() == 0;
   if (const auto* grid = p.model->as<WaveGridView>(); grid && p.control.dt && method->stability.wave_dt)
-    if (const double limit = method->stability.wave_dt(*grid); *p.control.dt > limit)
+    if (const double limit = method->stability.wave_dt(*grid); *p.control.dt > limit && speaks)
       fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s on this grid (d = {} m, c = {} m/s, "
                  "mu = {} 1/s); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method, limit,
                  grid->spacing, grid->c, grid->mu);
   // and on a mass-spring system, the limit its stiffest mode sets at the start (verification/stability.hpp), for
   // the methods that have one (asked first with any mode, so the eigenproblem is solved only for those)
-  if (p.model->as<MassSpringView>() && p.control.dt && method->stability.oscillator_dt) {
+  if (p.model->as<MassSpringView>() && p.control.dt && method->stability.oscillator_dt && speaks) {
     const StiffestMode mode = stiffest_mode(*p.model, 0, p.model->initial_state());
     if (const double limit = method->stability.oscillator_dt(mode.omega, mode.damping); *p.control.dt > limit)
       fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s for this system's stiffest mode (omega = {:.6g} "

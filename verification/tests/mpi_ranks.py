@@ -7,7 +7,8 @@ usage: mpi_ranks.py STEPWISE SCENES_DIR TOLERANCES_HPP [SERIAL_QUICK_REPORT]
   one-process run's; provenance.json says how many ranks ran and what each was busy for.
 - `run` under mpirun: the pool (wave-fd on the water's grid) split among 2, 3 and 4 ranks writes the one-process
   run's trajectory.csv byte for byte and its summary.json (cpu_seconds aside) with `ranks` N; more ranks than the
-  grid has rows: exit 2 naming both numbers, nothing written; a model that is not split (the pendulum) runs on
+  grid has rows: exit 2 naming both numbers, nothing written; past the scheme's limit: diverged at the one-process
+  run's time, exit 1, its summary written, the warning said once; a model that is not split (the pendulum) runs on
   rank 0 alone, which says so in one line, with `ranks` 1.
 - `report --quick` under `-np 2` and `-np 3` against the one-process report given (the report_quick test's):
   every CSV's non-timing columns alike (the cloth's to implicit-euler's kept-factor reproducibility, read from
@@ -143,6 +144,18 @@ def main():
             expect(open(os.path.join(one, "trajectory.csv"), "rb").read() == open(os.path.join(out, "trajectory.csv"), "rb").read(),
                    f"pool on {n} ranks: trajectory.csv as one process's, byte for byte")
             print(f"run pool (67 x 67, 3 s, {len(s1['events'])} drops) on {n} ranks: trajectory.csv and summary.json as one process's")
+        # past the scheme's limit: diverged at the same time as one process, exit 1, the summary written, said once
+        one, two = os.path.join(d, "pool-diverged-1"), os.path.join(d, "pool-diverged-2")
+        past = [os.path.join(scenes, "pool.toml"), "--dt", "0.02"]
+        r1 = run([binary, "run"] + past + ["--out", one])
+        r2 = run(mpirun(2) + [binary, "run"] + past + ["--out", two])
+        expect(r1.returncode == 1 and r2.returncode == 1, f"pool past its limit: exit {r1.returncode} and {r2.returncode} on 2 ranks (1)")
+        if r2.returncode == 1:
+            s1, s2 = (json.load(open(os.path.join(x, "summary.json"))) for x in (one, two))
+            expect(s2["status"] == "diverged" and s2["t_stop"] == s1["t_stop"],
+                   f"pool past its limit on 2 ranks: {s2['status']} at {s2['t_stop']}, one process at {s1['t_stop']}")
+        expect(r2.stderr.count("warning: dt") == 1 and "interrupted" not in r2.stderr,
+               f"pool past its limit on 2 ranks: the warning once, nobody interrupted: {r2.stderr[-300:]}")
         out = os.path.join(d, "pool-too-many")
         r = run(mpirun(5) + [binary, "run", os.path.join(scenes, "pool.toml"), "--set", "size=4", "--out", out])
         expect(r.returncode == 2 and re.search(r"5 ranks make a 5 x 1 decomposition, more than the grid's 4 rows or 4 columns", r.stderr) is not None,
