@@ -1,7 +1,6 @@
 #include "distributed_lines.hpp"
 
 #include "distributed_wave.hpp"
-#include "kernels/wave_acceleration.hpp"
 
 #include "sundials_support.hpp"
 
@@ -31,37 +30,17 @@ struct ArkodeFree {
 // what f reaches through user_data: the grid, this rank's block and the halo it exchanges
 struct Lines {
   DistributedWave* grid;
-  DistributedWave::Block block;
-  int n = 0;  // the whole grid's points per side
-  double c2 = 0, mu = 0;
+  WaveGridView view;
   long rhs_evals = 0;
 };
 
-// f on the local state, the block's z (rows x cols, row-major) then its v, or a part of it as the model splits
-// it for IMEX (models/height_field.cpp): `stiff` z' = v and c^2 Lap z, `damping` -mu v; both: the whole f
+// f on the local state (the block's z, then its v), or a part of it as the model splits it for IMEX
+// (distributed_wave.hpp's block_rhs: `stiff` z' = v and c^2 Lap z, `damping` -mu v)
 template <bool stiff, bool damping>
 int rhs(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
   Lines& L = *static_cast<Lines*>(user_data);
   ++L.rhs_evals;
-  const int r = L.block.rows, c = L.block.cols, s = L.grid->stride();
-  const double* z = N_VGetArrayPointer(y);
-  const double* v = z + static_cast<std::ptrdiff_t>(r) * c;
-  double* dz = N_VGetArrayPointer(ydot);
-  double* dv = dz + static_cast<std::ptrdiff_t>(r) * c;
-  double* halo = L.grid->level();
-  if (stiff) {
-    for (int a = 0; a < r; ++a)
-      for (int b = 0; b < c; ++b) halo[(a + 1) * s + b + 1] = z[a * c + b];
-    L.grid->exchange();
-  }
-  const double c2 = stiff ? L.c2 : 0.0, mu = damping ? L.mu : 0.0;
-  for (int a = 0; a < r; ++a)
-    for (int b = 0; b < c; ++b) {
-      const int i = L.block.row0 + a, j = L.block.col0 + b, k = a * c + b;
-      const bool interior = i > 0 && i < L.n - 1 && j > 0 && j < L.n - 1;
-      dz[k] = stiff ? v[k] : 0.0;
-      dv[k] = interior ? wave_acceleration(c2, mu, stiff ? neighbour_sum(halo, (a + 1) * s + b + 1, s) : 0.0, z[k], v[k]) : 0.0;
-    }
+  block_rhs(*L.grid, L.view, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot), stiff, damping);
   return 0;
 }
 
@@ -71,8 +50,8 @@ DistributedLinesRun lines_distributed(std::string_view method, const WaveGridVie
                                       double atol) {
   const int n = view.points;
   DistributedWave grid(n, n, WaveCoefficients{});
-  Lines lines{&grid, grid.block(), n, view.c * view.c / (view.spacing * view.spacing), view.mu};
-  const auto& B = lines.block;
+  Lines lines{&grid, view};
+  const auto B = grid.block();
   const long local = 2L * B.rows * B.cols, global = 2L * n * n;
   DistributedLinesRun run;
   const auto failed = [&](std::string_view call, long code) {

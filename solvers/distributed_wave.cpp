@@ -160,6 +160,14 @@ std::vector<double> DistributedWave::gather() const {
 double* DistributedWave::level() { return impl_->z.data(); }
 int DistributedWave::stride() const { return impl_->stride; }
 
+void DistributedWave::load(const double* z) {
+  Impl& m = *impl_;
+  for (int a = 0; a < m.block.rows; ++a)
+    std::copy(z + static_cast<std::ptrdiff_t>(a) * m.block.cols, z + static_cast<std::ptrdiff_t>(a + 1) * m.block.cols,
+              m.z.begin() + static_cast<std::ptrdiff_t>(a + 1) * m.stride + 1);
+  exchange();
+}
+
 void DistributedWave::exchange() {
   MPI_Request requests[8];
   impl_->exchange(requests);
@@ -216,17 +224,6 @@ std::vector<double> DistributedWave::gather(const std::vector<double>& mine) con
 
 namespace {
 
-// a block's z (rows x cols) into the grid's level inside its halo, the halo filled from the neighbours
-void load_level(DistributedWave& grid, const double* z) {
-  const auto b = grid.block();
-  const int stride = grid.stride();
-  double* level = grid.level();
-  for (int a = 0; a < b.rows; ++a)
-    std::copy(z + static_cast<std::ptrdiff_t>(a) * b.cols, z + static_cast<std::ptrdiff_t>(a + 1) * b.cols,
-              level + static_cast<std::ptrdiff_t>(a + 1) * stride + 1);
-  grid.exchange();
-}
-
 // f(cell in the block, the same cell in the level inside its halo) for the block's cells on the grid's interior
 template <class F>
 void for_interior(const DistributedWave& grid, int points, F&& f) {
@@ -238,8 +235,8 @@ void for_interior(const DistributedWave& grid, int points, F&& f) {
     for (int c = c0; c < c1; ++c) f(static_cast<std::ptrdiff_t>(a) * b.cols + c, static_cast<std::ptrdiff_t>(a + 1) * stride + c + 1);
 }
 
-// the water model on this rank's block: its state (z, v) of the block, its f by the model's formula with z's
-// halo from the neighbours (collective, like every call on the grid), its events the model's for the block
+// the water model on this rank's block: its state (z, v) of the block, its f block_rhs (collective, like every
+// call on the grid), its events the model's for the block
 class BlockSystem final : public OdeSystem {
  public:
   BlockSystem(DistributedWave& grid, const WaveGridView& view, const WaveBlocksView& blocks)
@@ -248,15 +245,7 @@ class BlockSystem final : public OdeSystem {
   bool autonomous() const override { return true; }
   std::span<const Event> events() const override { return events_; }
   void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
-    load_level(grid_, y.data());
-    const double* level = grid_.level();
-    const int stride = grid_.stride();
-    const double c2 = view_.c * view_.c / (view_.spacing * view_.spacing);
-    dydt.head(cells_) = y.tail(cells_);
-    dydt.tail(cells_).setZero();
-    for_interior(grid_, view_.points, [&](std::ptrdiff_t cell, std::ptrdiff_t at) {
-      dydt[cells_ + cell] = wave_acceleration(c2, view_.mu, neighbour_sum(level, at, stride), y[cell], y[cells_ + cell]);
-    });
+    block_rhs(grid_, view_, y.data(), dydt.data());
   }
 
  private:
@@ -289,7 +278,7 @@ class BlockWaveFd final : public FixedStepper {
         for (int a = 0; a < b.rows; ++a) still(a, edge - b.col0);
     }
     RunningNorm largest;  // of what is written below (the boundary's zeros change nothing)
-    load_level(grid_, z);
+    grid_.load(z);
     const double* level = grid_.level();
     const int stride = grid_.stride(), points = view_.points;
     const bool continuing = history_ && std::abs(h - h_) <= 1e-9 * h_ && std::abs(t - t_last_) <= 1e-9 * h_ && y.data() == last_;
@@ -311,7 +300,7 @@ class BlockWaveFd final : public FixedStepper {
         v1[j] = vj;
         largest.add(zj);
       });
-      load_level(grid_, z1);
+      grid_.load(z1);
       for_interior(grid_, points, [&](std::ptrdiff_t j, std::ptrdiff_t at) {
         v1[j] = wave_restart_second(h, view_.mu, v1[j], wave_laplacian(c2, neighbour_sum(level, at, stride), z1[j]));
         largest.add(v1[j]);
@@ -341,6 +330,24 @@ class BlockWaveFd final : public FixedStepper {
 };
 
 }  // namespace
+
+void block_rhs(DistributedWave& grid, const WaveGridView& view, const double* y, double* dydt, bool stiff, bool damping) {
+  const auto b = grid.block();
+  const std::ptrdiff_t cells = static_cast<std::ptrdiff_t>(b.rows) * b.cols;
+  const double *z = y, *v = y + cells;
+  double *dz = dydt, *dv = dydt + cells;
+  if (stiff) grid.load(z);
+  const double* level = grid.level();
+  const int stride = grid.stride();
+  const double c2 = stiff ? view.c * view.c / (view.spacing * view.spacing) : 0.0, mu = damping ? view.mu : 0.0;
+  for (std::ptrdiff_t k = 0; k < cells; ++k) {
+    dz[k] = stiff ? v[k] : 0.0;
+    dv[k] = 0.0;  // the boundary's; the interior's below
+  }
+  for_interior(grid, view.points, [&](std::ptrdiff_t cell, std::ptrdiff_t at) {
+    dv[cell] = wave_acceleration(c2, mu, stiff ? neighbour_sum(level, at, stride) : 0.0, z[cell], v[cell]);
+  });
+}
 
 RunResult wave_fd_distributed(DistributedWave& grid, const WaveGridView& view, const WaveBlocksView& blocks, const StepControl& control,
                               std::span<const double> t_out) {

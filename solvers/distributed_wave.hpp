@@ -89,11 +89,18 @@ class DistributedWave {
   double* level();
   int stride() const;
   void exchange();
+  // a block's z (rows x cols, row-major) into level() inside its halo, then exchange()
+  void load(const double* z);
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// the water's f (models/height_field.cpp's, cell by cell by the same kernel) on this rank's block: y and dydt the
+// block's (z, v), the grid's boundary still; `stiff` and `damping` pick the IMEX split's parts, z' = v with
+// c^2 Lap z, and -mu v (both: all of f). Collective when `stiff`: z's halo is exchanged through `grid`
+void block_rhs(DistributedWave& grid, const WaveGridView& view, const double* y, double* dydt, bool stiff = true, bool damping = true);
 
 // wave-fd on this rank's block of a water model's grid (split by `grid`): the fixed-step loop of one process
 // (fixed_step.hpp: steps landing on the output times, the events located and handled, the divergence test)
