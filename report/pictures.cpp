@@ -62,7 +62,7 @@ std::string scene_description(const fs::path& scene_file) {
 }
 
 std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, const StudyContext& ctx) {
-  const int frames = ctx.quick ? 16 : 60;
+  const int frames = ctx.quick ? 12 : 60;
   const std::string size = ctx.quick ? "480x270" : "640x360";
   std::vector<std::string> scenes;
   for (const auto& entry : fs::directory_iterator(scenes_dir))
@@ -89,7 +89,7 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
     }
     // an adaptive run's steps from a time scale of a thousandth of the run (the scenes do not say theirs); a
     // scene's fixed part ~1 s (its GL context and the set-up of its run and its animation: the quick report's
-    // cheapest scenes took ~1 s for 16 frames)
+    // cheapest scenes took ~1 s for 16 frames; it draws 12 since)
     costs.push_back(1e9 + expected_run_ns(*find_method(p.method), p.control, p.t_end, p.t_end / 1000, p.model->size()) +
                     frames * expected_frame_ns(balls, water, other));
   }
