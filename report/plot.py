@@ -1,15 +1,16 @@
 #!/usr/bin/python3
 """Draw the report's figures from the CSV files a stepwise study or report wrote, and turn report.md into index.html.
 
-    plot.py DIR [--html] [--dpi N]
+    plot.py DIR [--html] [--dpi N] [--jobs N]
 
 DIR/figures.csv lists the figures (stem, kind, subject): each is drawn by the function of that kind below, from
-the CSVs in DIR only, into DIR/stem.png. DIR/methods.csv (the method table) fixes one colour and marker per
+the CSVs in DIR only, into DIR/stem.png, by N processes at once (--jobs; default 1). DIR/methods.csv (the method table) fixes one colour and marker per
 method, the same in every figure. With --html, DIR/report.md becomes DIR/index.html (Python-Markdown, tables).
 Needs Debian's python3-matplotlib (and python3-markdown for --html); exit status 3 names a missing one.
 """
 import csv
 import math
+import multiprocessing
 import os
 import sys
 
@@ -402,6 +403,17 @@ code {{ background: #f4f4f4; }}
     os.replace(path + ".tmp", path)
 
 
+DRAWERS = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, wave_adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
+                                    cloth_implicit_damping, cloth_realtime, fluid_viscosity, stability_regions, rigid_body_invariants, event_times, contacts)}
+
+
+def draw(directory, kind, subject, dpi):
+    """One figure (in a worker process: the resolution passed, not inherited)."""
+    global DPI
+    DPI = dpi
+    DRAWERS[kind](directory, subject, Styles(directory))
+
+
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
@@ -409,14 +421,19 @@ def main():
     directory = sys.argv[1]
     if "--dpi" in sys.argv:
         DPI = int(sys.argv[sys.argv.index("--dpi") + 1])
-    styles = Styles(directory)
-    drawers = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, wave_adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
-                                        cloth_implicit_damping, cloth_realtime, fluid_viscosity, stability_regions, rigid_body_invariants, event_times, contacts)}
-    for figure in read(directory, "figures"):
-        kind = figure["kind"]
-        if kind not in drawers:
+    jobs = int(sys.argv[sys.argv.index("--jobs") + 1]) if "--jobs" in sys.argv else 1
+    figures = [(directory, f["kind"], f["subject"], DPI) for f in read(directory, "figures")]
+    for _, kind, _, _ in figures:
+        if kind not in DRAWERS:
             sys.exit(f"plot.py: figures.csv: no drawing for kind '{kind}'")
-        drawers[kind](directory, figure["subject"], styles)
+    if jobs > 1 and len(figures) > 1:
+        # the figures are independent (each reads CSVs and writes its own PNG): drawn by forked workers, one
+        # figure at a time each; a worker's exception is raised here
+        with multiprocessing.get_context("fork").Pool(min(jobs, len(figures))) as pool:
+            pool.starmap(draw, figures, chunksize=1)
+    else:
+        for figure in figures:
+            draw(*figure)
     if "--html" in sys.argv[2:]:
         html(directory)
 

@@ -76,8 +76,9 @@ int fail(const char* command, const std::exception& e, bool together) {
   return 1;
 }
 
-// the figures' list for plot.py (figures.csv), then plot.py drawing them, and with `html` report.md as index.html
-void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, bool html) {
+// the figures' list for plot.py (figures.csv), then plot.py drawing them by `jobs` processes, and with `html`
+// report.md as index.html
+void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, int jobs, bool html) {
   Table list{{"stem", "kind", "subject"}, {}};
   for (const auto& f : figures) list.rows.push_back({f.stem(), f.kind, f.subject});
   write_file_atomic(dir / "figures.csv", to_csv(list));
@@ -85,7 +86,7 @@ void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, bool 
   for (const auto& m : methods()) method_table.rows.push_back({std::string(m.name), std::string(m.order.text), std::string(m.source), std::string(m.description)});
   write_file_atomic(dir / "methods.csv", to_csv(method_table));
   const std::string python = STEPWISE_PYTHON, script = fs::path(STEPWISE_REPORT_DIR) / "plot.py", where = dir.string();
-  std::vector<std::string> args{python, script, where};
+  std::vector<std::string> args{python, script, where, "--jobs", std::to_string(jobs)};
   if (html) args.push_back("--html");
   std::string why;
   const std::optional<int> status = run_process(args, &why);
@@ -177,7 +178,7 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
     together = false;
     if (!writer) return 0;
     write_file_atomic(fs::path(out) / (name + ".md"), md);
-    draw_figures(figures, out, false);
+    draw_figures(figures, out, ctx.threads, false);
     write_provenance(out, fmt::format("study {}{}", name, quick ? " --quick" : ""), ctx, start);
   } catch (const std::exception& e) {
     return fail("study", e, together);
@@ -238,7 +239,7 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
                              : fmt::format("---\nStudies run in {:.1f} s of wall time on {} MPI ranks of {} threads (the pictures on rank 0).\n",
                                            seconds, ranks::size(), ctx.threads);
     write_file_atomic(staging / "report.md", md);
-    draw_figures(figures, staging, true);
+    draw_figures(figures, staging, ctx.threads, true);
     write_provenance(staging, quick ? "report --quick" : "report", ctx, started);
     write_report_marker(staging);
   } catch (const std::exception& e) {
