@@ -1,5 +1,6 @@
 #include "pendulum.hpp"
 
+#include "solvers/capabilities/inline_rhs.hpp"
 #include "solvers/capabilities/second_order.hpp"
 
 #include <gsl/gsl_errno.h>
@@ -52,11 +53,10 @@ class Pendulum final : public Model {
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"theta", "omega"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector2d(theta0_, omega0_); }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, inline_rhs_); }
 
-  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
-    dydt[0] = y[1];
-    dydt[1] = -w_ * w_ * (small_angle_ ? y[0] : std::sin(y[0]));
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    std::get<PendulumRhs>(inline_rhs_.f)(t, y.data(), dydt.data());
   }
 
   bool has_jacobian() const override { return true; }
@@ -95,6 +95,7 @@ class Pendulum final : public Model {
   double quarter_ = 0; // K(k): a quarter period in units of 1/w
   double u0_ = 0;      // phase of the initial state in units of 1/w
   SecondOrderView second_order_{1};  // y = (x, v)
+  InlineRhs inline_rhs_{PendulumRhs{w_ * w_, small_angle_}};  // f, for the steppers that call it inline
 };
 
 }  // namespace

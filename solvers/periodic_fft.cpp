@@ -33,8 +33,12 @@ struct PlanCache {
   }
 };
 
-// FFTW_MEASURE times candidate algorithms on scratch arrays; FFTW_UNALIGNED lets the plans run on any
-// caller's arrays (std::vector's are 16-byte aligned, FFTW's own 32 or 64)
+// FFTW_ESTIMATE: the plan chosen by FFTW's model, the same in every process. FFTW_MEASURE chose by timing
+// candidates, and under a different load a different algorithm, which rounds differently: a 2-rank report's
+// fluid viscosity CSV differed from one process's in the 15th digit (mpi_ranks). Measured, ESTIMATE's plans
+// cost 1.3x MEASURE's at 256^2 (a forward transform 0.194 -> 0.254 ms), the fluid's f 1.25x, a Stable Fluids
+// step 1.06x. FFTW_UNALIGNED lets the plans run on any caller's arrays (std::vector's are 16-byte aligned,
+// FFTW's own 32 or 64)
 const Plans& plans_for(int n) {
   static std::mutex lock;
   static PlanCache cache;
@@ -45,8 +49,7 @@ const Plans& plans_for(int n) {
     const int half = n / 2 + 1;
     std::unique_ptr<double, decltype(&fftw_free)> grid(fftw_alloc_real(static_cast<size_t>(n) * n), fftw_free);
     std::unique_ptr<fftw_complex, decltype(&fftw_free)> modes(fftw_alloc_complex(static_cast<size_t>(n) * half), fftw_free);
-    // measuring a plan costs seconds beyond 512^2: there FFTW's estimate
-    const unsigned flags = (n <= 512 ? FFTW_MEASURE : FFTW_ESTIMATE) | FFTW_UNALIGNED;
+    const unsigned flags = FFTW_ESTIMATE | FFTW_UNALIGNED;
     it->second.forward = fftw_plan_dft_r2c_2d(n, n, grid.get(), modes.get(), flags);
     it->second.inverse = fftw_plan_dft_c2r_2d(n, n, modes.get(), grid.get(), flags);
     if (!it->second.forward || !it->second.inverse) {

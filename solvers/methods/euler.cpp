@@ -1,18 +1,27 @@
 // euler: explicit Euler, the first method the seeds teach.
-#include "solvers/fixed_step.hpp"
-#include "solvers/run_support.hpp"
+#include "solvers/inline_stepper.hpp"
 
 namespace stepwise {
 namespace {
 
-// y1 = y0 + h f(t0, y0): one call of f and one loop that also measures |y1|inf; N as in rk4.cpp
-template <int N>
+// y1 = y0 + h f(t0, y0): one call of f and one loop that also measures |y1|inf; N and F as in rk4.cpp
+template <int N, class F>
 class Euler final : public FixedStepper {
+  static constexpr bool inline_f = !std::is_void_v<F>;
+
  public:
-  explicit Euler(const CountedSystem& s) : system_(s), f_(s.size()) {}
+  explicit Euler(const CountedSystem& s, KernelOr<F> kernel = {}) : system_(s), kernel_(kernel), f_(s.size()) {}
   STEPWISE_SCALAR_STORES bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
-    system_.rhs(t, y, f_);
-    const double *y0 = y.data(), *f = f_.data();
+    std::array<double, inline_f ? N : 0> local;  // f, inline
+    const double* f = f_.data();
+    if constexpr (inline_f) {
+      ++system_.stats().rhs_evals;
+      kernel_(t, y.data(), local.data());
+      f = local.data();
+    } else {
+      system_.rhs(t, y, f_);
+    }
+    const double* y0 = y.data();
     double* y1 = y_next.data();
     RunningNorm norm;
     for (Eigen::Index i = 0; i < (N > 0 ? N : y.size()); ++i) {
@@ -25,6 +34,7 @@ class Euler final : public FixedStepper {
 
  private:
   const CountedSystem& system_;
+  [[no_unique_address]] KernelOr<F> kernel_;
   Eigen::VectorXd f_;
 };
 
@@ -38,7 +48,7 @@ void register_euler_methods(MethodTable& table) {
       .description = "explicit, fixed step",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
-      .make = fixed_steps([](const CountedSystem& system) { return make_sized<Euler>(system.size(), system); }),
+      .make = fixed_steps([](const CountedSystem& system) { return make_inline_or_sized<Euler>(system); }),
       // |1 + h lambda| <= 1 at lambda = -a + i sqrt(w^2 - a^2), |lambda| = w: h < 2 a / w^2, none at all undamped
       .stability = {.R = [](std::complex<double> z) { return 1.0 + z; },
                     .oscillator_dt = [](double omega, double damping) { return 2 * damping / (omega * omega); }},

@@ -1,6 +1,5 @@
 // symplectic-euler: semi-implicit Euler on y = (x, v), the velocity first.
-#include "solvers/fixed_step.hpp"
-#include "solvers/run_support.hpp"
+#include "solvers/inline_stepper.hpp"
 #include "solvers/stability.hpp"
 #include "solvers/wave_step.hpp"
 
@@ -9,6 +8,12 @@
 
 namespace stepwise {
 namespace {
+
+// the method at one coordinate: v1 = v0 + h a, then x1 = x0 + h v1
+inline void kick_drift(double h, double x0, double v0, double a, double& x1, double& v1) {
+  v1 = v0 + h * a;
+  x1 = x0 + h * v1;
+}
 
 // semi-implicit (symplectic) Euler on y = (x, v): v1 = v0 + h a(t0, x0, v0), x1 = x0 + h v1.
 // Memory-bound on large systems (a particle system): after the acceleration, one pass over the state does
@@ -59,11 +64,7 @@ class SymplecticEuler final : public FixedStepper {
 #endif
     STEPWISE_CLONES void update(double h, const double* __restrict x0, const double* __restrict v0, const double* __restrict a,
                 double* __restrict x1, double* __restrict v1, Eigen::Index n) {
-      for (Eigen::Index i = 0; i < n; ++i) {
-        const double v = v0[i] + h * a[i];
-        v1[i] = v;
-        x1[i] = x0[i] + h * v;
-      }
+      for (Eigen::Index i = 0; i < n; ++i) kick_drift(h, x0[i], v0[i], a[i], x1[i], v1[i]);
       // x - x is 0 for a finite entry and NaN otherwise, so the sums are 0 exactly when all are finite
       // (Eigen vectorises sums and plain maxima; its allFinite() and NaN-propagating max measured slower)
       const Eigen::Map<const Eigen::ArrayXd> x(x1, n), v(v1, n);
@@ -78,6 +79,37 @@ class SymplecticEuler final : public FixedStepper {
   Eigen::VectorXd a_, f_;  // f_: f where the model has no acceleration of its own
 };
 
+// the same on the model's f called inline (solvers/inline_stepper.hpp), a = its second half: on a small state
+// (the pendulum) the whole step in registers
+template <int N, class F>
+class InlineSymplecticEuler final : public FixedStepper {
+ public:
+  InlineSymplecticEuler(const CountedSystem& s, F kernel) : system_(s), kernel_(kernel) {}
+  STEPWISE_SCALAR_STORES bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
+    constexpr int n = N / 2;
+    std::array<double, N> f;
+    ++system_.stats().rhs_evals;
+    kernel_(t, y.data(), f.data());
+    const double* y0 = y.data();
+    double* y1 = y_next.data();
+    RunningNorm norm;
+    for (int i = 0; i < n; ++i) {
+      kick_drift(h, y0[i], y0[n + i], f[n + i], y1[i], y1[n + i]);
+      norm.add(y1[i]);
+      norm.add(y1[n + i]);
+    }
+    norm_ = norm.value();
+    return true;
+  }
+
+ private:
+  const CountedSystem& system_;
+  F kernel_;
+};
+
+template <int N, class F>
+using Stepper = std::conditional_t<std::is_void_v<F>, SymplecticEuler, InlineSymplecticEuler<N, F>>;
+
 }  // namespace
 
 void register_symplectic_euler_methods(MethodTable& table) {
@@ -89,7 +121,7 @@ void register_symplectic_euler_methods(MethodTable& table) {
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
       .needs = needs_second_order,
-      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<SymplecticEuler>(system); }),
+      .make = fixed_steps([](const CountedSystem& system) { return make_inline_or_sized<Stepper>(system); }),
       .stability = {.oscillator_dt = symplectic_euler_oscillator_dt, .wave_dt = symplectic_euler_wave_dt},
   });
 }
