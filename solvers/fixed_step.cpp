@@ -40,9 +40,21 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
     stepper->reset();
     return stepper->step(t, s * h, y, ys, failure);
   };
+  // a run with none of these may have the stepper take its full steps itself (FixedStepper::plain_steps)
+  const bool plain = !watch_events && !method_events && !projects;
   for (const double target : t_out) {
     while (t < target) {
-      double t_next = (target - (t + dt) <= snap) ? target : t + dt;
+      if (plain) {
+        bool diverged = false;
+        const long taken = stepper->plain_steps(t, dt, target, snap, bound, y, y_next, diverged);
+        result.stats.steps += taken;
+        if (diverged) [[unlikely]] {
+          mark_diverged(result, t + dt);
+          break;
+        }
+        if (taken > 0) continue;
+      }
+      double t_next = step_end(t, dt, target, snap);
       h = t_next - t;
       if (!stepper->step(t, h, y, y_next, failure)) [[unlikely]] {
         mark_failed(result, t, failure);

@@ -37,6 +37,12 @@ class FixedStepper {
   // |y|inf of a state this stepper steps: the whole state's, or for a stepper on one rank's part of it
   // (solvers/distributed_wave.hpp) the whole grid's over the ranks, so they agree on the divergence bound
   virtual double norm(const Eigen::VectorXd& y) const { return y.lpNorm<Eigen::Infinity>(); }
+  // the loop's full steps taken by the stepper itself, without a virtual call a step (PlainStepping below):
+  // asked only of a run without events, projection or the method's own events. 0: not offered
+  virtual long plain_steps(double& /*t*/, double /*dt*/, double /*target*/, double /*snap*/, double /*bound*/, Eigen::VectorXd& /*y*/,
+                           Eigen::VectorXd& /*y_next*/, bool& /*diverged*/) {
+    return 0;
+  }
 
  protected:
   double norm_ = -1;  // step()'s measure of |y_next|inf; negative: not measured
@@ -73,6 +79,37 @@ class RunningNorm {
 
  private:
   double largest_ = 0, nonfinite_ = 0;
+};
+
+// the end of a step from t: t + dt, or the output time when that is within `snap` of it (no sliver left)
+inline double step_end(double t, double dt, double target, double snap) { return (target - (t + dt) <= snap) ? target : t + dt; }
+
+// the base of a stepper that never fails and measures its norm on every step (last_norm), Self: that
+// stepper, final: it takes the loop's full steps itself, step() called directly (inline), as the loop takes
+// them (h = (t + dt) - t, y and y_next swapped) while a step ends short of `target`; the landing step is the
+// loop's. Returns the steps taken, t at the last one's end; after a step past `bound`, `diverged`, that step
+// counted, t at its start and y_next its end.
+template <class Self>
+class PlainStepping : public FixedStepper {
+ public:
+  // (with the steppers' own optimisation options, so that their step() can be inlined here)
+  STEPWISE_SCALAR_STORES long plain_steps(double& t, double dt, double target, double snap, double bound, Eigen::VectorXd& y,
+                                          Eigen::VectorXd& y_next, bool& diverged) final {
+    Self& self = static_cast<Self&>(*this);
+    long taken = 0;
+    std::string unused;
+    for (double t_next = t + dt; step_end(t, dt, target, snap) != target; t_next = t + dt) {
+      self.step(t, t_next - t, y, y_next, unused);
+      ++taken;
+      if (!(norm_ <= bound)) [[unlikely]] {
+        diverged = true;
+        return taken;
+      }
+      t = t_next;
+      y.swap(y_next);
+    }
+    return taken;
+  }
 };
 
 using FixedStepperFactory = std::function<std::unique_ptr<FixedStepper>(const CountedSystem& system)>;

@@ -6,7 +6,9 @@ namespace {
 
 // y1 = y0 + h f(t0, y0): one call of f and one loop that also measures |y1|inf; N and F as in rk4.cpp
 template <int N, class F>
-class Euler final : public FixedStepper {
+class Euler final : public PlainStepping<Euler<N, F>> {
+  using FixedStepper::norm_;
+
   static constexpr bool inline_f = !std::is_void_v<F>;
 
  public:

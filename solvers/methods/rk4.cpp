@@ -11,7 +11,9 @@ namespace {
 // where known at compile time (make_sized), else 0. F: the model's f called inline, the stages then in
 // local arrays the compiler keeps in registers (solvers/inline_stepper.hpp), or void: through the system
 template <int N, class F>
-class Rk4 final : public FixedStepper {
+class Rk4 final : public PlainStepping<Rk4<N, F>> {
+  using FixedStepper::norm_;
+
   static constexpr bool inline_f = !std::is_void_v<F>;
 
  public:

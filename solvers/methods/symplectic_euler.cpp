@@ -19,7 +19,7 @@ inline void kick_drift(double h, double x0, double v0, double a, double& x1, dou
 // Memory-bound on large systems (a particle system): after the acceleration, one pass over the state does
 // both updates and the divergence norm; with a local acceleration the whole step is one pass, block by
 // block, the block's acceleration never leaving cache
-class SymplecticEuler final : public FixedStepper {
+class SymplecticEuler final : public PlainStepping<SymplecticEuler> {
  public:
   explicit SymplecticEuler(const CountedSystem& s)
       : system_(s), view_(*s.as<SecondOrderView>()), n_(view_.positions), a_(view_.local_acceleration ? std::min(block, n_) : n_) {}
@@ -82,7 +82,9 @@ class SymplecticEuler final : public FixedStepper {
 // the same on the model's f called inline (solvers/inline_stepper.hpp), a = its second half: on a small state
 // (the pendulum) the whole step in registers
 template <int N, class F>
-class InlineSymplecticEuler final : public FixedStepper {
+class InlineSymplecticEuler final : public PlainStepping<InlineSymplecticEuler<N, F>> {
+  using FixedStepper::norm_;
+
  public:
   InlineSymplecticEuler(const CountedSystem& s, F kernel) : system_(s), kernel_(kernel) {}
   STEPWISE_SCALAR_STORES bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {

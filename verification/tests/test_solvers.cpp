@@ -100,6 +100,47 @@ TEST(Solvers, AStepperCallingTheModelsFInlineTakesTheSameStepsAndCountsAsThrough
   }
 }
 
+// the model with an event that never fires (g = 1): the fixed-step loop then takes every step itself
+class WithIdleEvent final : public OdeSystem {
+ public:
+  explicit WithIdleEvent(const Model& m) : model_(m) { event_.push_back({"never", 0, [](double, const Eigen::VectorXd&) { return 1.0; }, {}}); }
+  int size() const override { return model_.size(); }
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) const override { model_.rhs(t, y, f); }
+  bool autonomous() const override { return model_.autonomous(); }
+  std::span<const Event> events() const override { return event_; }
+  const void* capability(const std::type_info& type) const override { return model_.capability(type); }
+
+ private:
+  const Model& model_;
+  std::vector<Event> event_;
+};
+
+// A run without events or projection has the stepper take its full steps itself (FixedStepper::plain_steps,
+// rk4, euler, symplectic-euler): the same steps, to the bit, as the loop takes one by one, and a blow-up at the
+// same time (inside the stepper's run: at 2 s, before the first output); output times off the step grid (0.505 s
+// at dt 0.01) so that the loop's landing steps are in it
+TEST(Solvers, TheSteppersOwnRunOfStepsIsTheLoopsStepByStep) {
+  const auto model = make_model("pendulum", {{"theta0", 2.0}});
+  const WithIdleEvent stepwise_loop(*model);
+  for (const char* method : {"rk4", "euler", "symplectic-euler"})
+    for (const double dt : {1e-2, 2.0}) {
+      // at 2 s the swing grows and the runs pass |y| = 2 |y0| (a bound lowered from 1e12 so that they cross it)
+      StepControl control = StepControl::fixed(dt);
+      if (dt == 2.0) control.blowup = 2;
+      const auto integrator = make_integrator(method, control);
+      const std::vector<double> t_out = dt == 2.0 ? std::vector{5.5, 20.0} : std::vector{0.505, 1.5, 20.0};
+      const RunResult own = integrator->integrate(*model, 0, model->initial_state(), t_out);
+      const RunResult looped = integrator->integrate(stepwise_loop, 0, model->initial_state(), t_out);
+      EXPECT_EQ(own.status, looped.status) << method << " dt " << dt;
+      EXPECT_EQ(own.t_stop, looped.t_stop) << method << " dt " << dt;
+      if (dt == 2.0) EXPECT_EQ(own.status, Status::diverged) << method;
+      EXPECT_EQ(own.stats.steps, looped.stats.steps) << method << " dt " << dt;
+      EXPECT_EQ(own.stats.rhs_evals, looped.stats.rhs_evals) << method << " dt " << dt;
+      EXPECT_EQ(own.trajectory.t, looped.trajectory.t) << method << " dt " << dt;
+      for (Eigen::Index i = 0; i < model->size(); ++i) EXPECT_EQ(own.y_stop[i], looped.y_stop[i]) << method << " dt " << dt;
+    }
+}
+
 // the flow field (x, y, sin x) offering its Jacobian as a sparse matrix, so that CVODE BDF takes its KLU path
 class SparseFlow final : public OdeSystem {
  public:
