@@ -26,6 +26,8 @@ double expected_run_ns(const Method& method, const StepControl& control, double 
   return steps * (fixed + 10 * n * stages * (implicit ? 5 : 1) + (gpu ? 1e4 : 0));
 }
 
+double expected_contact_ns(double steps, double bodies) { return steps * bodies * bodies * 3.4e3; }
+
 double expected_frame_ns(double balls, double water_points, double other_primitives) {
   return 1.2e7 + 4e3 * balls + 1e3 * water_points + 2e3 * other_primitives;
 }

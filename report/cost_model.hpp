@@ -16,6 +16,10 @@ bool solves_newton_systems(const Method& method);
 // iterations; ~10 us more for a GPU pass's round trip through OpenGL)
 double expected_run_ns(const Method& method, const StepControl& control, double t_end, double time_scale, double n);
 
+// nanoseconds of a contact method's (sequential impulses') collision work over `steps` steps among `bodies`
+// bodies: every pair tested and resolved each step, ~3.4 us a pair (stack-collapse: 16 bodies, 0.87 ms a step)
+double expected_contact_ns(double steps, double bodies);
+
 // nanoseconds to draw and write one frame of a picture (render/): a fixed part (the read-back and the PNG,
 // ~12 ms at 640 x 360: the full report's cheapest scenes took ~0.8 s for their 60 frames) and the scene's
 // primitives, measured per kind on llvmpipe (the report's pictures table: 100 000 balls 430 ms a frame, a 128^2

@@ -7,6 +7,7 @@
 #include "run/csv.hpp"
 #include "run/prepare.hpp"
 #include "run/render_scene.hpp"
+#include "solvers/capabilities/contact_bodies.hpp"
 #include "solvers/method_table.hpp"
 
 #include <fmt/format.h>
@@ -84,8 +85,9 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
     run.scene_file = (scenes_dir / (scene + ".toml")).string();
     if (const QuickChange* change = quick_change(scene, ctx.quick)) run.sets = change->sets;
     const PreparedRun p = prepare_run(run);
-    double balls = 0, water = 0, other = 0;
+    double balls = 0, water = 0, other = 0, shapes_bodies = 0;
     if (const auto shapes = p.model->shapes(p.model->initial_state())) {
+      shapes_bodies = static_cast<double>(shapes->bodies.size() + shapes->balls.size());
       balls = static_cast<double>(shapes->balls.size());
       if (shapes->water) water = static_cast<double>(shapes->water->points) * shapes->water->points;
       if (shapes->field) water += static_cast<double>(shapes->field->points) * shapes->field->points;
@@ -93,9 +95,14 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
       for (const auto& sheet : shapes->surfaces) other += static_cast<double>(sheet.faces.rows());
     }
     // an adaptive run's steps from a time scale of a thousandth of the run (the scenes do not say theirs); a
-    // scene's fixed part ~1 s (its GL context and the set-up of its run and its animation: the quick report's
-    // cheapest scenes took ~1 s for 16 frames; it draws 12 since)
-    costs.push_back(1e9 + expected_run_ns(*find_method(p.method), p.control, p.t_end, p.t_end / 1000, p.model->size()) +
+    // scene's fixed part ~0.4 s (its GL context and the set-up of its run and its animation: the quick report's
+    // cheapest scenes took 0.44-0.47 s as `stepwise render`, a process's start included); a contact scene's
+    // collision work by its bodies
+    const Method& method = *find_method(p.method);
+    const double contact = method.needs.type == needs_contact_bodies.type && p.control.dt && shapes_bodies > 0
+                               ? expected_contact_ns(p.t_end / *p.control.dt, shapes_bodies)
+                               : 0;
+    costs.push_back(0.4e9 + expected_run_ns(method, p.control, p.t_end, p.t_end / 1000, p.model->size()) + contact +
                     frames * expected_frame_ns(balls, water, other));
   }
   const auto drawn = ctx.sweep<Drawn>(scenes, [&](size_t i) {

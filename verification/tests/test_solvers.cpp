@@ -133,7 +133,9 @@ TEST(Solvers, TheSteppersOwnRunOfStepsIsTheLoopsStepByStep) {
       const RunResult looped = integrator->integrate(stepwise_loop, 0, model->initial_state(), t_out);
       EXPECT_EQ(own.status, looped.status) << method << " dt " << dt;
       EXPECT_EQ(own.t_stop, looped.t_stop) << method << " dt " << dt;
-      if (dt == 2.0) EXPECT_EQ(own.status, Status::diverged) << method;
+      if (dt == 2.0) {
+        EXPECT_EQ(own.status, Status::diverged) << method;
+      }
       EXPECT_EQ(own.stats.steps, looped.stats.steps) << method << " dt " << dt;
       EXPECT_EQ(own.stats.rhs_evals, looped.stats.rhs_evals) << method << " dt " << dt;
       EXPECT_EQ(own.trajectory.t, looped.trajectory.t) << method << " dt " << dt;
