@@ -97,9 +97,9 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
     // an adaptive run's steps from a time scale of a tenth of the run (the scenes do not say theirs; the one
     // adaptive scene, bouncing-ball, cvode-bdf at rtol 1e-10: 5 382 steps over 5 s, which this says as 4 600: a
     // thousandth, as before, said 460 000, and its 1.6 s against a true 8 ms, the first point done, scaled every
-    // later estimate down 5x); a scene's fixed part ~0.4 s (its GL context and the set-up of its run and its animation: the quick report's
-    // cheapest scenes took 0.44-0.47 s as `stepwise render`, a process's start included); a contact scene's
-    // collision work by its bodies
+    // later estimate down 5x); a scene's fixed part ~0.4 s (its GL context and the set-up of its run and its
+    // animation: the quick report's cheapest scenes took 0.44-0.47 s as `stepwise render`, a process's start
+    // included); a contact scene's collision work by its bodies
     const Method& method = *find_method(p.method);
     const double contact = method.needs.type == needs_contact_bodies.type && p.control.dt && shapes_bodies > 0
                                ? expected_contact_ns(p.t_end / *p.control.dt, shapes_bodies)

@@ -98,7 +98,8 @@ class PlainStepping : public FixedStepper {
     Self& self = static_cast<Self&>(*this);
     long taken = 0;
     std::string unused;
-    for (double t_next = t + dt; step_end(t, dt, target, snap) != target; t_next = t + dt) {
+    while (step_end(t, dt, target, snap) != target) {
+      const double t_next = t + dt;
       self.step(t, t_next - t, y, y_next, unused);
       ++taken;
       if (!(norm_ <= bound)) [[unlikely]] {
