@@ -1,6 +1,6 @@
 // tsitouras54, verner98: embedded Runge-Kutta pairs of our own, hand-written on the fixed-step path's terms
 // (plain loops, nothing allocated, f called through the counted system and nothing else per stage), with a
-// PI step-size controller and, where the pair has one, dense output for output times and events.
+// PI step-size controller and dense output for output times and events.
 //
 // The stage sums are unrolled at compile time over the tableau's nonzero coefficients (a tableau is a type,
 // solvers/tableaus/), so a 16-stage Verner step does only the multiplications its coefficients need.
@@ -8,6 +8,7 @@
 #include "solvers/fixed_step.hpp"
 #include "solvers/run_support.hpp"
 #include "solvers/step_controller.hpp"
+#include "solvers/tableaus/dense_weight.hpp"
 #include "solvers/tableaus/tsitouras54.hpp"
 #include "solvers/tableaus/verner98.hpp"
 
@@ -21,7 +22,7 @@ namespace {
 template <class T, int N>
 class Stages {
  public:
-  explicit Stages(const CountedSystem& s) : system_(s), n_(s.size()), k_(T::stages * n_), tmp_(s.size()) {}
+  explicit Stages(const CountedSystem& s) : system_(s), n_(s.size()), k_(T::dense_stages * n_), tmp_(s.size()) {}
 
   // k_0 = f(t, y0) unless first-same-as-last left it from the previous step (reuse_first)
   STEPWISE_SCALAR_STORES void compute(double t, double h, const double* y0, bool reuse_first) {
@@ -46,17 +47,19 @@ class Stages {
     return std::isfinite(norm.value()) ? worst : std::numeric_limits<double>::infinity();
   }
 
-  // y(t0 + theta h) from the last step's stages (T::dense_degree > 0)
+  // the interpolant's own stages, after the step's (where T::dense_stages > T::stages): k_i = f(t0 + c_i h,
+  // y0 + h sum_j a_ij k_j) over the step's stages and the ones before it
+  void extend(double t, double h, const double* y0) {
+    [&]<int... I>(std::integer_sequence<int, I...>) { (stage<T::stages + I>(t, h, y0), ...); }(std::make_integer_sequence<int, T::dense_stages - T::stages>{});
+  }
+
+  // y(t0 + theta h) from the last step's stages, the interpolant's own included (extend)
   void interpolate(double theta, double h, const double* y0, double* out) const {
-    std::array<double, T::stages> w{};
-    for (int s = 0; s < T::stages; ++s) {
-      double p = 0;
-      for (int d = T::dense_degree - 1; d >= 0; --d) p = (p + T::r[s][d]) * theta;
-      w[static_cast<size_t>(s)] = p;
-    }
+    std::array<double, T::dense_stages> w{};
+    for (int s = 0; s < T::dense_stages; ++s) w[static_cast<size_t>(s)] = tableau::dense_weight<T>(s, theta);
     for (Eigen::Index i = 0; i < size(); ++i) {
       double sum = 0;
-      for (int s = 0; s < T::stages; ++s) sum += w[static_cast<size_t>(s)] * k(s)[i];
+      for (int s = 0; s < T::dense_stages; ++s) sum += w[static_cast<size_t>(s)] * k(s)[i];
       out[i] = y0[i] + h * sum;
     }
   }
@@ -130,8 +133,7 @@ struct FixedPair {
   };
 };
 
-// the pair with its error estimate, the PI controller of step_controller.hpp and dense output where the
-// tableau has it
+// the pair with its error estimate, the PI controller of step_controller.hpp and dense output
 template <class T>
 struct AdaptivePair {
   template <int N>
@@ -144,8 +146,9 @@ struct AdaptivePair {
       for (;;) {
         const bool clamped = t + h >= t_limit;
         const double dt = clamped ? t_limit - t : h;
-        stages_.compute(t, dt, y.data(), T::fsal && have_first_);
-        have_first_ = false;
+        stages_.compute(t, dt, y.data(), have_first_);
+        have_first_ = true;  // a retry from the same (t, y) reuses k_0
+        carried_ = extended_ = false;
         const double err = stages_.finish(dt, y.data(), y1_.data(), rtol_, atol_);
         if (err <= 1) {
           last_t_ = t;
@@ -154,8 +157,9 @@ struct AdaptivePair {
           y.swap(y1_);  // y1_ keeps the step's start, for dense output
           if constexpr (T::fsal) {
             stages_.carry_last();
-            have_first_ = true;
             carried_ = true;
+          } else {
+            have_first_ = false;
           }
           const double next = dt * controller_.accepted(err);
           h = clamped ? std::max(h, next) : next;
@@ -170,48 +174,55 @@ struct AdaptivePair {
       }
     }
 
-    bool dense() const override { return T::dense_degree > 0; }
+    bool dense() const override { return true; }
     void interpolate(double t, Eigen::VectorXd& out) override {
       out.resize(y1_.size());
-      if (carried_) uncarry();
+      ready_interpolant();
       stages_.interpolate((t - last_t_) / last_h_, last_h_, y1_.data(), out.data());
     }
 
     bool restep(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_out) override {
-      // within the last accepted step from its start: the interpolant, where the pair has one
-      if constexpr (T::dense_degree > 0) {
-        if (t == last_t_ && h <= last_h_ && y == y1_) {
-          y_out.resize(y.size());
-          if (carried_) uncarry();
-          stages_.interpolate(h / last_h_, last_h_, y1_.data(), y_out.data());
-          return true;
-        }
+      // within the last accepted step from its start: the interpolant
+      if (t == last_t_ && h <= last_h_ && y == y1_) {
+        y_out.resize(y.size());
+        ready_interpolant();
+        stages_.interpolate(h / last_h_, last_h_, y1_.data(), y_out.data());
+        return true;
       }
-      have_first_ = carried_ = false;
+      have_first_ = carried_ = extended_ = false;
       y_out.resize(y.size());
       stages_.compute(t, h, y.data(), false);
       return std::isfinite(stages_.finish(h, y.data(), y_out.data(), rtol_, atol_));
     }
 
+    // the state changed (an event): k_0 is no longer f there; the last step's stages stay for its interpolant
     void reset() override {
-      have_first_ = carried_ = false;
+      have_first_ = false;
       controller_.reset();
     }
 
    private:
-    // the last step's first stage back in place for its interpolant (carry_last moved it); the next step
-    // then computes its first stage afresh
-    void uncarry() {
-      stages_.carry_last();
-      carried_ = have_first_ = false;
+    // the last step's stages as its interpolant wants them: the first back in place (carry_last moved it;
+    // the next step then computes its first stage afresh), and the interpolant's own stages, computed once
+    // a step and only for a step that has an output time or an event inside it
+    void ready_interpolant() {
+      if (carried_) {
+        stages_.carry_last();
+        carried_ = have_first_ = false;
+      }
+      if constexpr (T::dense_stages > T::stages) {
+        if (!extended_) stages_.extend(last_t_, last_h_, y1_.data());
+        extended_ = true;
+      }
     }
 
     Stages<T, N> stages_;
     double rtol_, atol_;
     Eigen::VectorXd y1_;
     std::string name_;
-    bool have_first_ = false;  // k_0 holds f at the current (t, y) (first same as last)
-    bool carried_ = false;     // the last step's stages were rotated for that
+    bool have_first_ = false;  // k_0 holds f at the current (t, y): a rejected try's, or first same as last
+    bool carried_ = false;     // the last step's first and last stages trade places for the latter
+    bool extended_ = false;    // the interpolant's own stages are the last step's
     PiStepController controller_{T::estimate_order + 1};
     double last_t_ = 0, last_h_ = 0;
   };
@@ -243,7 +254,7 @@ void register_embedded_pair_methods(MethodTable& table) {
   table.add({.name = "verner98",
              .family = "embedded-pairs",
              .source = "hand-written",
-             .description = "Verner's most efficient 9(8), 16 stages, PI control",
+             .description = "Verner's most efficient 9(8), 16 stages, PI control, 8th-order dense output (5 more stages)",
              .order = {9, 9, "9"},
              .stepping = Stepping::fixed_or_adaptive,
              .make = pair_integrator<tableau::Verner98>()});

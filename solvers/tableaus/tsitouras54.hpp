@@ -11,6 +11,7 @@ struct Tsitouras54 {
   static constexpr int order = 5;           // the solution advanced
   static constexpr int estimate_order = 4;  // the embedded one: the error estimate is O(h^5)
   static constexpr bool fsal = true;        // the last stage is f at the step's end
+  static constexpr int dense_stages = 7;    // the interpolant takes the step's stages alone
   static constexpr double c[stages] = {0, 0.161, 0.327, 0.9, 0.9800255409045097, 1, 1};
   static constexpr double a[stages][stages] = {
       {},
@@ -24,16 +25,18 @@ struct Tsitouras54 {
   static constexpr double b[stages] = {0.09646076681806523, 0.01, 0.4798896504144996, 1.379008574103742, -3.290069515436081, 2.324710524099774, 0};
   static constexpr double e[stages] = {-0.00178001105222577714, -0.0008164344596567469, 0.007880878010261995, -0.1447110071732629,
                                        0.5823571654525552,      -0.45808210592918697,   0.015151515151515152};
-  // dense output: b_i(theta) = r[i][0] theta + r[i][1] theta^2 + r[i][2] theta^3 + r[i][3] theta^4
+  // dense output: b_i(theta) = sum_k w[i][k] (theta - 1/2)^k, degree 4: the published weights in powers of
+  // theta, re-expanded about the step's middle in exact rational arithmetic
   static constexpr int dense_degree = 4;
-  static constexpr double r[stages][dense_degree] = {
-      {1.0, -2.763706197274826, 2.9132554618219126, -1.0530884977290216},
-      {0, 0.13169999999999998, -0.2234, 0.1017},
-      {0, 3.9302962368947516, -5.941033872131505, 2.490627285651253},
-      {0, -12.411077166933676, 30.33818863028232, -16.548102889244902},
-      {0, 37.50931341651104, -88.1789048947664, 47.37952196281928},
-      {0, -27.896526289197286, 65.09189467479366, -34.87065786149661},
-      {0, 1.5, -4, 2.5},
+  static constexpr int dense_order = 4;  // the interpolant's: its local error is O(h^5)
+  static constexpr double w[dense_stages][dense_degree + 1] = {
+      {0.107412352300968725, -0.10530884977290235, 0.0265442488645105, 0.8070784663638694, -1.0530884977290216},
+      {0.011356249999999995, 0.01499999999999998, -0.05085000000000002, -0.02, 0.1017},
+      {0.3956090305604530875, 0.71983447562174935, -1.2453136428256264, -0.959779300828999, 2.490627285651253},
+      {-0.344752143525935375, 2.068512861155613, 8.274051444622451, -2.758017148207484, -16.548102889244902},
+      {1.316185364958165, -4.93510427315412, -23.68976098140964, 6.58013903087216, 47.37952196281928},
+      {-1.017060854293652125, 3.487065786149654, 17.435328930748289, -4.64942104819956, -34.87065786149661},
+      {0.03125, -0.25, -0.75, 1, 2.5},
   };
 };
 
