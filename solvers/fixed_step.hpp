@@ -4,6 +4,7 @@
 #include "method.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -89,6 +90,12 @@ inline double step_end(double t, double dt, double target, double snap) { return
 // them (h = (t + dt) - t, y and y_next swapped) while a step ends short of `target`; the landing step is the
 // loop's. Returns the steps taken, t at the last one's end; after a step past `bound`, `diverged`, that step
 // counted, t at its start and y_next its end.
+//
+// A stepper on the model's f inline with a state of known size (Self::size > 0) offers advance(t, h, y0, y1):
+// the step on raw states, returning |y1|inf, f's calls not counted (counted(steps) counts them). The run then
+// keeps the state in local arrays, which the compiler keeps in registers, instead of the two vectors' memory:
+// no store and reload of the state, and of their data pointers after a swap, on the chain from one step's f to
+// the next's (euler on the pendulum: 1.36-1.41 -> 1.17-1.29 times odeint's std::array loop, docs/performance.md)
 template <class Self>
 class PlainStepping : public FixedStepper {
  public:
@@ -97,17 +104,39 @@ class PlainStepping : public FixedStepper {
                                           Eigen::VectorXd& y_next, bool& diverged) final {
     Self& self = static_cast<Self&>(*this);
     long taken = 0;
-    std::string unused;
-    while (step_end(t, dt, target, snap) != target) {
-      const double t_next = t + dt;
-      self.step(t, t_next - t, y, y_next, unused);
-      ++taken;
-      if (!(norm_ <= bound)) [[unlikely]] {
-        diverged = true;
-        return taken;
+    if constexpr (Self::size > 0) {
+      std::array<double, Self::size> y0, y1;
+      std::copy_n(y.data(), Self::size, y0.begin());
+      double t0 = t;
+      while (step_end(t0, dt, target, snap) != target) {
+        const double t1 = t0 + dt;
+        const double norm = self.advance(t0, t1 - t0, y0.data(), y1.data());
+        ++taken;
+        if (!(norm <= bound)) [[unlikely]] {
+          diverged = true;
+          norm_ = norm;
+          std::copy_n(y1.begin(), Self::size, y_next.data());
+          break;
+        }
+        t0 = t1;
+        y0 = y1;
       }
-      t = t_next;
-      y.swap(y_next);
+      t = t0;
+      std::copy_n(y0.begin(), Self::size, y.data());
+      self.counted(taken);
+    } else {
+      std::string unused;
+      while (step_end(t, dt, target, snap) != target) {
+        const double t_next = t + dt;
+        self.step(t, t_next - t, y, y_next, unused);
+        ++taken;
+        if (!(norm_ <= bound)) [[unlikely]] {
+          diverged = true;
+          return taken;
+        }
+        t = t_next;
+        y.swap(y_next);
+      }
     }
     return taken;
   }

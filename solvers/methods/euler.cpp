@@ -12,29 +12,39 @@ class Euler final : public PlainStepping<Euler<N, F>> {
   static constexpr bool inline_f = !std::is_void_v<F>;
 
  public:
+  static constexpr int size = inline_f ? N : 0;  // PlainStepping: advance() offered
+
   explicit Euler(const CountedSystem& s, KernelOr<F> kernel = {}) : system_(s), kernel_(kernel), f_(s.size()) {}
   STEPWISE_SCALAR_STORES bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
-    std::array<double, inline_f ? N : 0> local;  // f, inline
-    const double* f = f_.data();
     if constexpr (inline_f) {
-      ++system_.stats().rhs_evals;
-      kernel_(t, y.data(), local.data());
-      f = local.data();
+      counted(1);
+      norm_ = advance(t, h, y.data(), y_next.data());
     } else {
       system_.rhs(t, y, f_);
+      norm_ = update(h, y.data(), f_.data(), y_next.data(), y.size());
     }
-    const double* y0 = y.data();
-    double* y1 = y_next.data();
+    return true;
+  }
+  double advance(double t, double h, const double* y0, double* y1) const
+    requires inline_f
+  {
+    std::array<double, N> f;
+    kernel_(t, y0, f.data());
+    return update(h, y0, f.data(), y1, N);
+  }
+  void counted(long steps) const { system_.stats().rhs_evals += steps; }
+
+ private:
+  // y1 = y0 + h f; |y1|inf
+  static double update(double h, const double* y0, const double* f, double* y1, Eigen::Index n) {
     RunningNorm norm;
-    for (Eigen::Index i = 0; i < (N > 0 ? N : y.size()); ++i) {
+    for (Eigen::Index i = 0; i < (N > 0 ? N : n); ++i) {
       y1[i] = y0[i] + h * f[i];
       norm.add(y1[i]);
     }
-    norm_ = norm.value();
-    return true;
+    return norm.value();
   }
 
- private:
   const CountedSystem& system_;
   [[no_unique_address]] KernelOr<F> kernel_;
   Eigen::VectorXd f_;

@@ -17,42 +17,53 @@ class Rk4 final : public PlainStepping<Rk4<N, F>> {
   static constexpr bool inline_f = !std::is_void_v<F>;
 
  public:
+  static constexpr int size = inline_f ? N : 0;  // PlainStepping: advance() offered
+
   explicit Rk4(const CountedSystem& s, KernelOr<F> f = {}) : system_(s), f_(f), k1_(s.size()), k2_(s.size()), k3_(s.size()), k4_(s.size()), tmp_(s.size()) {}
   STEPWISE_SCALAR_STORES bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
-    const Eigen::Index n = N > 0 ? N : y.size();
-    std::array<std::array<double, inline_f ? N : 0>, 5> local;  // k1..k4 and the stage's argument, inline
-    const double* y0 = y.data();
-    double* k[4];
-    double* tmp;
     if constexpr (inline_f) {
-      for (int i = 0; i < 4; ++i) k[i] = local[i].data();
-      tmp = local[4].data();
-      system_.stats().rhs_evals += 4;
+      counted(1);
+      norm_ = advance(t, h, y.data(), y_next.data());
     } else {
-      k[0] = k1_.data(), k[1] = k2_.data(), k[2] = k3_.data(), k[3] = k4_.data();
-      tmp = tmp_.data();
+      double* k[4] = {k1_.data(), k2_.data(), k3_.data(), k4_.data()};
+      const auto f = [&](int i, double ts, const double*, double*) {
+        if (i == 0) system_.rhs(ts, y, k1_);
+        else system_.rhs(ts, stage_, i == 1 ? k2_ : i == 2 ? k3_ : k4_);
+      };
+      norm_ = stages(f, t, h, y.data(), k, tmp_.data(), y_next.data(), y.size());
     }
-    // f at stage i (0: at y, else at tmp) into k[i]
-    const auto f = [&](int i, double ts) {
-      if constexpr (inline_f) f_(ts, i == 0 ? y0 : tmp, k[i]);
-      else if (i == 0) system_.rhs(ts, y, k1_);
-      else system_.rhs(ts, stage_, i == 1 ? k2_ : i == 2 ? k3_ : k4_);
-    };
-    f(0, t);
+    return true;
+  }
+  // the stages k1..k4 and the stage's argument in local arrays the compiler keeps in registers
+  STEPWISE_SCALAR_STORES double advance(double t, double h, const double* y0, double* y1) const
+    requires inline_f
+  {
+    std::array<std::array<double, N>, 5> local;
+    double* k[4] = {local[0].data(), local[1].data(), local[2].data(), local[3].data()};
+    const auto f = [&](int, double ts, const double* at, double* out) { f_(ts, at, out); };
+    return stages(f, t, h, y0, k, local[4].data(), y1, N);
+  }
+  void counted(long steps) const { system_.stats().rhs_evals += 4 * steps; }
+
+ private:
+  // the method, once for both paths: f(i, ts, at, k[i]) puts f(ts, at) into k[i] (at: y0, then tmp); |y1|inf
+  template <class CallF>
+  STEPWISE_SCALAR_STORES static double stages(const CallF& f, double t, double h, const double* y0, double* const* k, double* tmp, double* y1,
+                                              Eigen::Index size) {
+    const Eigen::Index n = N > 0 ? N : size;
+    f(0, t, y0, k[0]);
     for (Eigen::Index i = 0; i < n; ++i) tmp[i] = y0[i] + (h / 2) * k[0][i];
-    f(1, t + h / 2);
+    f(1, t + h / 2, tmp, k[1]);
     for (Eigen::Index i = 0; i < n; ++i) tmp[i] = y0[i] + (h / 2) * k[1][i];
-    f(2, t + h / 2);
+    f(2, t + h / 2, tmp, k[2]);
     for (Eigen::Index i = 0; i < n; ++i) tmp[i] = y0[i] + h * k[2][i];
-    f(3, t + h);
-    double* y1 = y_next.data();
+    f(3, t + h, tmp, k[3]);
     RunningNorm norm;
     for (Eigen::Index i = 0; i < n; ++i) {
       y1[i] = y0[i] + (h / 6) * (k[0][i] + 2 * k[1][i] + 2 * k[2][i] + k[3][i]);
       norm.add(y1[i]);
     }
-    norm_ = norm.value();
-    return true;
+    return norm.value();
   }
 
  private:

@@ -21,6 +21,8 @@ inline void kick_drift(double h, double x0, double v0, double a, double& x1, dou
 // block, the block's acceleration never leaving cache
 class SymplecticEuler final : public PlainStepping<SymplecticEuler> {
  public:
+  static constexpr int size = 0;  // PlainStepping: no advance(), the state of a run-time size
+
   explicit SymplecticEuler(const CountedSystem& s)
       : system_(s), view_(*s.as<SecondOrderView>()), n_(view_.positions), a_(view_.local_acceleration ? std::min(block, n_) : n_) {}
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
@@ -86,23 +88,27 @@ class InlineSymplecticEuler final : public PlainStepping<InlineSymplecticEuler<N
   using FixedStepper::norm_;
 
  public:
+  static constexpr int size = N;  // PlainStepping: advance() offered
+
   InlineSymplecticEuler(const CountedSystem& s, F kernel) : system_(s), kernel_(kernel) {}
   STEPWISE_SCALAR_STORES bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
+    counted(1);
+    norm_ = advance(t, h, y.data(), y_next.data());
+    return true;
+  }
+  double advance(double t, double h, const double* y0, double* y1) const {
     constexpr int n = N / 2;
     std::array<double, N> f;
-    ++system_.stats().rhs_evals;
-    kernel_(t, y.data(), f.data());
-    const double* y0 = y.data();
-    double* y1 = y_next.data();
+    kernel_(t, y0, f.data());
     RunningNorm norm;
     for (int i = 0; i < n; ++i) {
       kick_drift(h, y0[i], y0[n + i], f[n + i], y1[i], y1[n + i]);
       norm.add(y1[i]);
       norm.add(y1[n + i]);
     }
-    norm_ = norm.value();
-    return true;
+    return norm.value();
   }
+  void counted(long steps) const { system_.stats().rhs_evals += steps; }
 
  private:
   const CountedSystem& system_;
