@@ -23,19 +23,21 @@ struct SteppingThroughSystem {
   using type = Stepper<N, void>;
 };
 
-template <template <int, class> class Stepper>
-std::unique_ptr<FixedStepper> make_inline_or_sized(const CountedSystem& system) {
+// Stepper(system, args..., kernel) on the inline f, else Stepper(system, args...) for the system's size; Base:
+// the stepper's interface (FixedStepper, or AdaptiveStepper for the pairs)
+template <template <int, class> class Stepper, class Base = FixedStepper, class... Args>
+std::unique_ptr<Base> make_inline_or_sized(const CountedSystem& system, const Args&... args) {
   if (const auto* inline_rhs = system.as<InlineRhs>()) {
     auto made = std::visit(
-        [&](const auto& f) -> std::unique_ptr<FixedStepper> {
+        [&](const auto& f) -> std::unique_ptr<Base> {
           using F = std::decay_t<decltype(f)>;
           if (system.size() != F::size) return nullptr;
-          return std::make_unique<Stepper<F::size, F>>(system, f);
+          return std::make_unique<Stepper<F::size, F>>(system, args..., f);
         },
         inline_rhs->f);
     if (made) return made;
   }
-  return make_sized<SteppingThroughSystem<Stepper>::template type>(system.size(), system);
+  return make_sized<SteppingThroughSystem<Stepper>::template type, Base>(system.size(), system, args...);
 }
 
 }  // namespace stepwise

@@ -6,6 +6,7 @@
 // solvers/tableaus/), so a 16-stage Verner step does only the multiplications its coefficients need.
 #include "solvers/adaptive_step.hpp"
 #include "solvers/fixed_step.hpp"
+#include "solvers/inline_stepper.hpp"
 #include "solvers/run_support.hpp"
 #include "solvers/step_controller.hpp"
 #include "solvers/tableaus/dense_weight.hpp"
@@ -18,15 +19,18 @@
 namespace stepwise {
 namespace {
 
-// the stages of one explicit Runge-Kutta step of tableau T on a state of N entries (0: any size)
-template <class T, int N>
+// the stages of one explicit Runge-Kutta step of tableau T on a state of N entries (0: any size); F: the
+// model's f called inline (solvers/inline_stepper.hpp), or void: through the system
+template <class T, int N, class F = void>
 class Stages {
+  static constexpr bool inline_f = !std::is_void_v<F>;
+
  public:
-  explicit Stages(const CountedSystem& s) : system_(s), n_(s.size()), k_(T::dense_stages * n_), tmp_(s.size()) {}
+  explicit Stages(const CountedSystem& s, KernelOr<F> f = {}) : system_(s), f_(f), n_(s.size()), k_(T::dense_stages * n_), tmp_(s.size()) {}
 
   // k_0 = f(t, y0) unless first-same-as-last left it from the previous step (reuse_first)
   STEPWISE_SCALAR_STORES void compute(double t, double h, const double* y0, bool reuse_first) {
-    if (!reuse_first) system_.rhs(t, Eigen::Map<const Eigen::VectorXd>(y0, n_), stage_out(0));
+    if (!reuse_first) evaluate(t, y0, 0);
     [&]<int... I>(std::integer_sequence<int, I...>) { (stage<I + 1>(t, h, y0), ...); }(std::make_integer_sequence<int, T::stages - 1>{});
   }
 
@@ -100,7 +104,19 @@ class Stages {
   void stage(double t, double h, const double* y0) {
     double* tmp = tmp_.data();
     for (Eigen::Index i = 0; i < size(); ++i) tmp[i] = y0[i] + h * weighted<Row::a, I, I>(i);
-    system_.rhs(t + T::c[I] * h, stage_, stage_out(I));
+    evaluate(t + T::c[I] * h, tmp, I);
+  }
+
+  // k_j = f(t, y), y the step's start or the stage's argument (tmp_), counted either way
+  void evaluate(double t, const double* y, int j) {
+    if constexpr (inline_f) {
+      ++system_.stats().rhs_evals;
+      f_(t, y, k(j));
+    } else if (y == tmp_.data()) {
+      system_.rhs(t, stage_, stage_out(j));
+    } else {
+      system_.rhs(t, Eigen::Map<const Eigen::VectorXd>(y, n_), stage_out(j));
+    }
   }
 
   // stage j's values: one block of the stages' buffer (with N known, at a fixed offset from one pointer)
@@ -109,6 +125,7 @@ class Stages {
   Eigen::Map<Eigen::VectorXd> stage_out(int j) { return {k(j), size()}; }
 
   const CountedSystem& system_;
+  [[no_unique_address]] KernelOr<F> f_;
   Eigen::Index n_;
   Eigen::VectorXd k_;  // the stages, one after another
   Eigen::VectorXd tmp_;
@@ -118,10 +135,10 @@ class Stages {
 // the pair at a fixed step (for the order tests and fixed-step sweeps): no error estimate used
 template <class T>
 struct FixedPair {
-  template <int N>
+  template <int N, class F>
   class Stepper final : public FixedStepper {
    public:
-    explicit Stepper(const CountedSystem& s) : stages_(s) {}
+    explicit Stepper(const CountedSystem& s, KernelOr<F> f = {}) : stages_(s, f) {}
     bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
       stages_.compute(t, h, y.data(), false);
       norm_ = stages_.template finish<false>(h, y.data(), y_next.data());
@@ -129,18 +146,18 @@ struct FixedPair {
     }
 
    private:
-    Stages<T, N> stages_;
+    Stages<T, N, F> stages_;
   };
 };
 
 // the pair with its error estimate, the PI controller of step_controller.hpp and dense output
 template <class T>
 struct AdaptivePair {
-  template <int N>
+  template <int N, class F>
   class Stepper final : public AdaptiveStepper {
    public:
-    Stepper(const CountedSystem& s, const StepControl& control, std::string name)
-        : stages_(s), rtol_(control.rtol), atol_(control.atol), y1_(s.size()), name_(std::move(name)) {}
+    Stepper(const CountedSystem& s, const StepControl& control, const std::string& name, KernelOr<F> f = {})
+        : stages_(s, f), rtol_(control.rtol), atol_(control.atol), y1_(s.size()), name_(name) {}
 
     bool step(double& t, double t_limit, double& h, Eigen::VectorXd& y, long& rejected, std::string& failure) override {
       for (;;) {
@@ -216,7 +233,7 @@ struct AdaptivePair {
       }
     }
 
-    Stages<T, N> stages_;
+    Stages<T, N, F> stages_;
     double rtol_, atol_;
     Eigen::VectorXd y1_;
     std::string name_;
@@ -233,10 +250,10 @@ MakeIntegrator pair_integrator() {
   return [](const Method& method, const StepControl& control) -> std::unique_ptr<Integrator> {
     if (control.dt)
       return std::make_unique<FixedStepIntegrator>(method, control, [](const CountedSystem& s) {
-        return make_sized<FixedPair<T>::template Stepper>(s.size(), s);
+        return make_inline_or_sized<FixedPair<T>::template Stepper>(s);
       });
     return std::make_unique<AdaptiveStepIntegrator>(method, control, [name = std::string(method.name)](const CountedSystem& s, const StepControl& c) {
-      return make_sized<AdaptivePair<T>::template Stepper, AdaptiveStepper>(s.size(), s, c, name);
+      return make_inline_or_sized<AdaptivePair<T>::template Stepper, AdaptiveStepper>(s, c, name);
     });
   };
 }
