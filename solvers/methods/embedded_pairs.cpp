@@ -1,5 +1,6 @@
 // tsitouras54, verner98: embedded Runge-Kutta pairs of our own, hand-written on the fixed-step path's terms
-// (plain loops, nothing allocated, f called through the counted system and nothing else per stage), with a
+// (plain loops, nothing allocated, f called through the counted system, or inline where the model offers it
+// as a kernel (solvers/inline_stepper.hpp), and nothing else per stage), with a
 // PI step-size controller and dense output for output times and events.
 //
 // The stage sums are unrolled at compile time over the tableau's nonzero coefficients (a tableau is a type,
