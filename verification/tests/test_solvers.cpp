@@ -126,30 +126,43 @@ class WithIdleEvent final : public OdeSystem {
 
 // A run without events or projection has the stepper take its full steps itself (FixedStepper::plain_steps,
 // rk4, euler, symplectic-euler): the same steps, to the bit, as the loop takes one by one, and a blow-up at the
-// same time (inside the stepper's run: at 2 s, before the first output); output times off the step grid (0.505 s
-// at dt 0.01) so that the loop's landing steps are in it
+// same time, step and state (the steppers test for it once a block of PlainStepping::test_every steps, and step
+// a block past the bound again from its start); output times off the step grid (0.505 s at dt 0.01) so that
+// the loop's landing steps are in it
 TEST(Solvers, TheSteppersOwnRunOfStepsIsTheLoopsStepByStep) {
   const auto model = make_model("pendulum", {{"theta0", 2.0}});
   const WithIdleEvent stepwise_loop(*model);
-  for (const char* method : {"rk4", "euler", "symplectic-euler"})
-    for (const double dt : {1e-2, 2.0}) {
-      // at 2 s the swing grows and the runs pass |y| = 2 |y0| (a bound lowered from 1e12 so that they cross it)
-      StepControl control = StepControl::fixed(dt);
-      if (dt == 2.0) control.blowup = 2;
-      const auto integrator = make_integrator(method, control);
-      const std::vector<double> t_out = dt == 2.0 ? std::vector{5.5, 20.0} : std::vector{0.505, 1.5, 20.0};
-      const RunResult own = integrator->integrate(*model, 0, model->initial_state(), t_out);
-      const RunResult looped = integrator->integrate(stepwise_loop, 0, model->initial_state(), t_out);
-      EXPECT_EQ(own.status, looped.status) << method << " dt " << dt;
-      EXPECT_EQ(own.t_stop, looped.t_stop) << method << " dt " << dt;
-      if (dt == 2.0) {
-        EXPECT_EQ(own.status, Status::diverged) << method;
-      }
-      EXPECT_EQ(own.stats.steps, looped.stats.steps) << method << " dt " << dt;
-      EXPECT_EQ(own.stats.rhs_evals, looped.stats.rhs_evals) << method << " dt " << dt;
-      EXPECT_EQ(own.trajectory.t, looped.trajectory.t) << method << " dt " << dt;
-      for (Eigen::Index i = 0; i < model->size(); ++i) EXPECT_EQ(own.y_stop[i], looped.y_stop[i]) << method << " dt " << dt;
+  struct Case {
+    const char* method;
+    double dt;
+    double blowup;  // lowered from 1e12 so that the growing swing crosses |y| = blowup |y0|
+    long steps;     // the steps to the blow-up (0: none)
+  };
+  // a bound of 5 |y0| = 10 lies past the true swing's |omega| <= 5.3, so only a run whose energy grows crosses
+  // it, its angle going over the top without end: the first step at dt = 2 s (|y| = 2 |y0|: inside the first
+  // block), steps 18-30 in the methods' unstable ranges (inside the second; a report at the block's end, the
+  // 32nd step, fails it)
+  const Case cases[] = {{"rk4", 1e-2, 1e12, 0}, {"euler", 1e-2, 1e12, 0}, {"symplectic-euler", 1e-2, 1e12, 0},
+                        {"rk4", 2.0, 2, 1},     {"euler", 2.0, 2, 1},     {"symplectic-euler", 2.0, 2, 1},
+                        {"rk4", 1.2, 5, 18},    {"euler", 0.1, 5, 30},    {"symplectic-euler", 0.6, 5, 30}};
+  for (const auto& [method, dt, blowup, steps] : cases) {
+    StepControl control = StepControl::fixed(dt);
+    control.blowup = blowup;
+    const auto integrator = make_integrator(method, control);
+    const std::vector<double> t_out = dt > 0.1 ? std::vector{5.5, 200.0} : std::vector{0.505, 1.5, 20.0};
+    const RunResult own = integrator->integrate(*model, 0, model->initial_state(), t_out);
+    const RunResult looped = integrator->integrate(stepwise_loop, 0, model->initial_state(), t_out);
+    EXPECT_EQ(own.status, looped.status) << method << " dt " << dt;
+    EXPECT_EQ(own.t_stop, looped.t_stop) << method << " dt " << dt;
+    EXPECT_EQ(own.status, steps > 0 ? Status::diverged : Status::ok) << method << " dt " << dt;
+    if (steps > 0) {
+      EXPECT_EQ(own.stats.steps, steps) << method << " dt " << dt;
     }
+    EXPECT_EQ(own.stats.steps, looped.stats.steps) << method << " dt " << dt;
+    EXPECT_EQ(own.stats.rhs_evals, looped.stats.rhs_evals) << method << " dt " << dt;
+    EXPECT_EQ(own.trajectory.t, looped.trajectory.t) << method << " dt " << dt;
+    for (Eigen::Index i = 0; i < model->size(); ++i) EXPECT_EQ(own.y_stop[i], looped.y_stop[i]) << method << " dt " << dt;
+  }
 }
 
 // the flow field (x, y, sin x) offering its Jacobian as a sparse matrix, so that CVODE BDF takes its KLU path
