@@ -42,12 +42,12 @@ class Stages {
   STEPWISE_SCALAR_STORES double finish(double h, const double* y0, double* y1, double rtol = 0, double atol = 1) const {
     double worst = 0;
     RunningNorm norm;
-    for (Eigen::Index i = 0; i < size(); ++i) {
+    each_entry([&](Eigen::Index i) {
       const double v = y0[i] + h * weighted<Row::b>(i);
       y1[i] = v;
       if constexpr (estimate) worst = std::max(worst, std::abs(h * weighted<Row::e>(i)) / (atol + rtol * std::max(std::abs(y0[i]), std::abs(v))));
       norm.add(v);
-    }
+    });
     if constexpr (!estimate) return norm.value();
     return std::isfinite(norm.value()) ? worst : std::numeric_limits<double>::infinity();
   }
@@ -79,6 +79,20 @@ class Stages {
  private:
   Eigen::Index size() const { return N > 0 ? N : n_; }
 
+  // body(i) for each entry of the state: with N known, written out entry by entry at compile time, not as a
+  // loop. The loop vectoriser turned a 2-entry loop into one 16-byte operation whose store the next stage read
+  // back 8 bytes at a time, and whose 16-byte loads of a stage written 8 bytes at a time, both missing
+  // store-to-load forwarding on the chain from one stage's f to the next (verner98 on the pendulum: see
+  // docs/performance.md); STEPWISE_SCALAR_STORES keeps the written-out entries apart
+  template <class Body>
+  void each_entry(const Body& body) const {
+    if constexpr (N > 0) {
+      [&]<int... I>(std::integer_sequence<int, I...>) { (body(Eigen::Index{I}), ...); }(std::make_integer_sequence<int, N>{});
+    } else {
+      for (Eigen::Index i = 0; i < n_; ++i) body(i);
+    }
+  }
+
   // which of the tableau's coefficient rows a sum takes: row I of a, b or e
   enum class Row { a, b, e };
   template <Row R, int I>
@@ -104,7 +118,7 @@ class Stages {
   template <int I>
   void stage(double t, double h, const double* y0) {
     double* tmp = tmp_.data();
-    for (Eigen::Index i = 0; i < size(); ++i) tmp[i] = y0[i] + h * weighted<Row::a, I, I>(i);
+    each_entry([&](Eigen::Index i) { tmp[i] = y0[i] + h * weighted<Row::a, I, I>(i); });
     evaluate(t + T::c[I] * h, tmp, I);
   }
 
