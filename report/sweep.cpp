@@ -91,7 +91,7 @@ void Progress::draw(const std::string& label) {
     constexpr int width = 24;
     const int filled = static_cast<int>(width * done_ / total_);
     std::string shown = label.size() > 40 ? label.substr(0, 39) + "~" : label;
-    fmt::print(stderr, "\r\033[K{} [{}{}] {}/{} {} ~{:.0f} s left", study_, std::string(filled, '#'), std::string(width - filled, '.'),
+    fmt::print(stderr, "\r\033[K{} [{}{}] {}/{} {} ~{:.0f} s left in this sweep", study_, std::string(filled, '#'), std::string(width - filled, '.'),
                done_, total_, shown, left);
   } else if (const auto now = std::chrono::steady_clock::now();
              done_ == total_ || (done_weight_ - last_line_weight_) * 10 >= total_weight_ || now - last_line_time_ >= std::chrono::seconds(30)) {
@@ -99,7 +99,7 @@ void Progress::draw(const std::string& label) {
     // count could be most of the time), and at least every 30 s: a log keeps the progress without a line per point
     last_line_weight_ = done_weight_;
     last_line_time_ = now;
-    fmt::print(stderr, "stepwise:   {}/{} points, last {}, ~{:.0f} s left\n", done_, total_, label, left);
+    fmt::print(stderr, "stepwise:   {}/{} points, last {}, ~{:.0f} s left in this sweep\n", done_, total_, label, left);
   }
 }
 

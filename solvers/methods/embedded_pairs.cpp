@@ -42,7 +42,7 @@ class Stages {
   STEPWISE_SCALAR_STORES double finish(double h, const double* y0, double* y1, double rtol = 0, double atol = 1) const {
     double worst = 0;
     RunningNorm norm;
-    each_entry([&](Eigen::Index i) {
+    each_entry([&](Eigen::Index i) __attribute__((always_inline)) {
       const double v = y0[i] + h * weighted<Row::b>(i);
       y1[i] = v;
       if constexpr (estimate) worst = std::max(worst, std::abs(h * weighted<Row::e>(i)) / (atol + rtol * std::max(std::abs(y0[i]), std::abs(v))));
@@ -118,7 +118,7 @@ class Stages {
   template <int I>
   void stage(double t, double h, const double* y0) {
     double* tmp = tmp_.data();
-    each_entry([&](Eigen::Index i) { tmp[i] = y0[i] + h * weighted<Row::a, I, I>(i); });
+    each_entry([&](Eigen::Index i) __attribute__((always_inline)) { tmp[i] = y0[i] + h * weighted<Row::a, I, I>(i); });
     evaluate(t + T::c[I] * h, tmp, I);
   }
 
