@@ -1,5 +1,7 @@
 #include "flow_particle.hpp"
 
+#include "solvers/capabilities/inline_rhs.hpp"
+
 #include <gsl/gsl_sf_expint.h>
 
 #include <cmath>
@@ -34,10 +36,10 @@ class FlowParticle final : public Model {
   std::vector<std::string> state_names() const override { return {"x", "y"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector2d(x0_, y0_); }
 
-  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::VectorXd> dpdt) const override {
-    dpdt[0] = p[0];
-    dpdt[1] = std::sin(p[1]);
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::VectorXd> dpdt) const override {
+    std::get<FlowParticleRhs>(inline_rhs_.f)(t, p.data(), dpdt.data());
   }
+  const void* capability(const std::type_info& type) const override { return offer(type, inline_rhs_); }
   bool has_jacobian() const override { return true; }
   void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::MatrixXd> dfdp) const override {
     dfdp << 1, 0, 0, std::cos(p[1]);
@@ -54,6 +56,7 @@ class FlowParticle final : public Model {
 
  private:
   double x0_, y0_;
+  InlineRhs inline_rhs_{FlowParticleRhs{}};  // f, for the steppers that call it inline
 };
 
 class FlowParticle3d final : public Model {

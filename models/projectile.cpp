@@ -1,5 +1,6 @@
 #include "projectile.hpp"
 
+#include "solvers/capabilities/inline_rhs.hpp"
 #include "solvers/capabilities/second_order.hpp"
 
 #include <cmath>
@@ -36,10 +37,10 @@ class Projectile final : public Model {
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"x", "y", "vx", "vy"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector4d(x0_, y0_, vx0_, vy0_); }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, inline_rhs_); }
 
-  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& s, Eigen::Ref<Eigen::VectorXd> dsdt) const override {
-    dsdt << s[2], s[3], -k_ * s[2], -g_ - k_ * s[3];
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& s, Eigen::Ref<Eigen::VectorXd> dsdt) const override {
+    std::get<ProjectileRhs>(inline_rhs_.f)(t, s.data(), dsdt.data());
   }
   bool has_jacobian() const override { return true; }
   void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::MatrixXd> dfds) const override {
@@ -77,6 +78,7 @@ class Projectile final : public Model {
  private:
   double x0_, y0_, vx0_, vy0_, g_, k_, mass_;
   SecondOrderView second_order_{2};  // y = (x, v)
+  InlineRhs inline_rhs_{ProjectileRhs{g_, k_}};  // f, for the steppers that call it inline
 };
 
 }  // namespace

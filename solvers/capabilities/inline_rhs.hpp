@@ -6,7 +6,9 @@
 // itself); a method asks with system.as<InlineRhs>() and counts the calls it makes (Stats::rhs_evals).
 #pragma once
 
+#include "kernels/flow_particle.hpp"
 #include "kernels/pendulum.hpp"
+#include "kernels/projectile.hpp"
 #include "solvers/ode_system.hpp"
 
 #include <variant>
@@ -15,7 +17,7 @@ namespace stepwise {
 
 struct InlineRhs {
   // each kernel: `static constexpr int size` and `void operator()(double t, const double* y, double* dydt) const`
-  std::variant<PendulumRhs> f;
+  std::variant<PendulumRhs, ProjectileRhs, FlowParticleRhs> f;
 };
 
 }  // namespace stepwise

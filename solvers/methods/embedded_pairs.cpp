@@ -14,6 +14,7 @@
 #include "solvers/tableaus/tsitouras54.hpp"
 #include "solvers/tableaus/verner98.hpp"
 
+#include <algorithm>
 #include <array>
 #include <utility>
 
@@ -26,8 +27,19 @@ template <class T, int N, class F = void>
 class Stages {
   static constexpr bool inline_f = !std::is_void_v<F>;
 
+  // Size doubles inside the stepper where N is known (nothing allocated per run: a 1 us run's allocations were
+  // a tenth of it), else a vector of the run's size
+  template <int Size>
+  using Buffer = std::conditional_t<(Size > 0), std::array<double, static_cast<size_t>(std::max(Size, 1))>, Eigen::VectorXd>;
+  template <int Size>
+  static Buffer<Size> buffer(Eigen::Index n) {
+    if constexpr (Size > 0) return {};
+    else return Eigen::VectorXd(n);
+  }
+
  public:
-  explicit Stages(const CountedSystem& s, KernelOr<F> f = {}) : system_(s), f_(f), n_(s.size()), k_(T::dense_stages * n_), tmp_(s.size()) {}
+  explicit Stages(const CountedSystem& s, KernelOr<F> f = {})
+      : system_(s), f_(f), n_(s.size()), k_(buffer<T::dense_stages * N>(T::dense_stages * n_)), tmp_(buffer<N>(n_)) {}
 
   // k_0 = f(t, y0) unless first-same-as-last left it from the previous step (reuse_first)
   STEPWISE_SCALAR_STORES void compute(double t, double h, const double* y0, bool reuse_first) {
@@ -142,9 +154,9 @@ class Stages {
   const CountedSystem& system_;
   [[no_unique_address]] KernelOr<F> f_;
   Eigen::Index n_;
-  Eigen::VectorXd k_;  // the stages, one after another
-  Eigen::VectorXd tmp_;
-  const Eigen::Ref<const Eigen::VectorXd> stage_{tmp_};
+  Buffer<T::dense_stages * N> k_;  // the stages, one after another
+  Buffer<N> tmp_;                  // a stage's argument
+  const Eigen::Ref<const Eigen::VectorXd> stage_{Eigen::Map<const Eigen::VectorXd>(tmp_.data(), n_)};
 };
 
 // the pair at a fixed step (for the order tests and fixed-step sweeps): no error estimate used

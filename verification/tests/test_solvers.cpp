@@ -80,12 +80,15 @@ class WithoutInlineF final : public OdeSystem {
 };
 
 // A stepper that calls the model's f inline (rk4, euler, symplectic-euler and the hand-written pairs, fixed
-// and adaptive, on the pendulum) takes the same steps, to the bit, and counts the same calls of f as through
-// the system: the inline f is the model's own formula (kernels/pendulum.hpp), and the step's arithmetic is
-// written once for both paths. Every method runs it (those with no inline path trivially agree)
+// and adaptive, on the pendulum, the projectile and the flow field) takes the same steps, to the bit, and
+// counts the same calls of f as through the system: the inline f is the model's own formula (kernels/), and
+// the step's arithmetic is written once for both paths. Every method runs it (those with no inline path
+// trivially agree)
 TEST(Solvers, AStepperCallingTheModelsFInlineTakesTheSameStepsAndCountsAsThroughTheSystem) {
-  for (const char* name : {"pendulum", "pendulum-small-angle"}) {
-    const auto model = make_model(name, {{"theta0", 2.0}});
+  const std::pair<const char*, Params> models[] = {
+      {"pendulum", {{"theta0", 2.0}}}, {"pendulum-small-angle", {{"theta0", 2.0}}}, {"projectile", {{"drag", 0.5}}}, {"flow-particle", {}}};
+  for (const auto& [name, params] : models) {
+    const auto model = make_model(name, params);
     ASSERT_NE(model->as<InlineRhs>(), nullptr) << name;
     const std::vector<double> t_out{0.5, 1.5};
     for (const auto& method : methods()) {
