@@ -1,10 +1,15 @@
 #include "report/cost_model.hpp"
 
+#include "models/model.hpp"
 #include "solvers/capabilities/imex_split.hpp"
 #include "solvers/capabilities/mass_spring.hpp"
+#include "solvers/method_table.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 namespace stepwise {
 
@@ -24,6 +29,25 @@ double expected_run_ns(const Method& method, const StepControl& control, double 
   const bool sundials = method.source.starts_with("SUNDIALS"), gsl = method.source == "GSL odeiv2";
   const double fixed = implicit && (sundials || gsl) ? 600 * stages : sundials ? 250 : gsl ? 100 : 10;
   return steps * (fixed + 10 * n * stages * (implicit ? 5 : 1) + (gpu ? 1e4 : 0));
+}
+
+double machine_slowness() {
+  const auto model = make_model("pendulum", {});
+  const auto integrator = make_integrator("rk4", StepControl::fixed(1e-3));
+  const std::vector<double> t_out{10.0};
+  integrator->solve(*model, 0, model->initial_state(), t_out);  // the warm-up
+  // the mean over ~20 ms of runs, not the least run: a machine shared with other work runs the sweeps slower
+  // too, which a least run of 0.35 ms, inside one time slice, does not see
+  constexpr int runs = 60;
+  const auto start = std::chrono::steady_clock::now();
+  for (int run = 0; run < runs; ++run)
+    if (integrator->solve(*model, 0, model->initial_state(), t_out).status != Status::ok) return 1;
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / runs;
+  if (std::getenv("STEPWISE_PRINT_SLOWNESS")) std::fprintf(stderr, "rk4 reference: %.1f us\n", seconds * 1e6);
+  // that machine's time, taken as this one's of 2026-11-25 (348-354 us quiet), whose time-left lines at 0.4 ns a
+  // unit came within a factor of two at every line of the full report's work-precision sweep
+  constexpr double reference_seconds = 350e-6;
+  return seconds / reference_seconds;
 }
 
 double expected_contact_ns(double steps, double bodies) { return steps * bodies * bodies * 3.4e3; }

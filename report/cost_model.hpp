@@ -16,6 +16,12 @@ bool solves_newton_systems(const Method& method);
 // iterations; ~10 us more for a GPU pass's round trip through OpenGL)
 double expected_run_ns(const Method& method, const StepControl& control, double t_end, double time_scale, double n);
 
+// how much slower this machine runs the cost model's work than the one its seconds per unit were measured on
+// (Progress takes 0.4 ns a unit for a group with no point done): a fixed piece of such work, rk4 on the
+// pendulum over 10 000 steps through the method table, timed here (the least of five runs, a few ms in all)
+// over its time there. 1 on that machine; 1.85 where the report took 1.85 times as long
+double machine_slowness();
+
 // nanoseconds of a contact method's (sequential impulses') collision work over `steps` steps among `bodies`
 // bodies: every pair tested and resolved each step, ~3.4 us a pair (stack-collapse: 16 bodies, 0.87 ms a step)
 double expected_contact_ns(double steps, double bodies);

@@ -1,5 +1,6 @@
 #include "report.hpp"
 
+#include "report/cost_model.hpp"
 #include "run/atomic_write.hpp"
 #include "pictures.hpp"
 #include "run/process.hpp"
@@ -170,6 +171,7 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
   try {
     const auto start = std::chrono::system_clock::now();
     Progress progress;
+    if (writer) progress.set_slowness(machine_slowness());
     RankLoad load;
     StudyContext ctx{quick, threads_or_default(threads), writer ? &progress : nullptr};
     ctx.load = &load;
@@ -217,6 +219,7 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
   const auto start = std::chrono::steady_clock::now();
   const auto started = std::chrono::system_clock::now();
   Progress progress;
+  if (writer) progress.set_slowness(machine_slowness());
   RankLoad load;
   StudyContext ctx{quick, threads_or_default(threads), writer ? &progress : nullptr};
   ctx.load = &load;

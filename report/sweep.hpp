@@ -26,6 +26,9 @@ class Progress {
   void point_started(size_t point);                                         // thread-safe
   void point_done(size_t point, const std::string& label, double seconds);  // thread-safe
   void end_study(double seconds);
+  // this machine's slowness against the cost model's (report/cost_model.hpp machine_slowness): the seconds a
+  // unit of expected cost takes in a group with no point done scale by it
+  void set_slowness(double slowness) { slowness_ = slowness; }
 
  private:
   void draw(const std::string& label);
@@ -40,6 +43,7 @@ class Progress {
   size_t total_ = 0, done_ = 0, sweep_offset_ = 0;  // sweep_offset_: the running sweep's first point in costs_
   int threads_ = 1;
   bool costs_given_ = false;  // the running sweep's costs are expected nanoseconds
+  double slowness_ = 1;
   std::vector<double> costs_;
   std::vector<size_t> group_of_;  // each point's group
   struct Group {
