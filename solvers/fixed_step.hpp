@@ -52,8 +52,13 @@ class FixedStepper {
 // on a stepper's step(): no pairing of a small state's scalar stores into vector stores. Measured on this
 // machine (AMD EPYC): f reading y[1] right after a stage wrote y[0..1] as one 16-byte store misses
 // store-to-load forwarding, and a pendulum's rk4 step took 1.5x as long. Loops over large states are still
-// vectorised (that is the loop vectoriser, not this one)
+// vectorised (that is the loop vectoriser, not this one). GCC's attribute: clang (the fuzz build) has none
+// such, and warned at every use
+#if defined(__clang__)
+#define STEPWISE_SCALAR_STORES
+#else
 #define STEPWISE_SCALAR_STORES __attribute__((optimize("no-tree-slp-vectorize")))
+#endif
 
 // the same stepper built for a state of N entries known at compile time (its loops unrolled: on a pendulum
 // the loop bookkeeping would otherwise cost as much as the method's arithmetic), or for any size (N = 0)
