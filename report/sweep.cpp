@@ -85,6 +85,12 @@ double Progress::seconds_left() const {
   return std::max(0.0, left) / threads_;
 }
 
+namespace {
+// a time left as the line says it: to a tenth of a second under 10 s, where whole seconds are too coarse to be
+// within a factor of two ("~1 s" says anything from 0.5 to 1.5), else whole seconds
+std::string seconds_shown(double seconds) { return seconds < 9.95 ? fmt::format("{:.1f}", seconds) : fmt::format("{:.0f}", seconds); }
+}  // namespace
+
 void Progress::draw(const std::string& label) {
   if (total_ == 0) return;
   const double left = seconds_left();
@@ -92,15 +98,15 @@ void Progress::draw(const std::string& label) {
     constexpr int width = 24;
     const int filled = static_cast<int>(width * done_ / total_);
     std::string shown = label.size() > 40 ? label.substr(0, 39) + "~" : label;
-    fmt::print(stderr, "\r\033[K{} [{}{}] {}/{} {} ~{:.0f} s left in this sweep", study_, std::string(filled, '#'), std::string(width - filled, '.'),
-               done_, total_, shown, left);
+    fmt::print(stderr, "\r\033[K{} [{}{}] {}/{} {} ~{} s left in this sweep", study_, std::string(filled, '#'), std::string(width - filled, '.'),
+               done_, total_, shown, seconds_shown(left));
   } else if (const auto now = std::chrono::steady_clock::now();
              done_ == total_ || (done_weight_ - last_line_weight_) * 10 >= total_weight_ || now - last_line_time_ >= std::chrono::seconds(30)) {
     // a line each tenth of the sweep's expected cost (the costliest points come first, so a tenth of the
     // count could be most of the time), and at least every 30 s: a log keeps the progress without a line per point
     last_line_weight_ = done_weight_;
     last_line_time_ = now;
-    fmt::print(stderr, "stepwise:   {}/{} points, last {}, ~{:.0f} s left in this sweep\n", done_, total_, label, left);
+    fmt::print(stderr, "stepwise:   {}/{} points, last {}, ~{} s left in this sweep\n", done_, total_, label, seconds_shown(left));
   }
 }
 
