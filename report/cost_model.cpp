@@ -8,8 +8,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 namespace stepwise {
 
@@ -43,7 +41,6 @@ double machine_slowness() {
   for (int run = 0; run < runs; ++run)
     if (integrator->solve(*model, 0, model->initial_state(), t_out).status != Status::ok) return 1;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / runs;
-  if (std::getenv("STEPWISE_PRINT_SLOWNESS")) std::fprintf(stderr, "rk4 reference: %.1f us\n", seconds * 1e6);
   // that machine's time, taken as this one's of 2026-11-25 (348-354 us quiet), whose time-left lines at 0.4 ns a
   // unit came within a factor of two at every line of the full report's work-precision sweep
   constexpr double reference_seconds = 350e-6;

@@ -18,8 +18,9 @@ double expected_run_ns(const Method& method, const StepControl& control, double 
 
 // how much slower this machine runs the cost model's work than the one its seconds per unit were measured on
 // (Progress takes 0.4 ns a unit for a group with no point done): a fixed piece of such work, rk4 on the
-// pendulum over 10 000 steps through the method table, timed here (the least of five runs, a few ms in all)
-// over its time there. 1 on that machine; 1.85 where the report took 1.85 times as long
+// pendulum over 10 000 steps through the method table, timed here (the mean of 60 runs, ~20 ms in all, so that
+// a machine busy with other work shows as slower too) over its time there. 1 on that machine; ~2 with two busy
+// loops beside it on two cores
 double machine_slowness();
 
 // nanoseconds of a contact method's (sequential impulses') collision work over `steps` steps among `bodies`

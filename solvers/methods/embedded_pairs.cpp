@@ -30,7 +30,7 @@ class Stages {
   // Size doubles inside the stepper where N is known (nothing allocated per run: a 1 us run's allocations were
   // a tenth of it), else a vector of the run's size
   template <int Size>
-  using Buffer = std::conditional_t<(Size > 0), std::array<double, static_cast<size_t>(std::max(Size, 1))>, Eigen::VectorXd>;
+  using Buffer = std::conditional_t<(Size > 0), std::array<double, static_cast<size_t>(Size)>, Eigen::VectorXd>;
   template <int Size>
   static Buffer<Size> buffer(Eigen::Index n) {
     if constexpr (Size > 0) return {};
