@@ -1,5 +1,5 @@
 // The explicit cloth (issue 9): one symplectic Euler step of the seeds' flag (the cloth model's defaults:
-// four corners pinned, the gusting wind through its normals, twelve springs a node) at N x N nodes, N = 256,
+// four corners pinned, the gusting wind through its normals, twelve springs a node) at N x N nodes, N = 128, 256,
 // 1024, 2048, from the flat start. In one run:
 //  - gpu-cloth's fragment pass on the GL's device (llvmpipe here, its threads LP_NUM_THREADS, by default one
 //    per core; a GPU through EGL with STEPWISE_GPU_BACKEND=egl), in float32, finished before the clock stops;
@@ -65,6 +65,27 @@ void BM_cloth_grid_cpu(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(view.start.size()));
 }
 
+// the transfers a run adds to the passes, counted apart from them: range(1) 0 the state uploaded (a run's
+// start), 1 read back (each output of a run; a frame of a picture)
+void BM_gpu_cloth_transfer(benchmark::State& state) {
+  static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
+  const auto& view = flag_view(static_cast<int>(state.range(0)));
+  stepwise::gpu::GpuCloth gpu(*context, view);
+  const auto s = stepwise::cloth_grid::spread<float>(view, flat_start(view));
+  auto back = s;
+  gpu.upload(s);
+  for (auto _ : state) {
+    if (state.range(1) == 0) {
+      gpu.upload(s);
+      gpu.finish();
+    } else {
+      gpu.download(back);
+      benchmark::DoNotOptimize(back.x.data());
+    }
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(view.start.size()));
+}
+
 void BM_gpu_cloth(benchmark::State& state) {
   static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
   const auto& view = flag_view(static_cast<int>(state.range(0)));
@@ -79,16 +100,17 @@ void BM_gpu_cloth(benchmark::State& state) {
   state.SetLabel(context->description());
 }
 
-#define SIZES ->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime()
+#define SIZES ->Arg(128)->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime()
 BENCHMARK(BM_cloth_grid_cpu<double>) SIZES;
 BENCHMARK(BM_cloth_grid_cpu<float>) SIZES;
 BENCHMARK(BM_gpu_cloth) SIZES;
+BENCHMARK(BM_gpu_cloth_transfer)->ArgsProduct({{128, 256, 1024}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<std::pair<std::string, std::string>> pairs;
-  for (const char* n : {"256", "1024", "2048"}) {
+  for (const char* n : {"128", "256", "1024", "2048"}) {
     pairs.emplace_back(fmt::format("BM_gpu_cloth/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
     pairs.emplace_back(fmt::format("BM_cloth_grid_cpu<float>/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
   }

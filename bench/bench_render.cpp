@@ -8,6 +8,7 @@
 #include "render/caustics.hpp"
 #include "render/renderer.hpp"
 #include "run/measure.hpp"
+#include "solvers/gpu/gpu_grid.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -18,8 +19,9 @@ using namespace stepwise;
 
 constexpr int width = 1280, height = 720;
 
+// OSMesa (llvmpipe), or a GPU through EGL with STEPWISE_GPU_BACKEND=egl, as the GPU methods' benchmarks
 gl::Context& context() {
-  static const std::unique_ptr<gl::Context> c = gl::make_osmesa_context();
+  static const std::unique_ptr<gl::Context> c = gl::make_context(gpu::backend());
   return *c;
 }
 

@@ -80,6 +80,28 @@ void BM_gpu_wave(benchmark::State& state) {
   state.SetLabel(context->description());
 }
 
+// the transfers a run adds to the passes, counted apart from them: range(1) 0 both levels uploaded (a run's
+// start), 1 both read back (each output of a run; a frame of a picture)
+void BM_gpu_wave_transfer(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
+  Grids g(n);
+  stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k));
+  const Eigen::VectorXf z_prev = g.z_prev.cast<float>(), z = g.z.cast<float>();
+  Eigen::VectorXf back_prev, back;
+  gpu.upload(z_prev, z);
+  for (auto _ : state) {
+    if (state.range(1) == 0) {
+      gpu.upload(z_prev, z);
+      gpu.finish();
+    } else {
+      gpu.download(back_prev, back);
+      benchmark::DoNotOptimize(back.data());
+    }
+  }
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * 2 * static_cast<int64_t>(z.size()) * static_cast<int64_t>(sizeof(float)));
+}
+
 // a[i] = b[i] + s c[i] over three arrays of range(0)^2, eight times an iteration
 void BM_triad(benchmark::State& state) { stepwise::bench::stream_triad(state, state.range(0) * state.range(0), steps); }
 
@@ -92,6 +114,7 @@ BENCHMARK(BM_wave_step)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTim
 BENCHMARK(BM_wave_blocked)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_wave_step)->Args({2048, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_wave)->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_gpu_wave_transfer)->ArgsProduct({{1024, 2048}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_triad)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // the standing wave (65^2, mu = 0.5, 2 s) by `run`'s path: wave-fd at dt = limit/2, and CVODE at the

@@ -1,5 +1,6 @@
-// EGL on Mesa's surfaceless platform: no window system, no surface; drawing goes to framebuffer objects.
-// Its types stay in this file.
+// EGL with no window system and no surface; drawing goes to framebuffer objects. Mesa's surfaceless platform
+// first (llvmpipe here); where no vendor offers it (NVIDIA's EGL, behind glvnd, does not), the first device of
+// EGL_EXT_platform_device that initialises: a GPU's driver without a display. Its types stay in this file.
 #include "context.hpp"
 
 #include <EGL/egl.h>
@@ -10,6 +11,8 @@
 #include <dlfcn.h>
 #include <link.h>
 
+#include <map>
+#include <mutex>
 #include <string_view>
 
 namespace stepwise::gl {
@@ -30,18 +33,53 @@ void keep_drivers_loaded() {
       nullptr);
 }
 
+// the first device EGL_EXT_device_enumeration lists whose display initialises, or EGL_NO_DISPLAY
+EGLDisplay device_display(PFNEGLGETPLATFORMDISPLAYEXTPROC get_display) {
+  const auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+  if (!query_devices) return EGL_NO_DISPLAY;
+  EGLDeviceEXT devices[16];
+  EGLint count = 0;
+  if (!query_devices(16, devices, &count)) return EGL_NO_DISPLAY;
+  for (EGLint i = 0; i < count; ++i) {
+    const EGLDisplay display = get_display(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
+    EGLint major = 0, minor = 0;
+    if (display != EGL_NO_DISPLAY && eglInitialize(display, &major, &minor)) return display;
+  }
+  return EGL_NO_DISPLAY;
+}
+
+// An EGL display is the process's (every context on a device gets the same handle) and eglTerminate ends every
+// context on it, another thread's too: each context holds it, and the last one to let go terminates it. (Seen on
+// NVIDIA's EGL: a GPU method's context, made and dropped inside a test, left the test's own context
+// EGL_NOT_INITIALIZED.) Taking a display, initialising and holding it are one step under the lock, so no
+// terminate falls between them
+std::mutex& display_mutex() {
+  static std::mutex m;
+  return m;
+}
+std::map<EGLDisplay, int>& display_holders() {
+  static std::map<EGLDisplay, int> holders;
+  return holders;
+}
+
 class EglContext final : public Context {
  public:
   EglContext() {
+    std::unique_lock lock(display_mutex());
     const auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
     if (!get_display) throw GlError("eglGetProcAddress(eglGetPlatformDisplayEXT) returned NULL: EGL_EXT_platform_base is missing");
-    display_ = get_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (display_ == EGL_NO_DISPLAY)
-      throw GlError(fmt::format("eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA) failed: 0x{:04x} (Mesa's EGL is needed: "
-                                "apt-get install libegl-mesa0)", eglGetError()));
     EGLint major = 0, minor = 0;
-    if (!eglInitialize(display_, &major, &minor))
-      throw GlError(fmt::format("eglInitialize failed: 0x{:04x} (apt-get install libegl-mesa0)", eglGetError()));
+    display_ = get_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+    const EGLint surfaceless_error = display_ == EGL_NO_DISPLAY ? eglGetError() : EGL_SUCCESS;
+    if (display_ == EGL_NO_DISPLAY || !eglInitialize(display_, &major, &minor)) {
+      display_ = device_display(get_display);
+      if (display_ == EGL_NO_DISPLAY)
+        throw GlError(fmt::format("eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA) failed: 0x{:04x}, and no EGL device initialised "
+                                  "(Mesa's EGL is needed: apt-get install libegl-mesa0)",
+                                  surfaceless_error == EGL_SUCCESS ? eglGetError() : surfaceless_error));
+    }
+    ++display_holders()[display_];
+    lock.unlock();
     keep_drivers_loaded();
     if (!eglBindAPI(EGL_OPENGL_API)) fail("eglBindAPI(EGL_OPENGL_API)");
     const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5, EGL_CONTEXT_OPENGL_PROFILE_MASK,
@@ -70,7 +108,11 @@ class EglContext final : public Context {
       eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
       eglDestroyContext(display_, context_);
     }
-    eglTerminate(display_);
+    const std::lock_guard lock(display_mutex());
+    if (--display_holders()[display_] == 0) {
+      display_holders().erase(display_);
+      eglTerminate(display_);
+    }
   }
   EGLDisplay display_ = EGL_NO_DISPLAY;
   EGLContext context_ = EGL_NO_CONTEXT;

@@ -65,9 +65,10 @@ class Fluid final : public Model {
     grid_.viscosity = p.at("viscosity");
     if (flow == Flow::taylor_green || flow == Flow::shear_wave) {
       const double m = p.at("mode");
-      // the 2/3 rule keeps |wavenumber| <= n/3: a mode beyond it would be dropped from the start
-      if (m != std::floor(m) || m < 1 || 3 * m > n_)
-        throw BadParameter("mode", fmt::format("parameter 'mode' must be a whole number from 1 to size/3 = {} (the modes the 2/3 rule keeps), got {}", n_ / 3, m));
+      // the 2/3 rule keeps |wavenumber| <= K: a mode beyond it would be dropped from the start
+      const int K = PeriodicFft::largest_kept(n_);
+      if (m != std::floor(m) || m < 1 || m > K)
+        throw BadParameter("mode", fmt::format("parameter 'mode' must be a whole number from 1 to (size - 1)/3 = {} (the modes the 2/3 rule keeps), got {}", K, m));
       mode_ = static_cast<int>(m);
       amplitude_ = p.at("amplitude");
     }
@@ -361,14 +362,14 @@ class Fluid final : public Model {
 
 std::span<const ParamSpec> taylor_green_params() {
   static const auto specs = with_fluid_params(0.01, 32, {
-      {"mode", 1, "", "m: wavenumber k = 2 pi m / L, 1 <= m <= size/3", Bound::positive},
+      {"mode", 1, "", "m: wavenumber k = 2 pi m / L, 1 <= m <= (size - 1)/3", Bound::positive},
       {"amplitude", 1.0, "m/s", "A: the velocity's initial amplitude"}});
   return specs;
 }
 
 std::span<const ParamSpec> shear_wave_params() {
   static const auto specs = with_fluid_params(0.01, 32, {
-      {"mode", 1, "", "m: u = A sin(2 pi m y / L), 1 <= m <= size/3", Bound::positive},
+      {"mode", 1, "", "m: u = A sin(2 pi m y / L), 1 <= m <= (size - 1)/3", Bound::positive},
       {"amplitude", 1.0, "m/s", "A: the velocity's initial amplitude"}});
   return specs;
 }

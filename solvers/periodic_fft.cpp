@@ -84,8 +84,8 @@ PeriodicFft::PeriodicFft(int n, double length) : n_(n), half_(n / 2 + 1), length
     k2_row_[r] = k * k;
   }
   keep_.resize(n + half_);
-  for (int r = 0; r < n; ++r) keep_[r] = 3 * std::abs(wavenumber(r)) <= n;
-  for (int c = 0; c < half_; ++c) keep_[n + c] = 3 * c <= n;
+  for (int r = 0; r < n; ++r) keep_[r] = std::abs(wavenumber(r)) <= largest_kept(n);
+  for (int c = 0; c < half_; ++c) keep_[n + c] = c <= largest_kept(n);
   plans_ = &plans_for(n);
 }
 

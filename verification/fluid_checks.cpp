@@ -1,6 +1,7 @@
 #include "fluid_checks.hpp"
 
 #include "run/measure.hpp"
+#include "solvers/periodic_fft.hpp"
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
 
@@ -30,7 +31,7 @@ double taylor_green_viscosity(std::string_view method, int n, double nu, double 
 }
 
 std::optional<FluidStepLimits> fluid_step_limits(std::string_view method, int n, double length, double speed_sum, double nu) {
-  const double k = 2 * std::numbers::pi / length * (n / 3);
+  const double k = 2 * std::numbers::pi / length * PeriodicFft::largest_kept(n);
   const std::complex<double> advective(0, speed_sum * k), viscous(-nu * 2 * k * k, 0);
   const auto limit = [&](std::complex<double> lambda) { return spectrum_stable_dt(method, Eigen::VectorXcd::Constant(1, lambda)); };
   const auto a = limit(advective), v = limit(viscous), c = limit(advective + viscous);

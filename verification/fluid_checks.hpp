@@ -27,7 +27,7 @@ double taylor_green_viscosity(std::string_view method, int n, double nu, double 
 
 // The closed-form step limits of an explicit method with a stability function R (verification/stability.hpp) on
 // the de-aliased spectral discretisation of n x n points on a square of side L, frozen coefficients at the highest
-// mode kept, |kx| = |ky| = kmax = (2 pi / L) floor(n / 3): advection alone gives it the eigenvalue
+// mode kept, |kx| = |ky| = kmax = (2 pi / L) floor((n - 1) / 3): advection alone gives it the eigenvalue
 // i (u kx + v ky), at most i s kmax with s = max (|u| + |v|) over the grid (h below R's reach up the imaginary axis
 // over it: none for explicit Euler), viscosity alone -nu 2 kmax^2 (R's reach along the negative real axis over it),
 // and both together -nu 2 kmax^2 + i s kmax. Empty without R.

@@ -59,6 +59,29 @@ inline constexpr double inviscid_energy_drift = 2e-9;
 // next term is O(h) relative, at CFL 1 up to a third on the coarsest grid)
 inline constexpr double first_order_refinement = 1.5;
 
+// a field sent through FFTW's inverse and forward transforms: each is a Cooley-Tukey FFT whose error in the 2-norm
+// is at most log2(N) (u + mu) |X| (Higham, Accuracy and Stability of Numerical Algorithms, thm 24.2; mu ~ u for
+// FFTW's precomputed twiddles), N = n^2: the pair leaves at most 4 log2(n^2) u |X|_2 on any mode, one that should
+// be zero included (1.2e-14 |X| at 48^2), and at most 4 log2(n^2) u max |q| on the mean (the k = 0 mode / n^2)
+inline double fft_roundtrip_roundoff(int n) { return 4 * std::log2(static_cast<double>(n) * n) * 0x1p-53; }
+
+// the thin double shear layer (w = 80, L = 1, speed 1) has rolled up into its vortices by t = 1 (Brown & Minion
+// 1995, fig. 1: the braids thin from t = 0.8): the inviscid energy check runs to there. Rolled up means the
+// cross-flow has grown from the perturbation d = 0.05 to the layers' own speed's order: max |v| at least 5x d
+inline constexpr double shear_layer_rollup_time = 1.0;
+inline constexpr double rollup_cross_flow_growth = 5.0;
+
+// a back-trace in grid units on a 64^2 grid: coordinates up to n, four roundings each on the way: 8 n u
+inline double trace_roundoff(int n) { return 8 * n * 0x1p-53; }
+
+// a quantity summed over the grid's n^2 points (kinetic energy from 2 n^2 squares; enstrophy from n^2, after the
+// vorticity's transforms): the recursive sum's relative error at most (2 n^2) u, the transforms' 4 log2(n^2) u
+inline double grid_sum_roundoff(int n) { return (2.0 * n * n + 4 * std::log2(static_cast<double>(n) * n)) * 0x1p-53; }
+
+// the trapezoid rule's error over an interval, (dt^3 / 12) max |g''|, with g'' estimated from the run's own
+// second differences at the outputs (a sample of it, not its maximum over the interval): a factor 2 for that
+inline constexpr double trapezoid_bound_safety = 2.0;
+
 // MacCormack advection is second order where the field is smooth and first order at its extrema (the clamp);
 // on the Taylor-Green vortex at CFL 1 its numerical viscosity must fall below bilinear's by at least what one
 // refinement of a first-order method buys (first_order_refinement), else it is not worth its second pass
@@ -387,6 +410,11 @@ inline constexpr double accumulated_roundoff = 1e-12;
 inline constexpr double spring_momentum_roundoff = 1e-13;
 
 // ---- cloth
+
+// the same configuration seen through a symmetry of the grid (a sheet transposed): each node's force sums its
+// twelve springs' k (|d| - L) d / |d|, a few roundings each on coordinates and lengths of order one, in another
+// order: the two agree to ~12 x 8 eps ~ 2e-14 of the largest force; 1e-12 leaves a factor 50
+inline constexpr double spring_force_roundoff = 1e-12;
 
 // implicit Euler's amplification on the undamped oscillator, 1 / sqrt(1 + w^2 h^2) in the energy norm
 // (w x, v), is exact for a linear spring: one step's ratio against it is round-off, a few eps over the

@@ -3,7 +3,7 @@
 //   1. forces      v += h b (rho - mean rho),  rho += h s
 //   2. advection   q(x) <- q(x_back) for q = u, v, rho, semi-Lagrangian: x_back traced back through the
 //                  velocity of step 1 by the midpoint rule (x_mid = x - h/2 u(x), x_back = x - h u(x_mid)),
-//                  the value there bilinear in the four surrounding points (periodic)
+//                  the value there bilinear in the four surrounding points (periodic): semi_lagrangian.hpp
 //   3. diffusion   implicit Euler in Fourier space: q^ <- q^ / (1 + nu |k|^2 h) (kappa for rho)
 //   4. projection  (u^, v^) <- P(u^, v^) (periodic_fft.hpp's Leray projection)
 //
@@ -21,6 +21,7 @@
 #include "solvers/method_table.hpp"
 #include "solvers/periodic_fft.hpp"
 #include "solvers/run_support.hpp"
+#include "solvers/semi_lagrangian.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -88,35 +89,11 @@ class StableFluids final : public FixedStepper {
  private:
   // the points (in grid units, unwrapped) that reach each grid point in time h along (u, v): the midpoint rule
   void trace(const double* u, const double* v, double h, double* bx, double* by) const {
-    const double s = h / fft_.spacing();
-    for (int i = 0; i < n_; ++i)
-      for (int j = 0; j < n_; ++j) {
-        const Eigen::Index k = static_cast<Eigen::Index>(i) * n_ + j;
-        const double mx = j - 0.5 * s * u[k], my = i - 0.5 * s * v[k];
-        bx[k] = j - s * sample(u, mx, my);
-        by[k] = i - s * sample(v, mx, my);
-      }
+    semi_lagrangian::trace(u, v, n_, h / fft_.spacing(), bx, by);
   }
 
-  // q at (x, y) in grid units, bilinear between the four surrounding points, periodic; with `lo`, `hi`: the
-  // least and greatest of the four
   double sample(const double* q, double x, double y, double* lo = nullptr, double* hi = nullptr) const {
-    const double fx = std::floor(x), fy = std::floor(y);
-    const double ax = x - fx, ay = y - fy;
-    const auto wrap = [n = n_](double c) {  // the division only for points more than a period away
-      long w = static_cast<long>(c);
-      if (w >= 0 && w < n) return static_cast<Eigen::Index>(w);
-      if (w >= -n && w < 0) return static_cast<Eigen::Index>(w + n);
-      w %= n;
-      return static_cast<Eigen::Index>(w < 0 ? w + n : w);
-    };
-    const Eigen::Index j0 = wrap(fx), j1 = j0 + 1 == n_ ? 0 : j0 + 1, i0 = wrap(fy), i1 = i0 + 1 == n_ ? 0 : i0 + 1;
-    const double q00 = q[i0 * n_ + j0], q01 = q[i0 * n_ + j1], q10 = q[i1 * n_ + j0], q11 = q[i1 * n_ + j1];
-    if (lo) {
-      *lo = std::min({q00, q01, q10, q11});
-      *hi = std::max({q00, q01, q10, q11});
-    }
-    return (1 - ay) * ((1 - ax) * q00 + ax * q01) + ay * ((1 - ax) * q10 + ax * q11);
+    return semi_lagrangian::sample(q, n_, x, y, lo, hi);
   }
 
   void advect(const double* q, double* out) {

@@ -156,6 +156,40 @@ TEST(Cloth, ForceJacobiansMatchCentralDifferences) {
   }
 }
 
+TEST(Cloth, BendSpringsResistAFoldAlongEitherAxisAlike) {
+  // a square sheet of bend springs alone (no gravity, wind, drag, damping or pins), folded out of its plane into
+  // a parabola along the rows, z = a (r - 3)^2, and the same fold along the columns, z = a (c - 3)^2: the grid
+  // transposed takes one onto the other ((x, y) -> (-y - w/2, -x - w/2), z kept), so node (r, c)'s force in the
+  // first is node (c, r)'s in the second with x and y exchanged and negated. A bend family joined along one
+  // axis only (the other's springs laid along the same one) resists one fold twice and the other not at all
+  const int n = 7;
+  const auto model = make_model("cloth", {{"rows", n}, {"columns", n}, {"width", 1.0}, {"height", 1.0}, {"structural", 0}, {"shear", 0},
+                                          {"bend", 1}, {"g", 0}, {"wind_z", 0}, {"wind_coefficient", 0}, {"drag", 0}, {"damping", 0},
+                                          {"pin_corners", 0}});
+  ASSERT_EQ(model->size(), 6 * n * n);
+  const auto folded = [&](bool along_rows) {
+    Eigen::VectorXd y = model->initial_state();
+    for (int r = 0; r < n; ++r)
+      for (int c = 0; c < n; ++c) y[3 * (r * n + c) + 2] = 0.05 * std::pow((along_rows ? r : c) - 3, 2);
+    Eigen::VectorXd f(y.size());
+    model->rhs(0, y, f);
+    return Eigen::VectorXd(f.tail(3 * n * n));
+  };
+  const Eigen::VectorXd rows = folded(true), columns = folded(false);
+  const double scale = std::max(rows.lpNorm<Eigen::Infinity>(), columns.lpNorm<Eigen::Infinity>());
+  double worst = 0;
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      const Eigen::Vector3d a = rows.segment<3>(3 * (r * n + c)), b = columns.segment<3>(3 * (c * n + r));
+      worst = std::max(worst, (a - Eigen::Vector3d(-b.y(), -b.x(), b.z())).lpNorm<Eigen::Infinity>());
+    }
+  std::cout << "bend springs, a fold along the rows and along the columns: largest restoring acceleration " << rows.lpNorm<Eigen::Infinity>()
+            << " and " << columns.lpNorm<Eigen::Infinity>() << " m/s^2; the transposed fields differ by " << worst << '\n';
+  EXPECT_GT(rows.lpNorm<Eigen::Infinity>(), 0) << "a fold along the rows stretches the bend springs down the columns";
+  EXPECT_GT(columns.lpNorm<Eigen::Infinity>(), 0) << "a fold along the columns stretches those along the rows";
+  EXPECT_LE(worst, tolerance::spring_force_roundoff * scale);
+}
+
 TEST(Cloth, TheDefiniteApproximationMakesTheStepMatrixPositiveDefiniteWhereTheExactOneIsNot) {
   // without damping and wind the exact K is symmetric, so its Cholesky factorisation is what fails
   const auto model = small_cloth({{"damping", 0}, {"wind_coefficient", 0}});

@@ -5,6 +5,7 @@
 #include "run/measure.hpp"
 #include "run/scene.hpp"
 #include "solvers/periodic_fft.hpp"
+#include "solvers/semi_lagrangian.hpp"
 #include "solvers/capabilities/imex_split.hpp"
 #include "verification/fluid_checks.hpp"
 #include "verification/order_fit.hpp"
@@ -12,9 +13,12 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <random>
 
 namespace stepwise {
 namespace {
@@ -125,6 +129,232 @@ TEST(Fluid, WithoutViscosityTheDealiasedMethodOfLinesConservesEnergyAndDensity) 
   const double total = summary_value(*smoke, s.result.trajectory.y.back(), "density_total");
   std::cout << "smoke: density total " << total << " after " << t << " s, the source's " << two_pi * r * r * t << '\n';
   EXPECT_NEAR(total / (two_pi * r * r * t), 1.0, tolerance::spectral_divergence);
+}
+
+TEST(Fluid, TheDealiasedRightHandSideHasNoModePastTheTwoThirdsRuleOnEitherAxis) {
+  // f of a state with every mode filled (random values on the grid, not band-limited): each of u', v' and rho'
+  // is dealiased before it returns to the grid, so its transform has nothing, to the round-off of the two
+  // transforms between, at a mode with |kx| or |ky| past K = floor((n - 1) / 3) (either axis alone)
+  const int n = 48;
+  const auto model = make_model("smoke", {{"size", n}});
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::VectorXd y(model->size());
+  for (auto& x : y) x = u(rng);
+  Eigen::VectorXd f(y.size());
+  model->rhs(0, y, f);
+  const PeriodicFft fft(n, 1.0);
+  std::vector<PeriodicFft::Complex> modes(fft.modes());
+  for (int q = 0; q < 3; ++q) {
+    fft.forward(f.data() + q * n * n, modes.data());
+    // the wavenumbers from the layout itself (row r is r or r - n, column c is c), not from the rule under test
+    const int half = n / 2 + 1, K = PeriodicFft::largest_kept(n);
+    double dropped = 0, total = 0;
+    int dropped_x = 0, dropped_y = 0;
+    for (int r = 0; r < n; ++r)
+      for (int c = 0; c < half; ++c) {
+        const PeriodicFft::Complex a = modes[r * half + c];
+        total += std::norm(a);
+        const bool past_x = c > K, past_y = std::abs(r <= n / 2 ? r : r - n) > K;
+        if (!past_x && !past_y) continue;
+        dropped = std::max(dropped, std::abs(a));
+        dropped_x += past_x && !past_y;
+        dropped_y += past_y && !past_x;
+      }
+    ASSERT_GT(dropped_x, 0);
+    ASSERT_GT(dropped_y, 0);
+    const double bound = tolerance::fft_roundtrip_roundoff(n) * std::sqrt(total);
+    std::cout << "f's field " << q << " on " << n << "^2: largest mode past the 2/3 rule " << dropped << " (bound " << bound << ", |f^| " << std::sqrt(total)
+              << ")\n";
+    EXPECT_LE(dropped, bound) << "field " << q;
+  }
+}
+
+TEST(Fluid, WithoutViscosityTheEnergyIsConservedThroughTheShearLayersRollUp) {
+  // the inviscid Galerkin truncation conserves energy however far the flow cascades: run the thin layer
+  // (w = 80) through its roll-up, where the spectrum fills out to the cut-off and aliasing left on one axis
+  // would feed energy in or out
+  for (const int n : {48, 64}) {
+  const auto model = make_model("shear-layer", {{"size", n}, {"viscosity", 0.0}, {"width", 80}});
+  const double t = tolerance::shear_layer_rollup_time;
+  const Measured m = run_and_measure(*model, "cvode-adams", whole(StepControl::adaptive(1e-11, 1e-13)), t, t);
+  ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+  const double e0 = *model->energy(model->initial_state()), e1 = *model->energy(m.result.trajectory.y.back());
+  const auto cross_flow = [&](const Eigen::VectorXd& y) { return y.segment(n * n, n * n).lpNorm<Eigen::Infinity>(); };
+  const double v0 = cross_flow(model->initial_state()), v1 = cross_flow(m.result.trajectory.y.back());
+  std::cout << "thin shear layer, nu = 0, " << n << "^2: energy changed by " << e1 / e0 - 1 << " (relative) in " << t << " s; max |v| " << v0 << " -> " << v1
+            << '\n';
+  EXPECT_GT(v1, tolerance::rollup_cross_flow_growth * v0) << "the layer has rolled up";
+  EXPECT_LE(std::abs(e1 / e0 - 1), tolerance::inviscid_energy_drift);
+  }
+}
+
+TEST(Fluid, TheBackTraceFollowsTheExactCharacteristicsOfAShearAndARotation) {
+  // the trace alone (semi_lagrangian.hpp), in grid units on a 64^2 grid, on linear flows, where bilinear
+  // sampling of the velocity is exact away from the periodic seam (only points whose trace stays 3 cells inside
+  // it are compared):
+  //  - a shear u = gamma (y - c), v = 0: x_back = x - s gamma (y - c), y_back = y, what the midpoint rule gives
+  //    exactly (the flow's second derivative along the path is zero): round-off
+  //  - a solid-body rotation about the centre, u = -omega (y - c), v = omega (x - c): the exact trace turns
+  //    (x, y) about c by -omega h; the midpoint rule's error is (omega h)^3 / 6 |r|, third order in h
+  const int n = 64;
+  const double c = n / 2.0;
+  std::vector<double> u(n * n), v(n * n), bx(n * n), by(n * n);
+  const auto inside = [&](int k) {
+    const double i = k / n, j = k % n;
+    return std::min({i, j, bx[k], by[k]}) > 3 && std::max({i, j, bx[k], by[k]}) < n - 4;
+  };
+  const double gamma = 0.4, s = 2.0;
+  for (int k = 0; k < n * n; ++k) u[k] = gamma * (k / n - c), v[k] = 0;
+  semi_lagrangian::trace(u.data(), v.data(), n, s, bx.data(), by.data());
+  double shear_error = 0;
+  int compared = 0;
+  for (int k = 0; k < n * n; ++k) {
+    if (!inside(k)) continue;
+    const double i = k / n, j = k % n;
+    shear_error = std::max({shear_error, std::abs(bx[k] - (j - s * gamma * (i - c))), std::abs(by[k] - i)});
+    ++compared;
+  }
+  std::cout << "back-trace on a shear: largest error " << shear_error << " cells over " << compared << " points\n";
+  ASSERT_GT(compared, n * n / 4);
+  EXPECT_LE(shear_error, tolerance::trace_roundoff(n));
+
+  const double omega = 0.5;
+  for (int k = 0; k < n * n; ++k) u[k] = -omega * (k / n - c), v[k] = omega * (k % n - c);
+  std::vector<double> steps, errors;
+  for (double h = 0.4; h > 0.02; h /= 2) {
+    semi_lagrangian::trace(u.data(), v.data(), n, h, bx.data(), by.data());
+    const Eigen::Rotation2Dd back(-omega * h);
+    double worst = 0;
+    for (int k = 0; k < n * n; ++k) {
+      if (!inside(k)) continue;
+      const Eigen::Vector2d exact = Eigen::Vector2d(c, c) + back * Eigen::Vector2d(k % n - c, k / n - c);
+      worst = std::max(worst, (Eigen::Vector2d(bx[k], by[k]) - exact).norm());
+    }
+    steps.push_back(h);
+    errors.push_back(worst);
+  }
+  const double order = loglog_slope(steps, errors);
+  std::cout << "back-trace on a rotation: error " << errors.front() << " -> " << errors.back() << " cells, local order " << order << '\n';
+  EXPECT_NEAR(order, 3.0, tolerance::order_band);
+}
+
+TEST(Fluid, TheDiagnosticsAreTheTaylorGreenVortexsClosedForms) {
+  // u = A sin(kx) cos(ky), v = -A cos(kx) sin(ky) on [0, L)^2: kinetic energy (1/2) int |u|^2 = A^2 L^2 / 4,
+  // vorticity w = 2 A k sin(kx) sin(ky), enstrophy (1/2) int w^2 = A^2 k^2 L^2 / 2, their ratio 2 k^2; the grid's
+  // sums of these trigonometric products are the integrals exactly (discrete orthogonality), so only round-off is
+  // left; and at t both decay as e^(-4 nu k^2 t) (the velocity as e^(-2 nu k^2 t))
+  const double A = 0.7, L = 2.0, nu = 0.01, t = 0.5;
+  const int n = 32, mode = 2;
+  const double k = 2 * std::numbers::pi * mode / L;
+  const auto model = make_model("taylor-green", {{"size", n}, {"length", L}, {"mode", mode}, {"amplitude", A}, {"viscosity", nu}});
+  for (const double at : {0.0, t}) {
+    const Eigen::VectorXd y = model->exact(at);
+    const double decay = std::exp(-4 * nu * k * k * at);
+    const double energy = summary_value(*model, y, "kinetic_energy"), enstrophy = summary_value(*model, y, "enstrophy");
+    std::cout << "Taylor-Green at t = " << at << ": kinetic energy " << energy << " (closed form " << A * A * L * L / 4 * decay << "), enstrophy " << enstrophy
+              << " (" << A * A * k * k * L * L / 2 * decay << "), ratio / 2k^2 " << enstrophy / energy / (2 * k * k) << '\n';
+    EXPECT_NEAR(energy / (A * A * L * L / 4 * decay), 1, tolerance::grid_sum_roundoff(n));
+    EXPECT_NEAR(enstrophy / (A * A * k * k * L * L / 2 * decay), 1, tolerance::grid_sum_roundoff(n));
+    EXPECT_NEAR(enstrophy / energy / (2 * k * k), 1, tolerance::grid_sum_roundoff(n));
+    EXPECT_NEAR(summary_value(*model, y, "max_divergence"), 0, tolerance::spectral_divergence * 2 * A * k);
+  }
+}
+
+TEST(Fluid, TheEnergyFallsAtTwiceTheViscosityTimesTheEnstrophyInTheRunsOwnNumbers) {
+  // dE/dt = -2 nu Z for the unforced semi-discrete system (advection and projection do no work): between two
+  // outputs dt apart, E(t + dt) - E(t) = -nu dt (Z(t) + Z(t + dt)) with the trapezoid rule's error, at most
+  // (dt^3 / 12) 2 nu max |Z''|, Z'' estimated from the run's own second differences; the shear layer rolling up
+  const double nu = 2e-3, dt = 0.01;
+  const auto model = make_model("shear-layer", {{"size", 32}, {"viscosity", nu}});
+  StepControl control = StepControl::fixed(1e-3);
+  control.observe = [&](const Eigen::VectorXd& y) { return model->summary(y); };
+  const Measured m = run_and_measure(*model, "rk4", control, 1.0, dt);
+  ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+  const auto names = model->summary_names();
+  const auto column = [&](std::string_view name) {
+    const size_t c = std::find(names.begin(), names.end(), name) - names.begin();
+    std::vector<double> out;
+    for (const auto& s : m.result.trajectory.y) out.push_back(s[static_cast<Eigen::Index>(c)]);
+    return out;
+  };
+  const std::vector<double> E = column("kinetic_energy"), Z = column("enstrophy");
+  ASSERT_GE(E.size(), 50u);
+  double z2 = 0, worst = 0, dissipated = 0;
+  for (size_t i = 1; i + 1 < Z.size(); ++i) z2 = std::max(z2, std::abs(Z[i + 1] - 2 * Z[i] + Z[i - 1]) / (dt * dt));
+  for (size_t i = 0; i + 1 < E.size(); ++i) {
+    const double trapezoid = -nu * dt * (Z[i] + Z[i + 1]);
+    worst = std::max(worst, std::abs(E[i + 1] - E[i] - trapezoid));
+    dissipated = std::max(dissipated, std::abs(trapezoid));
+  }
+  const double bound = tolerance::trapezoid_bound_safety * dt * dt * dt / 12 * 2 * nu * z2;
+  std::cout << "shear layer, nu = " << nu << ": |dE - (-2 nu Z dt)| at most " << worst << " a step of " << dt << " s, the trapezoid's bound " << bound
+            << ", the dissipation " << dissipated << '\n';
+  EXPECT_LE(worst, bound);
+  EXPECT_GT(dissipated, 10 * bound) << "the balance is not within the bound by being small";
+}
+
+// bilinear interpolation's error bound integrated over the square, for a field q (n x n, spacing d): each point's
+// (d^2 / 8)(|q_xx| + |q_yy|) from its second differences, times its area d^2
+double interpolation_error_integral(const double* q, int n, double d) {
+  double sum = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double c = q[i * n + j];
+      const double xx = std::abs(q[i * n + (j + 1) % n] - 2 * c + q[i * n + (j + n - 1) % n]);
+      const double yy = std::abs(q[((i + 1) % n) * n + j] - 2 * c + q[((i + n - 1) % n) * n + j]);
+      sum += d * d / 8 * (xx + yy);
+    }
+  return sum;
+}
+
+// the mean of field q (0 u, 1 v) over the grid
+double mean_velocity(const Eigen::VectorXd& y, int n, int q) { return y.segment(static_cast<Eigen::Index>(q) * n * n, n * n).mean(); }
+
+TEST(Fluid, TheSmokesMeanVelocityStaysZeroAndStableFluidsConvergesToTheMethodOfLines) {
+  // buoyancy lifts the density above its mean and pushes the rest down (Boussinesq about the mean), so the flow's
+  // mean momentum, its k = 0 mode, which the projection and the advection keep, stays zero to round-off: in
+  // both the method of lines and Stable Fluids, at every output. A lift from the whole density would move the
+  // smoke up as one at b x (mean density)
+  // Stable Fluids' advection interpolates, which moves a field's mean by at most bilinear's error integrated over
+  // the square (as the density total's test below), a step: its bound is that, summed over the steps
+  const double t = 1.0;
+  for (const auto& [method, h] : {std::pair{"rk4", 5e-3}, {"stable-fluids", 1.0 / 32}}) {
+    const int n = 64;
+    const auto smoke = make_model("smoke", {{"size", n}});
+    const Measured m = run_and_measure(*smoke, method, whole(StepControl::fixed(h)), t, h);
+    ASSERT_EQ(m.result.status, Status::ok) << method;
+    double worst = 0, largest = 0, interpolation = 0;
+    for (const auto& y : m.result.trajectory.y) {
+      worst = std::max({worst, std::abs(mean_velocity(y, n, 0)), std::abs(mean_velocity(y, n, 1))});
+      largest = std::max(largest, y.head(2 * n * n).lpNorm<Eigen::Infinity>());
+      interpolation += std::max(interpolation_error_integral(y.data(), n, 1.0 / n), interpolation_error_integral(y.data() + n * n, n, 1.0 / n));
+    }
+    const double roundoff = tolerance::fft_roundtrip_roundoff(n) * (t / h) * 4 * largest;
+    const double bound = method == std::string("rk4") ? roundoff : roundoff + tolerance::semi_lagrangian_mass_bound * interpolation;
+    std::cout << method << " on the smoke: largest mean velocity " << worst << " m/s over " << t << " s (bound " << bound << ", largest |u| " << largest
+              << ")\n";
+    EXPECT_GT(largest, 0) << method << ": the smoke rises";
+    EXPECT_LE(worst, bound) << method;
+  }
+  // Stable Fluids against the method of lines on the same grid (rk4 at a hundredth of its step: the reference),
+  // grid and step refined together at a fixed advective CFL: the velocities' difference falls at first order
+  double previous = 0;
+  for (const int n : {32, 64, 128}) {
+    const auto smoke = make_model("smoke", {{"size", n}});
+    const double h = 1.0 / n, t_end = 0.25;
+    const Measured reference = run_and_measure(*smoke, "rk4", whole(StepControl::fixed(h / 8)), t_end, t_end);
+    const Measured stam = run_and_measure(*smoke, "stable-fluids", whole(StepControl::fixed(h)), t_end, t_end);
+    ASSERT_EQ(reference.result.status, Status::ok);
+    ASSERT_EQ(stam.result.status, Status::ok);
+    const Eigen::VectorXd a = reference.result.trajectory.y.back().head(2 * n * n), b = stam.result.trajectory.y.back().head(2 * n * n);
+    const double gap = (a - b).norm() / a.norm();
+    std::cout << "smoke at " << t_end << " s on " << n << "^2, h = " << h << ": stable-fluids against the method of lines, relative gap " << gap << '\n';
+    if (previous > 0) {
+      EXPECT_LT(gap, previous / tolerance::first_order_refinement) << n;
+    }
+    previous = gap;
+  }
 }
 
 // The double shear layer has no exact solution; its reference is a converged run, in both senses:
@@ -267,17 +497,7 @@ TEST(Fluid, StableFluidsDensityTotalStaysWithinTheInterpolationBoundAndConverges
     const Measured m = run_and_measure(*smoke, "stable-fluids", whole(StepControl::fixed(h)), t, h);
     ASSERT_EQ(m.result.status, Status::ok);
     double bound = 0;
-    for (size_t s = 0; s + 1 < m.result.trajectory.y.size(); ++s) {
-      const double* rho = m.result.trajectory.y[s].data() + 2 * n * n;
-      // each point's bound, (d^2 / 8)(|rho_xx| + |rho_yy|) from its second differences, times its area d^2
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          const double c = rho[i * n + j];
-          const double xx = std::abs(rho[i * n + (j + 1) % n] - 2 * c + rho[i * n + (j + n - 1) % n]);
-          const double yy = std::abs(rho[((i + 1) % n) * n + j] - 2 * c + rho[((i + n - 1) % n) * n + j]);
-          bound += d * d / 8 * (xx + yy);
-        }
-    }
+    for (size_t s = 0; s + 1 < m.result.trajectory.y.size(); ++s) bound += interpolation_error_integral(m.result.trajectory.y[s].data() + 2 * n * n, n, d);
     const double drift = std::abs(summary_value(*smoke, m.result.trajectory.y.back(), "density_total") - source);
     std::cout << "stable-fluids smoke on " << n << "^2: the density total drifts by " << drift / source << " of the source's " << source
               << "; the interpolation bound " << bound / source << '\n';

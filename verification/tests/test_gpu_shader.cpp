@@ -1,4 +1,5 @@
-// The seeds' GPU simulation (issue 9) on llvmpipe through OSMesa, no GPU needed: the wave schemes'
+// The seeds' GPU simulation (issue 9) on llvmpipe through OSMesa, no GPU needed (on a GPU through EGL with
+// STEPWISE_GPU_BACKEND=egl, where the bitwise claims that hold for llvmpipe alone are not made): the wave schemes'
 // fragment passes against the float32 CPU loops step for step, against float64 to show what precision
 // costs, and against the exactly evolved DST modes; the cloth's pass against its float32 CPU step, that step
 // in float64 against the model's own symplectic Euler, and gpu-cloth as `run` takes it.
@@ -21,8 +22,9 @@
 namespace stepwise {
 namespace {
 
+// the GPU methods' backend: OSMesa (llvmpipe) unless STEPWISE_GPU_BACKEND=egl (a GPU's driver, where one is)
 gl::Context& context() {
-  static const std::unique_ptr<gl::Context> c = gl::make_osmesa_context();
+  static const std::unique_ptr<gl::Context> c = gl::make_context(gpu::backend());
   return *c;
 }
 
