@@ -141,20 +141,10 @@ int run(int argc, char** argv) {
   return 2;
 }
 
-}  // namespace
-
 // the one guard: nothing escapes main. Bad input (the commands' own InputError, a file system refusing a path
 // the user gave) is exit 2, anything else a failed run, exit 1; either way one line, and the outputs as the
 // commands leave them (temporaries removed as their guards unwind; the previous outputs untouched)
-int main(int argc, char** argv) {
-  std::optional<stepwise::ranks::Session> mpi;  // MPI under mpirun only (run/ranks.hpp)
-  try {
-    mpi.emplace(argc, argv);
-  } catch (const std::exception& e) {
-    stepwise::print_error("", e.what());
-    return 1;
-  }
-  stepwise::interrupt::install();
+int guarded(int argc, char** argv) {
   try {
     return run(argc, argv);
   } catch (const stepwise::InputError& e) {
@@ -173,4 +163,21 @@ int main(int argc, char** argv) {
     stepwise::print_error("", "failed: an unknown exception");
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::optional<stepwise::ranks::Session> mpi;  // MPI under mpirun only (run/ranks.hpp)
+  try {
+    mpi.emplace(argc, argv);
+  } catch (const std::exception& e) {
+    stepwise::print_error("", e.what());
+    return 1;
+  }
+  stepwise::interrupt::install();
+  const int code = guarded(argc, argv);
+  // an interruption under way ends the process itself, with its status and its line
+  stepwise::interrupt::settle();
+  return code;
 }

@@ -40,8 +40,11 @@ int run_command(const RunOptions& options) {
       }
     }
     if (leader) {
-      ensure_writable_directory(options.out);
+      // every output checked before the directory is made or anything runs: a refusal leaves nothing behind
+      check_writable_directory(options.out);
       check_output_fits(options.out, p);
+      for (const char* name : {"trajectory.csv", "summary.json"}) check_replaceable_file(std::filesystem::path(options.out) / name);
+      ensure_writable_directory(options.out);
       interrupt::remove_stale(options.out);
       outputs = std::make_unique<RunOutputs>(options.out, p);
     }
@@ -74,11 +77,6 @@ int run_command(const RunOptions& options) {
     // the rows go to the trajectory's file as they come
     p.control.sink = [&outputs](double t, const Eigen::VectorXd& sample) { return outputs->sample(t, sample); };
     m = run_and_measure(*p.model, p.method, p.control, p.t_end, p.output_dt);
-  }
-  if (m.error && !std::isfinite(*m.error)) {
-    m.result.status = Status::diverged;
-    m.result.message = fmt::format("diverged at t = {:.9g}: the error against the exact solution overflowed ({})", p.t_end, *m.error);
-    m.result.t_stop = p.t_end;
   }
   try {
     outputs->finish(m);

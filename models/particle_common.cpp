@@ -10,24 +10,21 @@ namespace stepwise {
 
 int particle_count(const Params& params, std::string_view key, double bytes_each, std::string_view what) {
   const double count = params.at(std::string(key));
-  const double memory = physical_memory_bytes();
   if (count != std::floor(count) || count < 1)
     throw BadParameter(std::string(key), fmt::format("parameter '{}' must be a whole number of {}, got {}", key, what, count));
-  if (count * bytes_each > memory / 2 || count > 2e9)
-    throw BadParameter(std::string(key), fmt::format("parameter '{}' = {:.0f} would not fit in memory: about {:.3g} GiB, "
-                                                     "and this machine has {:.3g} GiB",
-                                                     key, count, count * bytes_each / 0x1p30, memory / 0x1p30));
+  if (over_memory_budget(count * bytes_each) || count > 2e9)
+    throw BadParameter(std::string(key), fmt::format("parameter '{}' = {:.0f} would not fit in memory: about {:.3g} GiB, {}", key, count,
+                                                     count * bytes_each / 0x1p30, memory_budget_text()));
   return static_cast<int>(count);
 }
 
 std::pair<int, int> particle_grid(const Params& params, std::string_view rows, std::string_view columns, double bytes_each,
                                   std::string_view what) {
   const int r = particle_count(params, rows, bytes_each, what), c = particle_count(params, columns, bytes_each, what);
-  const double count = static_cast<double>(r) * c, memory = physical_memory_bytes();
-  if (count * bytes_each > memory / 2 || count > 2e9)
-    throw BadParameter(std::string(rows), fmt::format("parameters '{}' x '{}' = {:.0f} {} would not fit in memory: about {:.3g} GiB, "
-                                                      "and this machine has {:.3g} GiB",
-                                                      rows, columns, count, what, count * bytes_each / 0x1p30, memory / 0x1p30));
+  const double count = static_cast<double>(r) * c;
+  if (over_memory_budget(count * bytes_each) || count > 2e9)
+    throw BadParameter(std::string(rows), fmt::format("parameters '{}' x '{}' = {:.0f} {} would not fit in memory: about {:.3g} GiB, {}", rows,
+                                                      columns, count, what, count * bytes_each / 0x1p30, memory_budget_text()));
   return {r, c};
 }
 

@@ -37,7 +37,8 @@ EncodeQueue::~EncodeQueue() {
 
 void EncodeQueue::push(Image image) {
   {
-    std::lock_guard lock(mutex_);
+    std::unique_lock lock(mutex_);
+    room_.wait(lock, [&] { return pending_.size() < max_pending; });
     pending_.push_back(std::move(image));
   }
   ready_.notify_all();
@@ -63,6 +64,7 @@ void EncodeQueue::work() {
       image = std::move(pending_.front());
       pending_.pop_front();
     }
+    room_.notify_all();
     // after a failure the rest are dropped: the first error is the one to report
     if (error_) continue;
     try {

@@ -26,9 +26,12 @@ std::string encode_png(const Image& image);
 std::string pixel_hash(const Image& image);
 
 // encodes images in order on one worker thread and hands each PNG to `write` (there, on that thread);
-// finish() waits for all and rethrows the first exception a write raised
+// finish() waits for all and rethrows the first exception a write raised. At most max_pending images wait:
+// push() waits for room, so that drawing faster than encoding (14 ms a 1280 x 720 frame against 70 ms to
+// encode it) does not hold every frame in memory at once
 class EncodeQueue {
  public:
+  static constexpr size_t max_pending = 2;
   explicit EncodeQueue(std::function<void(size_t index, const std::string& png)> write);
   ~EncodeQueue();
   EncodeQueue(const EncodeQueue&) = delete;
@@ -40,7 +43,7 @@ class EncodeQueue {
   void work();
   std::function<void(size_t, const std::string&)> write_;
   std::mutex mutex_;
-  std::condition_variable ready_;
+  std::condition_variable ready_, room_;
   std::deque<Image> pending_;
   size_t next_ = 0;
   bool closing_ = false;

@@ -9,9 +9,11 @@ method, the same in every figure. With --html, DIR/report.md becomes DIR/index.h
 Needs Debian's python3-matplotlib (and python3-markdown for --html); exit status 3 names a missing one.
 """
 import csv
+import ctypes
 import math
 import multiprocessing
 import os
+import signal
 import sys
 
 try:
@@ -414,6 +416,15 @@ def draw(directory, kind, subject, dpi):
     DRAWERS[kind](directory, subject, Styles(directory))
 
 
+def die_with_parent(parent):
+    """a worker's first act: ask for SIGTERM when its parent (this script) dies, as stepwise asks of this script
+    (prctl PR_SET_PDEATHSIG = 1), so that a report killed outright leaves no worker writing into its staging
+    directory; a parent already gone ends it at once"""
+    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)
+    if os.getppid() != parent:
+        os._exit(1)
+
+
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
@@ -429,7 +440,7 @@ def main():
     if jobs > 1 and len(figures) > 1:
         # the figures are independent (each reads CSVs and writes its own PNG): drawn by forked workers, one
         # figure at a time each; a worker's exception is raised here
-        with multiprocessing.get_context("fork").Pool(min(jobs, len(figures))) as pool:
+        with multiprocessing.get_context("fork").Pool(min(jobs, len(figures)), die_with_parent, (os.getpid(),)) as pool:
             pool.starmap(draw, figures, chunksize=1)
     else:
         for figure in figures:

@@ -8,6 +8,7 @@
 #include "run/interrupt.hpp"
 #include "run/provenance.hpp"
 #include "run/ranks.hpp"
+#include "run/scene.hpp"
 #include "studies.hpp"
 #include "solvers/method_table.hpp"
 
@@ -25,10 +26,13 @@
 namespace stepwise {
 namespace fs = std::filesystem;
 
+// the studies' names, and the report's pictures (every scene drawn), which `stepwise study` runs alone too
+constexpr const char* pictures_study = "pictures";
+
 std::string study_names() {
   std::string names;
   for (const auto& s : studies()) names += (names.empty() ? "" : " | ") + std::string(s.name);
-  return names;
+  return names + " | " + pictures_study;
 }
 
 namespace {
@@ -154,7 +158,8 @@ int threads_or_default(int requested) { return requested > 0 ? requested : stati
 int study_command(const std::string& name, bool quick, int threads, const std::string& out) {
   const bool writer = ranks::rank() == 0;
   const Study* study = find_study(name);
-  if (!study) {
+  const bool pictures = name == pictures_study;
+  if (!study && !pictures) {
     if (writer) print_error("study", fmt::format("unknown study '{}' (one of {})", name, study_names()));
     return 2;
   }
@@ -176,11 +181,17 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
     StudyContext ctx{quick, threads_or_default(threads), writer ? &progress : nullptr};
     ctx.load = &load;
     std::vector<Figure> figures;
-    const std::string md = run_study(*study, ctx, out, figures);
+    if (pictures) {  // rank 0's alone, as in the report
+      together = false;
+      if (!writer) return 0;
+      ctx.distribute = false;
+      ctx.load = nullptr;
+    }
+    const std::string md = pictures ? pictures_section(out, scenes_directory(), ctx) : run_study(*study, ctx, out, figures);
     together = false;
     if (!writer) return 0;
     write_file_atomic(fs::path(out) / (name + ".md"), md);
-    draw_figures(figures, out, ctx.threads, false);
+    if (!pictures) draw_figures(figures, out, ctx.threads, false);
     write_provenance(out, fmt::format("study {}{}", name, quick ? " --quick" : ""), ctx, start);
   } catch (const std::exception& e) {
     return fail("study", e, together);

@@ -27,6 +27,7 @@ unsigned default_mode(bool directory) {
 }
 
 AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
+  check_replaceable_file(target_);
   temporary_ = (target_.parent_path() / fmt::format(".{}{}XXXXXX", target_.filename().string(), interrupt::temporary_tag())).string();
   {
     // made and registered as one: an interruption between the two would leave the file unlisted, and one
@@ -101,6 +102,14 @@ void check_writable_directory(const std::filesystem::path& dir) {
     throw std::runtime_error(fmt::format("{}: cannot create output directory: {} is not a directory", dir.string(), at.string()));
   if (::access(at.c_str(), W_OK | X_OK) != 0)
     throw std::runtime_error(fmt::format("{}: {} is not writable: {}", dir.string(), at.string(), std::strerror(errno)));
+}
+
+void check_replaceable_file(const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || status.type() == std::filesystem::file_type::not_found || status.type() == std::filesystem::file_type::regular) return;
+  throw std::runtime_error(fmt::format("{}: {} is there, where the output file goes: move it away or choose another --out", path.string(),
+                                       std::filesystem::is_directory(status) ? "a directory" : "something other than a file"));
 }
 
 void ensure_writable_directory(const std::filesystem::path& dir) {

@@ -51,4 +51,8 @@ void check_writable_directory(const std::filesystem::path& dir);
 // create `dir` if needed and prove it writable; throws std::runtime_error naming it otherwise
 void ensure_writable_directory(const std::filesystem::path& dir);
 
+// whether a file could be renamed over `path`: nothing is there, or a file (or a link to one); throws
+// std::runtime_error naming it otherwise (a directory where trajectory.csv goes), before any work is done
+void check_replaceable_file(const std::filesystem::path& path);
+
 }  // namespace stepwise

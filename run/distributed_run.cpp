@@ -39,7 +39,7 @@ Measured DistributedRun::run(const PreparedRun& p, const std::function<std::stri
   };
   m.result = wave_fd_distributed(*grid_, *model.as<WaveGridView>(), *model.as<WaveBlocksView>(), control, m.t_out);
   m.result.y_stop = grid_->gather_state(m.result.y_stop);
-  if (leader) m.error = exact_error(model, m.result, p.t_end);
+  if (leader) measure_error(model, m, p.t_end);
   return m;
 }
 

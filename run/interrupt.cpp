@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <charconv>
 #include <csignal>
@@ -64,7 +65,14 @@ const char* signal_name(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGT
 // (OpenBLAS's pool), and a signal can be delivered to any of them
 int signal_pipe[2] = {-1, -1};
 
+// set by the handler before it writes (a lock-free atomic store is async-signal-safe): from then on the process
+// ends only by the cleaning thread's _exit (settle)
+std::atomic<bool> interrupted{false};
+static_assert(std::atomic<bool>::is_always_lock_free);
+std::atomic<std::thread::id> cleaner{};
+
 extern "C" void pass_signal(int sig) {
+  interrupted.store(true);
   const unsigned char byte = static_cast<unsigned char>(sig);
   [[maybe_unused]] const ssize_t n = ::write(signal_pipe[1], &byte, 1);
 }
@@ -76,6 +84,7 @@ void install() {
   std::call_once(once, [] {
     if (::pipe2(signal_pipe, O_CLOEXEC) != 0) return;
     std::thread([] {
+      cleaner.store(std::this_thread::get_id());
       unsigned char byte = 0;
       while (::read(signal_pipe[0], &byte, 1) != 1) {
       }
@@ -87,6 +96,11 @@ void install() {
     action.sa_flags = SA_RESTART;
     for (const int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &action, nullptr);
   });
+}
+
+void settle() {
+  if (!interrupted.load() || std::this_thread::get_id() == cleaner.load()) return;
+  for (;;) ::pause();
 }
 
 Temporary::Temporary(fs::path path) : path_(std::move(path)) {

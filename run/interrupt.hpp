@@ -14,6 +14,13 @@ namespace stepwise::interrupt {
 // take the signals (a handler that wakes the cleaning thread); call first in main
 void install();
 
+// once a signal has come, wait for the cleaning thread to end the process (never returns); else return at once.
+// Called before an error is said and before main returns: an interruption removes the temporaries a run is
+// writing into, its threads then fail, and a main returning meanwhile would run the static destructors (Mesa's,
+// FFTW's) under threads still drawing, and say a failure where the interruption is the news (SIGTERM during
+// the report's pictures died of SIGSEGV one try in three). The cleaning thread itself returns at once
+void settle();
+
 // a path removed (recursively) if the process is interrupted while the guard lives
 class Temporary {
  public:

@@ -1,5 +1,7 @@
 #include "measure.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 
 namespace stepwise {
@@ -26,8 +28,17 @@ Measured run_and_measure(const Model& model, std::string_view method, const Step
   // a large state is summarised at output times, not kept whole
   if (!model.summary_names().empty() && !c.observe) c.observe = [&model](const Eigen::VectorXd& y) { return model.summary(y); };
   m.result = make_integrator(method, c)->integrate(model, 0.0, model.initial_state(), m.t_out);
-  m.error = exact_error(model, m.result, t_end);
+  measure_error(model, m, t_end);
   return m;
+}
+
+void measure_error(const Model& model, Measured& m, double t_end) {
+  m.error = exact_error(model, m.result, t_end);
+  if (!m.error || std::isfinite(*m.error)) return;
+  m.result.status = Status::diverged;
+  m.result.message = fmt::format("diverged at t = {:.9g}: the error against the exact solution overflowed ({})", t_end, *m.error);
+  m.result.t_stop = t_end;
+  m.error.reset();
 }
 
 std::optional<double> exact_error(const Model& model, const RunResult& result, double t_end) {

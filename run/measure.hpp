@@ -28,6 +28,10 @@ Measured run_and_measure(const Model& model, std::string_view method, const Step
 // |y_stop - exact(t_end)|inf for a run that reached t_end on a model with an exact solution; empty otherwise
 std::optional<double> exact_error(const Model& model, const RunResult& result, double t_end);
 
+// m.error from exact_error; a run whose error is not finite (its state or the exact solution overflowing) is
+// diverged at t_end, saying so, never `ok` (the one place: run, render, the studies and split runs measure here)
+void measure_error(const Model& model, Measured& m, double t_end);
+
 // |a - b|inf
 double max_norm_error(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 

@@ -8,9 +8,12 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <limits>
 #include <sys/statvfs.h>
 
 namespace stepwise {
@@ -72,6 +75,21 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
     if (!y0.allFinite()) throw InputError(fmt::format("{}: the parameters give a non-finite initial state", s.where("parameters")));
     if (const auto e0 = p.model->energy(y0); e0 && !std::isfinite(*e0))
       throw InputError(fmt::format("{}: the parameters give an initial energy that overflows ({})", s.where("parameters"), *e0));
+    // the blow-up test compares |y| with blowup x max(1, |y0|): a start so large that the bound overflows (an angle
+    // of 1e308) could never be seen to diverge, and ran to `ok` with an error of 1e308. Refused, naming the
+    // parameter that gave the entry where one did (else the state entry)
+    Eigen::Index at = 0;
+    const double largest = y0.size() ? y0.cwiseAbs().maxCoeff(&at) : 0.0;
+    if (const double blowup = StepControl{}.blowup; !std::isfinite(blowup * std::max(1.0, largest))) {
+      std::string where = s.where("parameters");
+      for (const auto& [key, value] : values)
+        if (std::abs(value) == largest) where = set_origin.count(key) ? set_origin.at(key) : s.where("parameters." + key);
+      const auto names = p.model->state_names();
+      throw InputError(fmt::format("{}: the initial {} = {:g} is too large for a run to tell divergence from it (the blow-up test at {:g} "
+                                   "x |y0| overflows above |y0| = {:.3g})",
+                                   where, at < static_cast<Eigen::Index>(names.size()) ? names[static_cast<size_t>(at)] : "state", y0[at], blowup,
+                                   std::numeric_limits<double>::max() / blowup));
+    }
   }
 
   // method and step control: the command line wins over the scene; --dt and --rtol exclude each other
@@ -107,11 +125,10 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   } catch (const BadMethod& e) {
     throw InputError(fmt::format("{}: {}", adaptive ? "--rtol" : "--dt", e.what()));
   }
-  if (const double bytes = dense_matrix_bytes(*method, *p.model); bytes > 0.5 * physical_memory_bytes())
-    throw InputError(fmt::format("{}: {} keeps dense {} x {} matrices ({:.3g} GiB) for this {}-entry state, more than half this "
-                                 "machine's memory: use an explicit method{}",
+  if (const double bytes = dense_matrix_bytes(*method, *p.model); over_memory_budget(bytes))
+    throw InputError(fmt::format("{}: {} keeps dense {} x {} matrices ({:.3g} GiB) for this {}-entry state, {}: use an explicit method{}",
                                  o.method ? "--method" : s.where("run.method"), p.method, p.model->size(), p.model->size(),
-                                 bytes / 0x1p30, p.model->size(),
+                                 bytes / 0x1p30, p.model->size(), memory_budget_text(),
                                  p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
   // and the time: a dense LU of the Newton matrix takes (2/3) n^3 flops, at least once per step; past 1e12 (a
   // minute or more on one core here) a run of any length takes hours
@@ -154,6 +171,7 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
                  limit, mode.omega, mode.damping);
   }
   p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
+  p.output_dt_origin = o.output_dt ? "--output-dt" : s.output_dt ? s.where("run.output_dt") : "the default output step (t_end / 1000)";
   // budgets, from the inputs alone, before anything runs: the steps and the output rows
   const double max_steps = o.max_steps.value_or(default_max_steps);
   if (o.max_steps && !(max_steps >= 1 && max_steps <= 1e15 && std::floor(max_steps) == max_steps))
@@ -165,27 +183,37 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
       throw InputError(fmt::format("{} and {}: t_end / dt = {:.3g} steps, more than the {:.3g} allowed: take a larger step or a shorter run, "
                                    "or raise the limit with --max-steps", o.dt ? "--dt" : s.where("run.dt"), where_t_end(), steps, max_steps));
   }
+  // a fixed-step run samples on its own step grid: an output time between grid points would shorten a step
+  // and change the very run being sampled (a dt beyond the stability limit would be hidden by short steps).
+  // Rounded first, so that the rows counted are the rows written (an output step of 1e-16 at dt = 1e-3 is one
+  // row a step, not 1e13 rows)
+  if (p.control.dt) p.output_dt = std::max(1.0, std::round(p.output_dt / *p.control.dt)) * *p.control.dt;
   const double rows = std::floor(p.t_end / p.output_dt);
   if (rows > max_steps)
     throw InputError(fmt::format("{}: t_end / output_dt = {:.3g} output rows, more than the {:.3g} allowed: sample less often, or raise "
-                                 "the limit with --max-steps", o.output_dt ? "--output-dt" : s.output_dt ? s.where("run.output_dt") : "output_dt",
-                                 rows, max_steps));
-  // a fixed-step run samples on its own step grid: an output time between grid points would shorten a step
-  // and change the very run being sampled (a dt beyond the stability limit would be hidden by short steps)
-  if (p.control.dt) p.output_dt = std::max(1.0, std::round(p.output_dt / *p.control.dt)) * *p.control.dt;
+                                 "the limit with --max-steps", p.output_dt_origin, rows, max_steps));
   // a row: t, the samples and the energy, 17 significant digits and a sign, exponent and comma each
   const double columns = 2.0 + static_cast<double>(p.model->summary_names().empty() ? p.model->state_names().size() : p.model->summary_names().size());
   p.output_bytes = (std::floor(p.t_end / p.output_dt) + 2) * columns * 25;
   return p;
 }
 
+std::optional<double> free_bytes_at(const std::string& path) {
+  std::filesystem::path at = std::filesystem::absolute(path).lexically_normal();
+  for (;;) {
+    struct statvfs fs {};
+    if (::statvfs(at.c_str(), &fs) == 0) return static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize);
+    if (errno != ENOENT || !at.has_relative_path()) return std::nullopt;
+    at = at.parent_path();
+  }
+}
+
 void check_output_fits(const std::string& out, const PreparedRun& p) {
-  struct statvfs fs {};
-  if (::statvfs(out.c_str(), &fs) != 0) return;  // unknown: the write itself will say
-  const double free_bytes = static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize);
-  if (p.output_bytes > free_bytes)
-    throw InputError(fmt::format("--output-dt: the trajectory would take about {:.3g} GB, more than the {:.3g} GB free in {}: sample "
-                                 "less often", p.output_bytes / 1e9, free_bytes / 1e9, out));
+  const auto free_bytes = free_bytes_at(out);
+  if (!free_bytes) return;  // unknown: the write itself will say
+  if (p.output_bytes > *free_bytes)
+    throw InputError(fmt::format("{}: the trajectory, a row every {:g} s, would take about {:.3g} GB, more than the {:.3g} GB free in {}: "
+                                 "sample less often (--output-dt)", p.output_dt_origin, p.output_dt, p.output_bytes / 1e9, *free_bytes / 1e9, out));
 }
 
 }  // namespace stepwise

@@ -36,6 +36,7 @@ struct PreparedRun {
   StepControl control;
   double t_end = 0;
   double output_dt = 0;
+  std::string output_dt_origin;  // what set it: "--output-dt", the scene's run.output_dt, or the default
   double output_bytes = 0;  // the trajectory's size, estimated from its rows and columns
   int ranks = 1;            // the MPI ranks the run uses: 1, or under mpirun all of them for a split run (run/distributed_run.hpp)
 };
@@ -47,8 +48,12 @@ PreparedRun prepare_run(const RunOptions& options);
 // the same for a scene already loaded (options.scene_file unused)
 PreparedRun prepare_run(const RunOptions& options, Scene scene);
 
-// the trajectory's estimated size against the space free where it goes; InputError naming --output-dt and
-// both figures when it does not fit
+// the trajectory's estimated size against the space free where it goes; InputError naming what set the output
+// step (--output-dt, run.output_dt, or the default of 1000 rows) and both figures when it does not fit
 void check_output_fits(const std::string& out, const PreparedRun& p);
+
+// the bytes free to an unprivileged writer on the file system that holds `path`, or its nearest existing parent
+// (a directory not made yet); empty where it cannot be told
+std::optional<double> free_bytes_at(const std::string& path);
 
 }  // namespace stepwise

@@ -166,6 +166,8 @@ RenderedRun render_scene(const RenderOptions& options) {
     if (!p.model->shapes(p.model->initial_state()))
       throw InputError(fmt::format("{}: model {} has nothing to draw", p.scene.where("model"), p.scene.model));
     check_writable_directory(options.out);
+    check_replaceable_file(fs::path(options.out) / "render.json");
+    for (int k = 0; k < options.frames; ++k) check_replaceable_file(fs::path(options.out) / fmt::format("frame_{:04d}.png", k));
   } catch (const InputError&) {
     throw;
   } catch (const BadMethod& e) {
@@ -191,9 +193,23 @@ RenderedRun render_scene(const RenderOptions& options) {
     throw InputError(fmt::format("--frames {}: the run's step dt = {} s leaves room for only {} distinct frames up to t_end = {} s: ask for "
                                  "at most {}, or take a smaller --dt", options.frames, *p.control.dt, plan.count, p.t_end, plan.count));
   const double sample_bytes = (static_cast<double>(plan.count - 1) * static_cast<double>(plan.stride) + 1) * static_cast<double>(p.model->size()) * 8;
-  if (sample_bytes > 0.5 * physical_memory_bytes())
-    throw InputError(fmt::format("--frames {}: the frames' states would take {:.3g} GiB, more than half this machine's memory", options.frames,
-                                 sample_bytes / 0x1p30));
+  if (over_memory_budget(sample_bytes))
+    throw InputError(fmt::format("--frames {}: the frames' states would take {:.3g} GiB, {}", options.frames, sample_bytes / 0x1p30,
+                                 memory_budget_text()));
+  // the pixels' cost, before anything runs: the memory a frame takes to draw, read back and encode (measured
+  // over the ~100 MB a render starts with, at the peak: 50-67 bytes a pixel from 2048^2 to 8192 x 4096 — the
+  // GL's colour and depth buffers and llvmpipe's own, the read-back, the two frames the encoder may hold,
+  // stb's filtered rows and its output), and the disk the frames will take (a PNG at most half of its 4 bytes a
+  // pixel: the scenes' frames take 3-11%)
+  constexpr double bytes_per_pixel = 72, png_share = 0.5;
+  const double pixels = static_cast<double>(width) * height;
+  if (over_memory_budget(bytes_per_pixel * pixels))
+    throw InputError(fmt::format("--size {}: a frame takes about {:.3g} GiB to draw, read back and encode ({:.0f} bytes a pixel), {}",
+                                 options.size, bytes_per_pixel * pixels / 0x1p30, bytes_per_pixel, memory_budget_text()));
+  if (const auto free_bytes = free_bytes_at(options.out); free_bytes && png_share * 4 * pixels * plan.count > *free_bytes)
+    throw InputError(fmt::format("--size {} and --frames {}: the frames may take up to {:.3g} GB (a PNG at most half of its 4 bytes a pixel), "
+                                 "more than the {:.3g} GB free in {}", options.size, plan.count, png_share * 4 * pixels * plan.count / 1e9,
+                                 *free_bytes / 1e9, options.out));
   const bool movies = ffmpeg_takes(width, height);
   if (!movies && options.frames > 1)
     print_error("render", fmt::format("--size {}: larger than ffmpeg takes ((width + 128)(height + 128) must stay below 2^28): writing the "
@@ -289,9 +305,14 @@ RenderedRun render_scene(const RenderOptions& options) {
     throw InputError(e.what());
   }
 
+  // a frame of a few pixels is one colour whatever the camera sees (a 1 x 1 frame always): said as such
+  constexpr double fewest_telling_pixels = 32 * 32;
   if (empty_frames > 0)
-    print_error("render", fmt::format("{} of {} frames show one colour only: the scene is outside the camera's view (see render.json's camera)",
-                                      empty_frames, shapes.size()));
+    print_error("render", static_cast<double>(width) * height < fewest_telling_pixels
+                              ? fmt::format("{} of {} frames show one colour only: a {} x {} frame is too small to show the scene", empty_frames,
+                                            shapes.size(), width, height)
+                              : fmt::format("{} of {} frames show one colour only: the scene is outside the camera's view (see render.json's camera)",
+                                            empty_frames, shapes.size()));
   try {
     std::lock_guard lock(summary_mutex);
     write_file_atomic(out / "render.json", summary.dump(2) + "\n");

@@ -1,5 +1,7 @@
 #include "integrator.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <ctime>
@@ -34,6 +36,12 @@ double physical_memory_bytes() {
     return memory;
   }();
   return bytes;
+}
+
+bool over_memory_budget(double bytes) { return bytes > 0.5 * physical_memory_bytes(); }
+
+std::string memory_budget_text() {
+  return fmt::format("more than half of this machine's {:.3g} GiB, the most a run may plan on", physical_memory_bytes() / 0x1p30);
 }
 
 double thread_cpu_seconds() {

@@ -103,6 +103,11 @@ struct RunResult {
 // (the smallest of the machine's, its cgroup's memory.max and $STEPWISE_MEMORY in bytes)
 double physical_memory_bytes();
 
+// the memory budget every refusal keeps, in its words: a run may plan on at most half of physical_memory_bytes()
+// ("more than half of this machine's 23.5 GiB, the most a run may plan on")
+bool over_memory_budget(double bytes);
+std::string memory_budget_text();
+
 // thread CPU time in seconds: sweeps run in parallel, so process time would mix runs
 double thread_cpu_seconds();
 

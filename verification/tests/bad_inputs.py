@@ -36,6 +36,8 @@ def prepare(case, d):
         open(os.path.join(d, "out", "report.md"), "w").close()
         with open(os.path.join(d, "out", "data.csv"), "w") as f:
             f.write("a,b\n1,2\n")
+    elif setup == "output_blocked":
+        os.makedirs(os.path.join(d, "out", "trajectory.csv"))
     elif setup == "file":
         with open(os.path.join(d, "file"), "w") as f:
             f.write("mine\n")

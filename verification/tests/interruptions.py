@@ -8,9 +8,14 @@ usage: interruptions.py STEPWISE SCENES_DIR
   staging directory, after SIGKILL the next report's start removes the one left.
 - `run` killed while streaming a long trajectory: the previous trajectory.csv and summary.json intact, no
   temporary after SIGTERM, and the one a SIGKILL left removed by the next run.
-- `render` stopped: render.json written for the frames finished."""
+- `render` stopped: render.json written for the frames finished.
+- the report's pictures (`study pictures --quick`: every scene drawn by its own sweep thread and GL context,
+  frames encoded, ffmpeg children) sent SIGTERM 20 times at random moments of their first 3 s: each exit 143
+  with the interruption's one line and nothing else of ours (a run's threads fail as their files go; a main
+  returning then ran the static destructors under them: SIGSEGV one try in three), no litter."""
 import json
 import os
+import random
 import shutil
 import signal
 import subprocess
@@ -100,6 +105,20 @@ def main():
             expect(all(os.path.exists(os.path.join(frames, f)) for f in listed), "render.json lists a frame not written")
             print(f"render stopped after {len(listed)} frames; render.json lists them")
         expect(not litter(frames), f"render stopped by SIGTERM: left {litter(frames)}")
+
+        # the pictures' sweep threads stopped at random moments
+        rng = random.Random(42)
+        tries, started = 20, time.time()
+        for k in range(tries):
+            pictures = os.path.join(d, f"pictures{k}")
+            code, err = stop(start([binary, "study", "pictures", "--quick", "--out", pictures]), signal.SIGTERM, rng.uniform(0.2, 3.0))
+            # ours, less the progress lines ("stepwise: study pictures ...", "stepwise:   3/25 points, ...")
+            ours = [line for line in err.splitlines() if line.startswith("stepwise") and not line.startswith(("stepwise: study ", "stepwise:   "))]
+            expect(code == 128 + signal.SIGTERM, f"pictures stopped by SIGTERM (try {k + 1}): exit status {code}; said {err[-300:]!r}")
+            expect(len(ours) == 1 and "interrupted (SIGTERM)" in ours[0], f"pictures stopped by SIGTERM (try {k + 1}): said {ours!r}")
+            expect(not litter(pictures), f"pictures stopped by SIGTERM (try {k + 1}): left {litter(pictures)}")
+            shutil.rmtree(pictures, ignore_errors=True)
+        print(f"pictures: {tries} SIGTERMs in {time.time() - started:.0f} s")
     finally:
         shutil.rmtree(d, ignore_errors=True)
     print("interruptions:", "ok" if not failures else f"{len(failures)} failure(s)")
