@@ -150,17 +150,25 @@ void encode_movies(const fs::path& dir, int fps) {
   }
 }
 
-}  // namespace
-
-RenderedRun render_scene(const RenderOptions& options) {
+// everything the inputs alone say, checked before a GL context is made or anything runs: the scene prepared as
+// `run` takes it, the frame's size and backend, when the frames fall, and what they cost in memory and on disk
+struct RenderPlan {
   PreparedRun p;
-  std::pair<int, int> size;
+  int width = 0, height = 0;
   gl::Backend backend{};
+  bool has_trails = false;
+  FramePlan frames;
+};
+
+RenderPlan plan_render(const RenderOptions& options) {
+  RenderPlan r;
+  PreparedRun& p = r.p;
+  std::pair<int, int> size;
   try {
     size = parse_size(options.size);
     const auto parsed = gl::parse_backend(options.backend);
     if (!parsed) throw InputError(fmt::format("--backend {}: unknown backend (osmesa or egl)", options.backend));
-    backend = *parsed;
+    r.backend = *parsed;
     if (options.frames < 1 || options.frames > 100000) throw InputError(fmt::format("--frames {}: must lie in 1..100000", options.frames));
     p = prepare_run(options.run);
     if (!p.model->shapes(p.model->initial_state()))
@@ -175,20 +183,14 @@ RenderedRun render_scene(const RenderOptions& options) {
   } catch (const std::runtime_error& e) {
     throw InputError(fmt::format("--out: {}", e.what()));
   }
-
-  std::unique_ptr<gl::Context> context;
-  try {
-    context = gl::make_context(backend);
-  } catch (const gl::GlError& e) {
-    throw InputError(fmt::format("--backend {}: {}", options.backend, e.what()));
-  }
-
   const auto [width, height] = size;
-  const fs::path out(options.out);
+  r.width = width;
+  r.height = height;
   const Shapes first = *p.model->shapes(p.model->initial_state());
-  const bool has_trails = std::any_of(first.balls.begin(), first.balls.end(), [](const Shapes::Ball& b) { return b.trail; });
+  r.has_trails = std::any_of(first.balls.begin(), first.balls.end(), [](const Shapes::Ball& b) { return b.trail; });
   // what the frames asked for cost, before anything runs: every sample is kept for the frames and trails
-  const FramePlan plan = plan_frames(p, options.frames, has_trails);
+  r.frames = plan_frames(p, options.frames, r.has_trails);
+  const FramePlan& plan = r.frames;
   if (plan.count < options.frames)
     throw InputError(fmt::format("--frames {}: the run's step dt = {} s leaves room for only {} distinct frames up to t_end = {} s: ask for "
                                  "at most {}, or take a smaller --dt", options.frames, *p.control.dt, plan.count, p.t_end, plan.count));
@@ -210,6 +212,28 @@ RenderedRun render_scene(const RenderOptions& options) {
     throw InputError(fmt::format("--size {} and --frames {}: the frames may take up to {:.3g} GB (a PNG at most half of its 4 bytes a pixel), "
                                  "more than the {:.3g} GB free in {}", options.size, plan.count, png_share * 4 * pixels * plan.count / 1e9,
                                  *free_bytes / 1e9, options.out));
+  return r;
+}
+
+}  // namespace
+
+void check_render(const RenderOptions& options) { plan_render(options); }
+
+RenderedRun render_scene(const RenderOptions& options) {
+  RenderPlan planned = plan_render(options);
+  PreparedRun& p = planned.p;
+  const int width = planned.width, height = planned.height;
+  const gl::Backend backend = planned.backend;
+  const bool has_trails = planned.has_trails;
+  const FramePlan& plan = planned.frames;
+  const fs::path out(options.out);
+
+  std::unique_ptr<gl::Context> context;
+  try {
+    context = gl::make_context(backend);
+  } catch (const gl::GlError& e) {
+    throw InputError(fmt::format("--backend {}: {}", options.backend, e.what()));
+  }
   const bool movies = ffmpeg_takes(width, height);
   if (!movies && options.frames > 1)
     print_error("render", fmt::format("--size {}: larger than ffmpeg takes ((width + 128)(height + 128) must stay below 2^28): writing the "

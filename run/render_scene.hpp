@@ -28,4 +28,8 @@ struct RenderedRun {
 // frames that cannot be drawn or written (nothing is drawn for bad input)
 RenderedRun render_scene(const RenderOptions& options);
 
+// the checks render_scene makes of its inputs before it makes a GL context or runs anything (the options, the
+// scene, the outputs, the frames' memory and disk); InputError as render_scene says it. What the fuzzer calls
+void check_render(const RenderOptions& options);
+
 }  // namespace stepwise
