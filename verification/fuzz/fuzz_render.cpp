@@ -5,6 +5,7 @@
 // is the scene file. Bad input must come back as InputError (exit 2); a crash, a sanitizer report, a hang or any
 // other exception is a bug.
 //   build/fuzz/verification/fuzz/fuzz_render -max_total_time=30 verification/fuzz/render_corpus
+#include "fuzz_limits.hpp"
 #include "run/render_scene.hpp"
 
 #include <unistd.h>
@@ -17,15 +18,11 @@
 #include <string>
 #include <string_view>
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  // the memory rules judge against what the fuzzer's own RSS limit (2 GiB) lets a run have
-  setenv("STEPWISE_MEMORY", "1.5e9", 1);
-  return 0;
-}
+extern "C" int LLVMFuzzerInitialize(int*, char***) { return stepwise::fuzz::limit_memory(); }
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace stepwise;
-  if (size > (1u << 16)) return 0;
+  if (size > stepwise::fuzz::largest_input) return 0;
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   const auto newline = text.find('\n');
   if (newline == std::string_view::npos) return 0;

@@ -3,6 +3,7 @@
 // (the command line's exit 2); a crash, a sanitizer report, a hang or any other exception is a bug.
 //   cmake --preset fuzz && cmake --build --preset fuzz
 //   build/fuzz/verification/fuzz/fuzz_scene -max_total_time=60 verification/fuzz/corpus
+#include "fuzz_limits.hpp"
 #include "run/measure.hpp"
 #include "run/prepare.hpp"
 #include "solvers/method_table.hpp"
@@ -12,15 +13,11 @@
 #include <cstdlib>
 #include <string_view>
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  // the memory rules judge against what the fuzzer's own RSS limit (2 GiB) lets a run have
-  setenv("STEPWISE_MEMORY", "1.5e9", 1);
-  return 0;
-}
+extern "C" int LLVMFuzzerInitialize(int*, char***) { return stepwise::fuzz::limit_memory(); }
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace stepwise;
-  if (size > (1u << 16)) return 0;
+  if (size > stepwise::fuzz::largest_input) return 0;
   try {
     Scene scene = load_scene_text(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.toml");
     PreparedRun p = prepare_run(RunOptions{}, std::move(scene));
