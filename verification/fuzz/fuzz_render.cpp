@@ -12,13 +12,25 @@
 
 #include <charconv>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <string_view>
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) { return stepwise::fuzz::limit_memory(); }
+namespace {
+
+// the scene as a file, where render reads it (removed at exit); the outputs in a directory that is never made
+const std::string scene_file = "/tmp/fuzz_render_" + std::to_string(::getpid()) + ".toml";
+const std::string out = "/tmp/fuzz_render_" + std::to_string(::getpid()) + ".out/never-made";
+
+}  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  std::atexit([] { std::remove(scene_file.c_str()); });
+  return stepwise::fuzz::limit_memory();
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace stepwise;
@@ -34,11 +46,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.backend = backend;
   const auto [end, parsed] = std::from_chars(frames_text.data(), frames_text.data() + frames_text.size(), options.frames);
   if (parsed != std::errc() || end != frames_text.data() + frames_text.size()) return 0;  // the command line refuses it first
-  // the scene as a file, where render reads it; the outputs in a directory that is never made
-  static const std::string scene_file = "/tmp/fuzz_render_" + std::to_string(::getpid()) + ".toml";
   std::ofstream(scene_file, std::ios::binary | std::ios::trunc) << text.substr(newline + 1);
   options.run.scene_file = scene_file;
-  options.out = "/tmp/fuzz_render_" + std::to_string(::getpid()) + ".out/never-made";
+  options.out = out;
   try {
     check_render(options);
   } catch (const InputError&) {
