@@ -14,6 +14,11 @@ namespace stepwise::tolerance {
 // moves the slope by a few hundredths, well inside the band, while an order lost (p -> p-1) lies outside.
 inline constexpr double order_band = 0.15;
 
+// a step of an implicit method against the closed-form solution of its own equation: Newton stops when its
+// last update is below 1e-12 (1 + |y|) (solvers/methods/implicit_euler.cpp), and converging quadratically it
+// leaves far less than that; 1e-12 relative holds it
+inline constexpr double newton_solve = 1e-12;
+
 // a convergence fit uses only errors inside (roundoff_floor, asymptotic_ceiling): above the ceiling the
 // leading error term does not dominate yet (the pendulum's Euler error at 1e-1 rad is no longer linear in dt);
 // below the floor, round-off accumulated as a random walk over 1e4-1e6 steps of eps |y| each is comparable
