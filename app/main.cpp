@@ -168,6 +168,8 @@ int guarded(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // the signals first: one that comes while MPI starts ends the run as any other does
+  stepwise::interrupt::install();
   std::optional<stepwise::ranks::Session> mpi;  // MPI under mpirun only (run/ranks.hpp)
   try {
     mpi.emplace(argc, argv);

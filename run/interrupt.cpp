@@ -90,12 +90,14 @@ void install() {
       }
       clean_up_and_exit(byte);
     }).detach();
-    struct sigaction action {};
-    action.sa_handler = pass_signal;
-    sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESTART;
-    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &action, nullptr);
   });
+  // (again at each call: a library started since, MPI's, may have taken a signal for itself)
+  if (signal_pipe[1] < 0) return;
+  struct sigaction action {};
+  action.sa_handler = pass_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &action, nullptr);
 }
 
 void settle() {

@@ -11,7 +11,8 @@
 
 namespace stepwise::interrupt {
 
-// take the signals (a handler that wakes the cleaning thread); call first in main
+// take the signals (a handler that wakes the cleaning thread); call first in main, and again after a library
+// that may install handlers of its own (MPI) has started
 void install();
 
 // once a signal has come, wait for the cleaning thread to end the process (never returns); else return at once.
