@@ -12,7 +12,9 @@ usage: interruptions.py STEPWISE SCENES_DIR
 - the report's pictures (`study pictures --quick`: every scene drawn by its own sweep thread and GL context,
   frames encoded, ffmpeg children) sent SIGTERM 20 times at random moments of their first 3 s: each exit 143
   with the interruption's one line and nothing else of ours (a run's threads fail as their files go; a main
-  returning then ran the static destructors under them: SIGSEGV one try in three), no litter."""
+  returning then ran the static destructors under them: SIGSEGV one try in three), no litter.
+- plot.py's figure workers (a fork pool) die with plot.py when it is killed outright (they outlived a killed
+  report by two seconds and wrote into its staging directory)."""
 import json
 import os
 import random
@@ -47,8 +49,43 @@ def stop(p, sig, after):
     return p.returncode, err
 
 
+def alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    # a zombie (ended, not yet reaped by its new parent) counts as ended
+    with open(f"/proc/{pid}/stat") as f:
+        return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+
+
+def figure_workers_die_with_plot(report_dir):
+    """plot.py's pool as plot.py makes it, each worker napping; plot.py killed outright: the workers end too"""
+    code = (f"import multiprocessing, os, sys, time\nsys.path.insert(0, {report_dir!r})\nimport plot\n"
+            "def nap(_):\n    time.sleep(30)\n"
+            "if __name__ == '__main__':\n"
+            "    pool = multiprocessing.get_context('fork').Pool(2, plot.die_with_parent, (os.getpid(),))\n"
+            "    pool.map_async(nap, range(2))\n"
+            "    time.sleep(0.5)\n"
+            "    print(' '.join(str(p.pid) for p in pool._pool), flush=True)\n"
+            "    time.sleep(30)\n")
+    parent = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    workers = [int(p) for p in parent.stdout.readline().split()]
+    expect(len(workers) == 2 and all(alive(w) for w in workers), f"plot.py's pool did not start: {workers}")
+    parent.kill()
+    parent.wait()
+    time.sleep(0.5)
+    left = [w for w in workers if alive(w)]
+    expect(not left, f"plot.py killed outright: its figure workers {left} still run 0.5 s later")
+    for w in left:
+        os.kill(w, signal.SIGKILL)
+    if not left:
+        print(f"plot.py killed: its {len(workers)} figure workers ended with it")
+
+
 def main():
     binary, scenes = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+    figure_workers_die_with_plot(os.path.join(os.path.dirname(scenes), "report"))
     d = tempfile.mkdtemp(prefix="stepwise-interrupt-")
     try:
         # a previous report: its files and the marker listing them, and a file of the user's beside them
