@@ -4,6 +4,7 @@
 
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/method_table.hpp"
+#include "solvers/run_support.hpp"
 #include "solvers/stability.hpp"
 
 #include <fmt/format.h>
@@ -80,15 +81,15 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
     // parameter that gave the entry where one did (else the state entry)
     Eigen::Index at = 0;
     const double largest = y0.size() ? y0.cwiseAbs().maxCoeff(&at) : 0.0;
-    if (const double blowup = StepControl{}.blowup; !std::isfinite(blowup * std::max(1.0, largest))) {
+    if (const StepControl control{}; !std::isfinite(divergence_bound(control, largest))) {
       std::string where = s.where("parameters");
       for (const auto& [key, value] : values)
         if (std::abs(value) == largest) where = set_origin.count(key) ? set_origin.at(key) : s.where("parameters." + key);
       const auto names = p.model->state_names();
       throw InputError(fmt::format("{}: the initial {} = {:g} is too large for a run to tell divergence from it (the blow-up test at {:g} "
                                    "x |y0| overflows above |y0| = {:.3g})",
-                                   where, at < static_cast<Eigen::Index>(names.size()) ? names[static_cast<size_t>(at)] : "state", y0[at], blowup,
-                                   std::numeric_limits<double>::max() / blowup));
+                                   where, at < static_cast<Eigen::Index>(names.size()) ? names[static_cast<size_t>(at)] : "state", y0[at],
+                                   control.blowup, std::numeric_limits<double>::max() / control.blowup));
     }
   }
 
@@ -194,7 +195,7 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
                                  "the limit with --max-steps", p.output_dt_origin, rows, max_steps));
   // a row: t, the samples and the energy, 17 significant digits and a sign, exponent and comma each
   const double columns = 2.0 + static_cast<double>(p.model->summary_names().empty() ? p.model->state_names().size() : p.model->summary_names().size());
-  p.output_bytes = (std::floor(p.t_end / p.output_dt) + 2) * columns * 25;
+  p.output_bytes = (rows + 2) * columns * 25;
   return p;
 }
 

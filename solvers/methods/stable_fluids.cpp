@@ -61,8 +61,9 @@ class StableFluids final : public FixedStepper {
     if (!grid_.source.empty())
       for (Eigen::Index k = 0; k < P; ++k) rho[k] += h * grid_.source[k];
     // 2. advection through the forced velocity
-    trace(u, v, h, back_x_.data(), back_y_.data());
-    if (maccormack_) trace(u, v, -h, fore_x_.data(), fore_y_.data());
+    const double s = h / fft_.spacing();  // the step in grid units of time
+    semi_lagrangian::trace(u, v, n_, s, back_x_.data(), back_y_.data());
+    if (maccormack_) semi_lagrangian::trace(u, v, n_, -s, fore_x_.data(), fore_y_.data());
     for (int q = 0; q < 3; ++q) advect(forced_.data() + q * P, y_next.data() + q * P);
     // 3. diffusion and 4. projection in Fourier space
     double* u1 = y_next.data();
@@ -87,11 +88,7 @@ class StableFluids final : public FixedStepper {
   }
 
  private:
-  // the points (in grid units, unwrapped) that reach each grid point in time h along (u, v): the midpoint rule
-  void trace(const double* u, const double* v, double h, double* bx, double* by) const {
-    semi_lagrangian::trace(u, v, n_, h / fft_.spacing(), bx, by);
-  }
-
+  // q carried along the traced points (semi_lagrangian.hpp's bilinear sample)
   double sample(const double* q, double x, double y, double* lo = nullptr, double* hi = nullptr) const {
     return semi_lagrangian::sample(q, n_, x, y, lo, hi);
   }

@@ -175,17 +175,17 @@ TEST(Fluid, WithoutViscosityTheEnergyIsConservedThroughTheShearLayersRollUp) {
   // (w = 80) through its roll-up, where the spectrum fills out to the cut-off and aliasing left on one axis
   // would feed energy in or out
   for (const int n : {48, 64}) {
-  const auto model = make_model("shear-layer", {{"size", n}, {"viscosity", 0.0}, {"width", 80}});
-  const double t = tolerance::shear_layer_rollup_time;
-  const Measured m = run_and_measure(*model, "cvode-adams", whole(StepControl::adaptive(1e-11, 1e-13)), t, t);
-  ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
-  const double e0 = *model->energy(model->initial_state()), e1 = *model->energy(m.result.trajectory.y.back());
-  const auto cross_flow = [&](const Eigen::VectorXd& y) { return y.segment(n * n, n * n).lpNorm<Eigen::Infinity>(); };
-  const double v0 = cross_flow(model->initial_state()), v1 = cross_flow(m.result.trajectory.y.back());
-  std::cout << "thin shear layer, nu = 0, " << n << "^2: energy changed by " << e1 / e0 - 1 << " (relative) in " << t << " s; max |v| " << v0 << " -> " << v1
-            << '\n';
-  EXPECT_GT(v1, tolerance::rollup_cross_flow_growth * v0) << "the layer has rolled up";
-  EXPECT_LE(std::abs(e1 / e0 - 1), tolerance::inviscid_energy_drift);
+    const auto model = make_model("shear-layer", {{"size", n}, {"viscosity", 0.0}, {"width", 80}});
+    const double t = tolerance::shear_layer_rollup_time;
+    const Measured m = run_and_measure(*model, "cvode-adams", whole(StepControl::adaptive(1e-11, 1e-13)), t, t);
+    ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+    const double e0 = *model->energy(model->initial_state()), e1 = *model->energy(m.result.trajectory.y.back());
+    const auto cross_flow = [&](const Eigen::VectorXd& y) { return y.segment(n * n, n * n).lpNorm<Eigen::Infinity>(); };
+    const double v0 = cross_flow(model->initial_state()), v1 = cross_flow(m.result.trajectory.y.back());
+    std::cout << "thin shear layer, nu = 0, " << n << "^2: energy changed by " << e1 / e0 - 1 << " (relative) in " << t << " s; max |v| " << v0 << " -> " << v1
+              << '\n';
+    EXPECT_GT(v1, tolerance::rollup_cross_flow_growth * v0) << "the layer has rolled up";
+    EXPECT_LE(std::abs(e1 / e0 - 1), tolerance::inviscid_energy_drift);
   }
 }
 
