@@ -54,13 +54,23 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
     values[key] = *value;
     set_origin[key] = "--set " + key;
   }
-  const ModelInfo* info = find_model(s.model);
-  if (!info) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
-  if (s.mesh && !info->make_with_mesh) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
-  if (s.pins && !info->make_with_pins) throw InputError(fmt::format("{}: model {} takes no pins", s.where("pins"), s.model));
+  const ModelInfo* info = s.equations ? nullptr : find_model(s.model);
+  if (!info && !s.equations) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
+  if (s.mesh && (!info || !info->make_with_mesh)) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
+  if (s.pins && (!info || !info->make_with_pins)) throw InputError(fmt::format("{}: model {} takes no pins", s.where("pins"), s.model));
   try {
-    p.params = resolve_params(*info, values);
-    p.model = s.mesh ? info->make_with_mesh(p.params, *s.mesh) : s.pins ? info->make_with_pins(p.params, *s.pins) : info->make(p.params);
+    if (s.equations) {
+      // the user's equations: parameters and initial values by name, --set on either (models/equations.hpp)
+      p.model = make_equations(*s.equations, values);
+      p.params = s.equations->parameters;
+      for (const auto& [key, value] : s.equations->initial) p.params[key] = value;
+      for (const auto& [key, value] : values) p.params[key] = value;
+    } else {
+      p.params = resolve_params(*info, values);
+      p.model = s.mesh ? info->make_with_mesh(p.params, *s.mesh) : s.pins ? info->make_with_pins(p.params, *s.pins) : info->make(p.params);
+    }
+  } catch (const BadEquations& e) {
+    throw InputError(e.what());
   } catch (const BadParameter& e) {
     const auto origin = set_origin.find(e.key);
     throw InputError(fmt::format("{}: {}", origin != set_origin.end() ? origin->second

@@ -1,6 +1,7 @@
 #include "run_outputs.hpp"
 
 #include "run/csv.hpp"
+#include "models/equations.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -54,6 +55,11 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m) {
     j["events"].push_back({{"t", e.t}, {"kind", e.kind}, {"event", e.event < events.size() ? events[e.event].name : "contacts"}});
   j["parameters"] = nlohmann::json::object();
   for (const auto& [key, value] : p.params) j["parameters"][key] = value;
+  // a scene's own equations: whether the compiled right-hand side ran or the interpreter, and why
+  if (const auto e = equations_evaluation(*p.model)) {
+    j["equations"] = {{"evaluation", e->compiled ? "compiled" : "interpreted"}, {"detail", e->detail}, {"second_order", e->second_order > 0}};
+    if (!e->exact_note.empty()) j["equations"]["exact"] = e->exact_note;
+  }
   return j;
 }
 

@@ -164,6 +164,50 @@ std::vector<GridNode> pins_table(const toml::node& node, Scene& scene) {
   return rows_of<int, 2>(*nodes, scene, "pins.nodes", "grid indices (row, column)");
 }
 
+// a string value: its text, line and the file column of its first character (after the opening quote or quotes)
+Formula formula_of(const toml::node& node, const Scene& scene, const std::string& key, const std::string& name) {
+  const auto* text = node.as_string();
+  if (!text) throw InputError(fmt::format("{}:{}: {}: expected a formula in quotes", scene.file, line_of(node), key));
+  Formula f{name, text->get(), fmt::format("{}:{}: {}", scene.file, line_of(node), key), line_of(node),
+            static_cast<int>(node.source().begin.column) + 1};
+  return f;
+}
+
+// the equations model's tables: variables, [initial], [equations], [exact], energy
+void equations_entry(const std::string& key, const toml::node& node, Scene& scene) {
+  if (!scene.equations) scene.equations.emplace();
+  EquationsSpec& spec = *scene.equations;
+  spec.file = scene.file;
+  scene.lines[key] = line_of(node);
+  if (key == "variables") {
+    const auto* array = node.as_array();
+    if (!array) throw InputError(fmt::format("{}:{}: variables: expected an array of names, [\"x\", \"v\"]", scene.file, line_of(node)));
+    if (array->size() > max_equations)
+      throw InputError(fmt::format("{}:{}: variables: {} variables, more than the {} an equations scene may hold", scene.file, line_of(node), array->size(), max_equations));
+    spec.variables_where = fmt::format("{}:{}: variables", scene.file, line_of(node));
+    for (size_t i = 0; i < array->size(); ++i) {
+      const auto* name = array->get(i)->as_string();
+      if (!name) throw InputError(fmt::format("{}:{}: variables[{}]: expected a name in quotes", scene.file, line_of(*array->get(i)), i));
+      spec.variables.push_back(name->get());
+    }
+    return;
+  }
+  if (key == "energy") {
+    spec.energy = formula_of(node, scene, key, key);
+    return;
+  }
+  const auto* table = node.as_table();
+  if (!table) throw InputError(fmt::format("{}:{}: {}: expected a table", scene.file, line_of(node), key));
+  if (table->size() > max_equations)
+    throw InputError(fmt::format("{}:{}: {}: {} entries, more than the {} an equations scene may hold", scene.file, line_of(node), key, table->size(), max_equations));
+  for (auto&& [k, value] : *table) {
+    const std::string name(k.str()), full = key + "." + name;
+    scene.lines[full] = line_of(value);
+    if (key == "initial") spec.initial[name] = number(value, scene, full);
+    else (key == "equations" ? spec.equations : spec.exact).push_back(formula_of(value, scene, full, name));
+  }
+}
+
 }  // namespace
 
 std::string scenes_directory() {
@@ -238,11 +282,27 @@ Scene load_scene_text(std::string_view text, const std::string& file) {
       scene.pins = pins_table(node, scene);
     } else if (key == "render") {
       scene.look = render_table(node, scene);
+    } else if (key == "variables" || key == "initial" || key == "equations" || key == "exact" || key == "energy") {
+      equations_entry(key, node, scene);
     } else {
-      throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run], [mesh], [pins], [render])", file, line_of(node), key));
+      throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run], [mesh], [pins], [render]; an equations "
+                                   "scene variables, [initial], [equations], [exact], energy)", file, line_of(node), key));
     }
   }
   if (scene.model.empty()) throw InputError(fmt::format("{}: model: missing", file));
+  if (scene.model == "equations") {
+    if (!scene.equations || scene.equations->variables_where.empty())
+      throw InputError(fmt::format("{}: variables: missing (an equations scene names its state: variables = [\"x\", \"v\"])", file));
+    scene.equations->parameters = scene.parameters;
+  } else if (scene.equations) {
+    const auto first = std::min_element(scene.lines.begin(), scene.lines.end(), [](const auto& a, const auto& b) {
+      const bool ea = a.first.starts_with("variables") || a.first.starts_with("initial") || a.first.starts_with("equations") || a.first.starts_with("exact") || a.first == "energy";
+      const bool eb = b.first.starts_with("variables") || b.first.starts_with("initial") || b.first.starts_with("equations") || b.first.starts_with("exact") || b.first == "energy";
+      return ea != eb ? ea : a.second < b.second;
+    });
+    throw InputError(fmt::format("{}: only a scene with model = \"equations\" has variables, [initial], [equations], [exact] or energy (this is model {})",
+                                 scene.where(first->first), scene.model));
+  }
   return scene;
 }
 

@@ -12,8 +12,10 @@
 //   triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
 //   [render]       # how `stepwise render` sees it: eye, target, up ([x, y, z], m), fov (degrees), light
 //   eye = [0, -3, 2]   # (a direction towards it), color and background ([r, g, b] in 0-1), pool_depth (m)
+//   variables = ["x", "v"]  [initial]  [equations]  [exact]  energy = "..."   # model = "equations" only
 #pragma once
 
+#include "models/equations.hpp"
 #include "models/model.hpp"
 #include "models/triangle_mesh.hpp"
 #include "render/camera.hpp"
@@ -42,6 +44,9 @@ struct Scene {
   std::optional<TriangleMesh> mesh;       // [mesh], indices in range and vertices finite (checked on loading)
   std::optional<std::vector<GridNode>> pins;  // [pins] nodes = [[row, column], ...], whole numbers (the model checks the grid)
   render::Look look;                      // [render]
+  // model = "equations": variables, [initial], [equations], [exact], energy (models/equations.hpp), with
+  // [parameters] as spec.parameters too
+  std::optional<EquationsSpec> equations;
 
   // "file:line: key" where the key was written, "file: key" otherwise
   std::string where(const std::string& key) const;

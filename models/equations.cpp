@@ -1,0 +1,598 @@
+#include "equations.hpp"
+
+#include "native_code.hpp"
+#include "solvers/capabilities/second_order.hpp"
+
+#include <fmt/format.h>
+#include <ginac/ginac.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <ranges>
+#include <regex>
+#include <set>
+#include <sstream>
+
+namespace stepwise {
+namespace {
+
+// ---- what a formula may call: GiNaC parses many more functions (zeta, gamma, ...); these are the ones
+// evaluated, by the interpreter (fn) and in the generated C (c). Their derivatives are in the same set
+struct Function1 {
+  std::string_view name;
+  double (*fn)(double);
+  std::string_view c;
+};
+const std::array functions1{
+    Function1{"sin", [](double x) { return std::sin(x); }, "sin"},    Function1{"cos", [](double x) { return std::cos(x); }, "cos"},
+    Function1{"tan", [](double x) { return std::tan(x); }, "tan"},    Function1{"asin", [](double x) { return std::asin(x); }, "asin"},
+    Function1{"acos", [](double x) { return std::acos(x); }, "acos"}, Function1{"atan", [](double x) { return std::atan(x); }, "atan"},
+    Function1{"sinh", [](double x) { return std::sinh(x); }, "sinh"}, Function1{"cosh", [](double x) { return std::cosh(x); }, "cosh"},
+    Function1{"tanh", [](double x) { return std::tanh(x); }, "tanh"}, Function1{"asinh", [](double x) { return std::asinh(x); }, "asinh"},
+    Function1{"acosh", [](double x) { return std::acosh(x); }, "acosh"}, Function1{"atanh", [](double x) { return std::atanh(x); }, "atanh"},
+    Function1{"exp", [](double x) { return std::exp(x); }, "exp"},    Function1{"log", [](double x) { return std::log(x); }, "log"},
+    Function1{"sqrt", [](double x) { return std::sqrt(x); }, "sqrt"}, Function1{"abs", [](double x) { return std::abs(x); }, "fabs"},
+};
+constexpr std::string_view functions2 = "atan2";  // atan2(y, x)
+const std::string function_list = "sin, cos, tan, asin, acos, atan, atan2, sinh, cosh, tanh, asinh, acosh, atanh, exp, log, sqrt, abs, pow and ^";
+
+// names a variable or parameter may not take: the functions, the time, and GiNaC's constants
+bool reserved(std::string_view name) {
+  if (name == "t" || name == "pow" || name == functions2 || name == "Pi" || name == "I" || name == "Euler" || name == "Catalan") return true;
+  return std::any_of(functions1.begin(), functions1.end(), [&](const Function1& f) { return f.name == name; });
+}
+
+// ---- the tape: a formula in postfix, what the interpreter runs and the C is printed from (so both compute the
+// same operations in the same order: the compiled and interpreted f agree to the bit)
+enum class Op : std::uint8_t { number, variable, parameter, time, add, mul, power, integer_power, call, atan2 };
+struct Instruction {
+  Op op;
+  int arg = 0;       // variable, parameter or function index; operand count of add and mul; integer exponent
+  double value = 0;  // number
+};
+struct Tape {
+  std::vector<Instruction> code;
+  int depth = 0;  // the deepest the value stack goes
+};
+
+// x^n by binary powering (the generated C's stepwise_ipow is the same loop)
+double integer_power(double x, int n) {
+  double result = 1, base = x;
+  for (unsigned m = static_cast<unsigned>(n < 0 ? -n : n); m; m >>= 1) {
+    if (m & 1u) result *= base;
+    base *= base;
+  }
+  return n < 0 ? 1 / result : result;
+}
+constexpr std::string_view c_integer_power =
+    "static double stepwise_ipow(double x, int n) {\n"
+    "  double result = 1, base = x;\n"
+    "  for (unsigned m = (unsigned)(n < 0 ? -n : n); m; m >>= 1) {\n"
+    "    if (m & 1u) result *= base;\n"
+    "    base *= base;\n"
+    "  }\n"
+    "  return n < 0 ? 1 / result : result;\n"
+    "}\n";
+
+double run(const Tape& tape, double t, const double* y, const double* p, double* stack) {
+  int top = 0;
+  for (const Instruction& in : tape.code) {
+    switch (in.op) {
+      case Op::number: stack[top++] = in.value; break;
+      case Op::variable: stack[top++] = y[in.arg]; break;
+      case Op::parameter: stack[top++] = p[in.arg]; break;
+      case Op::time: stack[top++] = t; break;
+      case Op::add: {
+        top -= in.arg;
+        double s = stack[top];
+        for (int k = 1; k < in.arg; ++k) s += stack[top + k];
+        stack[top++] = s;
+        break;
+      }
+      case Op::mul: {
+        top -= in.arg;
+        double s = stack[top];
+        for (int k = 1; k < in.arg; ++k) s *= stack[top + k];
+        stack[top++] = s;
+        break;
+      }
+      case Op::power: --top; stack[top - 1] = std::pow(stack[top - 1], stack[top]); break;
+      case Op::integer_power: stack[top - 1] = integer_power(stack[top - 1], in.arg); break;
+      case Op::call: stack[top - 1] = functions1[static_cast<size_t>(in.arg)].fn(stack[top - 1]); break;
+      case Op::atan2: --top; stack[top - 1] = std::atan2(stack[top - 1], stack[top]); break;
+    }
+  }
+  return stack[0];
+}
+
+// the scratch stack of the calling thread (a sweep's threads share one model)
+double* scratch(int depth) {
+  thread_local std::vector<double> stack;
+  if (stack.size() < static_cast<size_t>(depth)) stack.resize(static_cast<size_t>(depth));
+  return stack.data();
+}
+
+// the tape's C: one constant a step, the result assigned to `target`
+std::string c_of(const Tape& tape, const std::string& target) {
+  std::vector<std::string> stack;
+  std::string body;
+  int next = 0;
+  const auto push = [&](const std::string& expr) {
+    const std::string name = fmt::format("s{}", next++);
+    body += fmt::format("    const double {} = {};\n", name, expr);
+    stack.push_back(name);
+  };
+  const auto pop = [&] {
+    std::string top = stack.back();
+    stack.pop_back();
+    return top;
+  };
+  for (const Instruction& in : tape.code) {
+    switch (in.op) {
+      case Op::number: push(fmt::format("({:a})", in.value)); break;
+      case Op::variable: push(fmt::format("y[{}]", in.arg)); break;
+      case Op::parameter: push(fmt::format("p[{}]", in.arg)); break;
+      case Op::time: push("t"); break;
+      case Op::add:
+      case Op::mul: {
+        std::vector<std::string> operands(static_cast<size_t>(in.arg));
+        for (int k = in.arg - 1; k >= 0; --k) operands[static_cast<size_t>(k)] = pop();
+        std::string expr = operands[0];
+        for (size_t k = 1; k < operands.size(); ++k) expr = fmt::format("({} {} {})", expr, in.op == Op::add ? '+' : '*', operands[k]);
+        push(expr);
+        break;
+      }
+      case Op::power: {
+        const std::string e = pop(), b = pop();
+        push(fmt::format("pow({}, {})", b, e));
+        break;
+      }
+      case Op::integer_power: push(fmt::format("stepwise_ipow({}, {})", pop(), in.arg)); break;
+      case Op::call: push(fmt::format("{}({})", functions1[static_cast<size_t>(in.arg)].c, pop())); break;
+      case Op::atan2: {
+        const std::string x = pop(), y = pop();
+        push(fmt::format("atan2({}, {})", y, x));
+        break;
+      }
+    }
+  }
+  return fmt::format("  {{\n{}    {} = {};\n  }}\n", body, target, stack.back());
+}
+
+// ---- GiNaC: the symbols of a system and the formulas parsed against them
+struct Symbols {
+  std::vector<GiNaC::realsymbol> variables, parameters;
+  GiNaC::realsymbol t{"t"};
+  std::vector<std::string> variable_names, parameter_names;
+  std::string defined;  // the names in words, for a message about an unknown one
+};
+
+std::string where_at(const Formula& f, int column_in_text) {
+  const std::string file = f.where.substr(0, f.where.find(':'));
+  const std::string key = f.where.substr(f.where.rfind(' ') + 1);
+  if (f.line > 0 && f.column > 0) return fmt::format("{}:{}:{}: {}", file, f.line, f.column + column_in_text - 1, key);
+  return fmt::format("{}, column {}", f.where, column_in_text);
+}
+
+// the column (from 1) of the whole word `word` in `text`, searching back from `before`; 0 if absent
+int column_of(const std::string& text, const std::string& word, size_t before = std::string::npos) {
+  if (word.empty()) return 0;
+  const bool identifier = std::isalpha(static_cast<unsigned char>(word[0])) || word[0] == '_';
+  for (size_t at = text.rfind(word, before); at != std::string::npos; at = at == 0 ? std::string::npos : text.rfind(word, at - 1)) {
+    const auto part_of_word = [&](size_t i) { return i < text.size() && (std::isalnum(static_cast<unsigned char>(text[i])) || text[i] == '_'); };
+    if (!identifier || ((at == 0 || !part_of_word(at - 1)) && !part_of_word(at + word.size()))) return static_cast<int>(at) + 1;
+  }
+  return 0;
+}
+
+GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, bool allow_time) {
+  const std::string& text = f.text;
+  if (text.size() > max_formula_chars)
+    throw BadEquations(fmt::format("{}: the formula is {} characters long, more than the {} a formula may hold", f.where, text.size(), max_formula_chars));
+  if (text.find_first_not_of(" \t") == std::string::npos) throw BadEquations(fmt::format("{}: the formula is empty", f.where));
+  // nesting: parentheses, and runs of signs (GiNaC's parser recurses once for each)
+  int depth = 0, deepest = 0, signs = 0;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    depth += c == '(' ? 1 : c == ')' ? -1 : 0;
+    signs = c == '+' || c == '-' ? signs + 1 : c == ' ' || c == '\t' ? signs : 0;
+    deepest = std::max({deepest, depth, signs});
+    if (deepest > max_formula_depth)
+      throw BadEquations(fmt::format("{}: nested more than {} deep", where_at(f, static_cast<int>(i) + 1), max_formula_depth));
+  }
+  GiNaC::symtab table;
+  if (allow_variables)
+    for (size_t i = 0; i < symbols.variables.size(); ++i) table[symbols.variable_names[i]] = symbols.variables[i];
+  for (size_t i = 0; i < symbols.parameters.size(); ++i) table[symbols.parameter_names[i]] = symbols.parameters[i];
+  if (allow_time) table["t"] = symbols.t;
+  GiNaC::parser reader(table, true);
+  std::istringstream in(text);
+  try {
+    return reader(in);
+  } catch (const GiNaC::parse_error& e) {
+    // GiNaC says "parse error at line 0, column 0: WHAT, got: TOKEN" and where in its source: kept is WHAT and
+    // TOKEN, and the column is found from the token and how far the parser read
+    std::string what = e.what();
+    what = what.substr(0, what.find('\n'));
+    if (const auto colon = what.find(": "); what.starts_with("GiNaC: parse error") && colon != std::string::npos)
+      if (const auto second = what.find(": ", colon + 2); second != std::string::npos) what = what.substr(second + 2);
+    in.clear();
+    const auto read = in.tellg();
+    const size_t stop = read < 0 ? text.size() : static_cast<size_t>(read);
+    int column = static_cast<int>(text.size()) + 1;
+    if (const auto got = what.rfind("got: \""); got != std::string::npos) {
+      const std::string token = what.substr(got + 6, what.size() - got - 7);
+      if (const int c = column_of(text, token, stop); c > 0) column = c;
+    } else if (const auto name = what.find("no function \""); name != std::string::npos) {
+      const std::string function = what.substr(name + 13, what.find('"', name + 13) - name - 13);
+      column = std::max(1, column_of(text, function, stop));
+      const bool known = function == "pow" || function == functions2 ||
+                         std::any_of(functions1.begin(), functions1.end(), [&](const Function1& g) { return g.name == function; });
+      what = fmt::format("{} '{}' (a formula may call {})", known ? "wrong number of arguments to" : "unknown function", function, function_list);
+    }
+    throw BadEquations(fmt::format("{}: {}", where_at(f, column), what));
+  } catch (const std::invalid_argument& e) {
+    // the strict symbol table: `find_or_insert_symbol: symbol "y" not found`
+    const std::string what = e.what();
+    const auto open = what.find('"'), close = what.rfind('"');
+    const std::string name = open != std::string::npos && close > open ? what.substr(open + 1, close - open - 1) : what;
+    std::string defined = allow_variables ? symbols.defined : fmt::format("parameters {}", fmt::join(symbols.parameter_names, ", "));
+    if (!allow_variables && symbols.parameter_names.empty()) defined = "no parameters";
+    const bool variable = std::find(symbols.variable_names.begin(), symbols.variable_names.end(), name) != symbols.variable_names.end();
+    throw BadEquations(fmt::format("{}: {} '{}' (defined: {}{})", where_at(f, std::max(1, column_of(text, name))),
+                                   variable ? "this formula cannot use the variable" : "unknown symbol", name, defined, allow_time ? "; and t" : ""));
+  }
+}
+
+std::string text_of(const GiNaC::ex& e) {
+  std::ostringstream text;
+  text << e;
+  return text.str();
+}
+
+// ---- the tape of a parsed formula: what the interpreter runs, and the check that it can be evaluated at all
+class TapeBuilder {
+ public:
+  // `formula`: the user's text the tree was parsed from, where a message can point to a column; null for a
+  // derivative
+  TapeBuilder(const Symbols& s, std::string where, const Formula* formula = nullptr) : s_(s), where_(std::move(where)), formula_(formula) {}
+  Tape build(const GiNaC::ex& e) {
+    Tape tape;
+    emit(e, tape);
+    int depth = 0;
+    for (const Instruction& in : tape.code) {
+      switch (in.op) {
+        case Op::number: case Op::variable: case Op::parameter: case Op::time: ++depth; break;
+        case Op::add: case Op::mul: depth -= in.arg - 1; break;
+        case Op::power: case Op::atan2: --depth; break;
+        default: break;
+      }
+      tape.depth = std::max(tape.depth, depth);
+    }
+    return tape;
+  }
+
+ private:
+  void emit(const GiNaC::ex& e, Tape& tape) {
+    using namespace GiNaC;
+    if (is_a<numeric>(e)) {
+      const numeric& n = ex_to<numeric>(e);
+      if (!n.is_real()) throw BadEquations(fmt::format("{}: {} is not a real number", at("I"), text_of(e)));
+      const double v = n.to_double();
+      if (!std::isfinite(v)) throw BadEquations(fmt::format("{}: the number {} is beyond the range of a double", where_, text_of(e)));
+      tape.code.push_back({Op::number, 0, v});
+    } else if (is_a<constant>(e)) {
+      const ex value = e.evalf();
+      if (!is_a<numeric>(value) || !ex_to<numeric>(value).is_real()) throw BadEquations(fmt::format("{}: the constant {} is not a real number", at(text_of(e)), text_of(e)));
+      tape.code.push_back({Op::number, 0, ex_to<numeric>(value).to_double()});
+    } else if (is_a<symbol>(e)) {
+      for (size_t i = 0; i < s_.variables.size(); ++i)
+        if (e.is_equal(s_.variables[i])) return tape.code.push_back({Op::variable, static_cast<int>(i), 0});
+      for (size_t i = 0; i < s_.parameters.size(); ++i)
+        if (e.is_equal(s_.parameters[i])) return tape.code.push_back({Op::parameter, static_cast<int>(i), 0});
+      if (e.is_equal(s_.t)) return tape.code.push_back({Op::time, 0, 0});
+      throw BadEquations(fmt::format("{}: unknown symbol {}", where_, text_of(e)));
+    } else if (is_a<add>(e) || is_a<mul>(e)) {
+      for (size_t i = 0; i < e.nops(); ++i) emit(e.op(i), tape);
+      tape.code.push_back({is_a<add>(e) ? Op::add : Op::mul, static_cast<int>(e.nops()), 0});
+    } else if (is_a<power>(e)) {
+      const ex exponent = e.op(1);
+      if (is_a<numeric>(exponent) && ex_to<numeric>(exponent).is_integer() && abs(ex_to<numeric>(exponent)) <= 64) {
+        emit(e.op(0), tape);
+        tape.code.push_back({Op::integer_power, ex_to<numeric>(exponent).to_int(), 0});
+      } else if (exponent.is_equal(numeric(1, 2)) || exponent.is_equal(numeric(-1, 2))) {
+        emit(e.op(0), tape);
+        tape.code.push_back({Op::call, static_cast<int>(std::find_if(functions1.begin(), functions1.end(), [](const Function1& f) { return f.name == "sqrt"; }) - functions1.begin()), 0});
+        if (exponent.is_equal(numeric(-1, 2))) tape.code.push_back({Op::integer_power, -1, 0});
+      } else {
+        emit(e.op(0), tape);
+        emit(exponent, tape);
+        tape.code.push_back({Op::power, 0, 0});
+      }
+    } else if (is_a<function>(e)) {
+      const std::string name = ex_to<function>(e).get_name();
+      if (name == functions2 && e.nops() == 2) {
+        emit(e.op(0), tape);
+        emit(e.op(1), tape);
+        return tape.code.push_back({Op::atan2, 0, 0});
+      }
+      const auto f = std::find_if(functions1.begin(), functions1.end(), [&](const Function1& g) { return g.name == name; });
+      if (f == functions1.end() || e.nops() != 1)
+        throw BadEquations(fmt::format("{}: the function {} is not one a formula may call ({})", at(name), name, function_list));
+      emit(e.op(0), tape);
+      tape.code.push_back({Op::call, static_cast<int>(f - functions1.begin()), 0});
+    } else {
+      throw BadEquations(fmt::format("{}: cannot evaluate {} (a formula may use numbers, its symbols, + - * / ^ and {})", where_, text_of(e), function_list));
+    }
+  }
+  // where a name (a function, a constant) is in the formula's text, where that can be told
+  std::string at(const std::string& name) const {
+    const int column = formula_ ? column_of(formula_->text, name) : 0;
+    return column > 0 ? where_at(*formula_, column) : where_;
+  }
+  const Symbols& s_;
+  std::string where_;
+  const Formula* formula_;
+};
+
+bool identifier(const std::string& name) { return std::regex_match(name, std::regex("[A-Za-z_][A-Za-z0-9_]*")); }
+
+// ---- the model
+using NativeFn = void (*)(double t, const double* y, const double* p, double* out);
+
+class Equations final : public Model {
+ public:
+  Equations(const EquationsSpec& spec, const Params& values, bool compile) {
+    build(spec, values, compile);
+  }
+
+  std::string_view name() const override { return "equations"; }
+  int size() const override { return static_cast<int>(names_.size()); }
+  bool autonomous() const override { return autonomous_; }
+  std::vector<std::string> state_names() const override { return names_; }
+  Eigen::VectorXd initial_state() const override { return y0_; }
+
+  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    if (native_rhs_) return native_rhs_(t, y.data(), p_.data(), dydt.data());
+    double* stack = scratch(depth_);
+    for (size_t i = 0; i < rhs_.size(); ++i) dydt[static_cast<Eigen::Index>(i)] = run(rhs_[i], t, y.data(), p_.data(), stack);
+  }
+
+  bool has_jacobian() const override { return true; }
+  void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+    thread_local std::vector<double> values;
+    values.resize(rows_.size());
+    jacobian_values(t, y.data(), values.data());
+    dfdy.setZero();
+    for (Eigen::Index c = 0; c < size(); ++c)
+      for (int k = columns_[static_cast<size_t>(c)]; k < columns_[static_cast<size_t>(c) + 1]; ++k) dfdy(rows_[static_cast<size_t>(k)], c) = values[static_cast<size_t>(k)];
+  }
+  bool has_sparse_jacobian() const override { return true; }
+  void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
+    if (dfdy.rows() != size() || dfdy.cols() != size() || dfdy.nonZeros() != static_cast<Eigen::Index>(rows_.size()) || !dfdy.isCompressed()) {
+      std::vector<Eigen::Triplet<double>> pattern;
+      for (int c = 0; c < size(); ++c)
+        for (int k = columns_[static_cast<size_t>(c)]; k < columns_[static_cast<size_t>(c) + 1]; ++k) pattern.emplace_back(rows_[static_cast<size_t>(k)], c, 1.0);
+      dfdy.resize(size(), size());
+      dfdy.setFromTriplets(pattern.begin(), pattern.end());
+      dfdy.makeCompressed();
+    }
+    jacobian_values(t, y.data(), dfdy.valuePtr());
+  }
+
+  std::optional<double> energy(const Eigen::VectorXd& y) const override {
+    if (!energy_) return std::nullopt;
+    return run(*energy_, 0, y.data(), p_.data(), scratch(depth_));
+  }
+  bool has_exact() const override { return !exact_.empty() && evaluation_.exact_note.empty(); }
+  Eigen::VectorXd exact(double t) const override {
+    if (exact_.empty()) return Model::exact(t);
+    Eigen::VectorXd y(size());
+    for (size_t i = 0; i < exact_.size(); ++i) y[static_cast<Eigen::Index>(i)] = run(exact_[i], t, nullptr, p_.data(), scratch(depth_));
+    return y;
+  }
+  const void* capability(const std::type_info& type) const override {
+    return second_order_.positions > 0 ? offer(type, second_order_) : nullptr;
+  }
+  const EquationsEvaluation& evaluation() const { return evaluation_; }
+
+ private:
+  void jacobian_values(double t, const double* y, double* values) const {
+    if (native_jacobian_) return native_jacobian_(t, y, p_.data(), values);
+    double* stack = scratch(depth_);
+    for (size_t k = 0; k < jacobian_.size(); ++k) values[k] = run(jacobian_[k], t, y, p_.data(), stack);
+  }
+
+  void build(const EquationsSpec& spec, const Params& values, bool compile);
+
+  std::vector<std::string> names_;
+  Eigen::VectorXd y0_;
+  std::vector<double> p_;
+  std::vector<Tape> rhs_, jacobian_, exact_;  // jacobian_: the nonzeros, column by column (CSC order)
+  std::optional<Tape> energy_;
+  std::vector<int> columns_, rows_;           // the pattern, CSC: column c's entries are [columns_[c], columns_[c+1])
+  int depth_ = 1;
+  bool autonomous_ = true;
+  SecondOrderView second_order_;
+  std::shared_ptr<const NativeCode> native_;
+  NativeFn native_rhs_ = nullptr, native_jacobian_ = nullptr;
+  EquationsEvaluation evaluation_;
+};
+
+void Equations::build(const EquationsSpec& spec, const Params& values, bool compile) {
+  // ---- the shape: names, one initial value and one equation per variable, nothing else
+  const size_t n = spec.variables.size();
+  if (n == 0) throw BadEquations(fmt::format("{}: the system is empty (variables = [\"x\", ...] names the state)", spec.variables_where));
+  if (n > max_equations)
+    throw BadEquations(fmt::format("{}: {} variables, more than the {} an equations scene may hold", spec.variables_where, n, max_equations));
+  std::set<std::string, std::less<>> seen;
+  for (const auto& name : spec.variables) {
+    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name (a letter or _, then letters, digits or _)", spec.variables_where, name));
+    if (reserved(name)) throw BadEquations(fmt::format("{}: the variable '{}' would shadow {}", spec.variables_where, name, name == "t" ? "the time t" : "a function or constant of the formulas"));
+    if (!seen.insert(name).second) throw BadEquations(fmt::format("{}: the variable '{}' is named twice", spec.variables_where, name));
+  }
+  for (const auto& [name, value] : spec.parameters) {
+    const std::string where = fmt::format("{}: parameters.{}", spec.file, name);
+    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name a formula can use", where, name));
+    if (reserved(name)) throw BadEquations(fmt::format("{}: the parameter '{}' would shadow {}", where, name, name == "t" ? "the time t" : "a function or constant of the formulas"));
+    if (seen.count(name)) throw BadEquations(fmt::format("{}: '{}' is both a variable and a parameter", where, name));
+  }
+  const auto check_cover = [&](const std::vector<Formula>& formulas, std::string_view table, bool required) {
+    for (const auto& f : formulas)
+      if (!seen.count(f.name))
+        throw BadEquations(fmt::format("{}: an {} for '{}', which is not a variable (variables: {}){}", f.where, table == "equations" ? "equation" : "exact solution",
+                                       f.name, fmt::join(spec.variables, ", "),
+                                       f.name == "energy" ? "; an energy formula goes above the first [table], as TOML puts a key under the table before it" : ""));
+    if (required || !formulas.empty())
+      for (const auto& v : spec.variables)
+        if (std::none_of(formulas.begin(), formulas.end(), [&](const Formula& f) { return f.name == v; }))
+          throw BadEquations(fmt::format("{}: the variable '{}' has no {} ([{}] {} = \"...\")", spec.file, v, table == "equations" ? "equation" : "exact solution", table, v));
+  };
+  check_cover(spec.equations, "equations", true);
+  check_cover(spec.exact, "exact", false);
+  for (const auto& [name, value] : spec.initial)
+    if (!seen.count(name)) throw BadEquations(fmt::format("{}: initial.{}: '{}' is not a variable (variables: {})", spec.file, name, name, fmt::join(spec.variables, ", ")));
+  for (const auto& v : spec.variables)
+    if (!spec.initial.count(v)) throw BadEquations(fmt::format("{}: the variable '{}' has no initial value ([initial] {} = ...)", spec.file, v, v));
+
+  // ---- values: the spec's, with the overrides (--set) applied to a parameter or an initial value
+  Params parameters = spec.parameters, initial = spec.initial;
+  for (const auto& [key, value] : values) {
+    Params* target = parameters.count(key) ? &parameters : initial.count(key) ? &initial : nullptr;
+    if (!target)
+      throw BadParameter(key, fmt::format("unknown parameter '{}' of this equations scene (parameters: {}; variables: {})", key,
+                                          parameters.empty() ? std::string("none") : fmt::format("{}", fmt::join(std::views::keys(parameters), ", ")),
+                                          fmt::join(spec.variables, ", ")));
+    if (!std::isfinite(value)) throw BadParameter(key, fmt::format("'{}' must be a finite number, got {}", key, value));
+    (*target)[key] = value;
+  }
+
+  // ---- the symbols and the formulas
+  Symbols s;
+  for (const auto& v : spec.variables) {
+    s.variables.emplace_back(v);
+    s.variable_names.push_back(v);
+  }
+  for (const auto& [name, value] : parameters) {
+    s.parameters.emplace_back(name);
+    s.parameter_names.push_back(name);
+    p_.push_back(value);
+  }
+  s.defined = fmt::format("variables {}{}", fmt::join(s.variable_names, ", "),
+                          s.parameter_names.empty() ? std::string() : fmt::format("; parameters {}", fmt::join(s.parameter_names, ", ")));
+  names_ = spec.variables;
+  y0_.resize(static_cast<Eigen::Index>(n));
+  for (size_t i = 0; i < n; ++i) y0_[static_cast<Eigen::Index>(i)] = initial.at(spec.variables[i]);
+
+  std::vector<GiNaC::ex> f(n);
+  std::vector<const Formula*> formula_of(n);
+  for (const auto& formula : spec.equations) {
+    const size_t i = static_cast<size_t>(std::find(names_.begin(), names_.end(), formula.name) - names_.begin());
+    f[i] = parse(formula, s, true, true);
+    formula_of[i] = &formula;
+  }
+  autonomous_ = std::none_of(f.begin(), f.end(), [&](const GiNaC::ex& e) { return e.has(s.t); });
+  for (size_t i = 0; i < n; ++i) rhs_.push_back(TapeBuilder(s, formula_of[i]->where, formula_of[i]).build(f[i]));
+
+  // the exact Jacobian and its pattern, column by column; the diagonal always in it (the Newton matrix I - h J has it)
+  columns_.push_back(0);
+  std::vector<GiNaC::ex> entries;
+  for (size_t c = 0; c < n; ++c) {
+    for (size_t r = 0; r < n; ++r) {
+      const GiNaC::ex d = f[r].diff(s.variables[c]);
+      if (d.is_zero() && r != c) continue;
+      rows_.push_back(static_cast<int>(r));
+      jacobian_.push_back(TapeBuilder(s, fmt::format("{} (its derivative in {})", formula_of[r]->where, names_[c])).build(d));
+    }
+    columns_.push_back(static_cast<int>(rows_.size()));
+  }
+  exact_.resize(spec.exact.size());  // one per variable (checked above), in the variables' order
+  for (const auto& formula : spec.exact) {
+    const size_t i = static_cast<size_t>(std::find(names_.begin(), names_.end(), formula.name) - names_.begin());
+    exact_[i] = TapeBuilder(s, formula.where, &formula).build(parse(formula, s, false, true));
+  }
+  if (spec.energy) energy_ = TapeBuilder(s, spec.energy->where, &*spec.energy).build(parse(*spec.energy, s, true, false));
+  for (const auto* tapes : {&rhs_, &jacobian_, &exact_})
+    for (const Tape& t : *tapes) depth_ = std::max(depth_, t.depth);
+  if (energy_) depth_ = std::max(depth_, energy_->depth);
+
+  // x' = v: the first half of the variables' equations are the second half's names
+  if (n % 2 == 0) {
+    const size_t half = n / 2;
+    bool pairs = true;
+    for (size_t i = 0; i < half && pairs; ++i) pairs = f[i].is_equal(s.variables[half + i]);
+    if (pairs) second_order_.positions = static_cast<int>(half);
+  }
+  evaluation_.second_order = second_order_.positions;
+
+  // ---- finite at the start (each formula named), before anything is compiled
+  {
+    double* stack = scratch(depth_);
+    for (size_t i = 0; i < n; ++i)
+      if (const double v = run(rhs_[i], 0, y0_.data(), p_.data(), stack); !std::isfinite(v))
+        throw BadEquations(fmt::format("{}: the formula is {} at the initial state (t = 0, {})", formula_of[i]->where, v, [&] {
+          std::string state;
+          for (size_t k = 0; k < n; ++k) state += fmt::format("{}{} = {:g}", k ? ", " : "", names_[k], y0_[static_cast<Eigen::Index>(k)]);
+          return state;
+        }()));
+    if (energy_)
+      if (const double e = run(*energy_, 0, y0_.data(), p_.data(), stack); !std::isfinite(e))
+        throw BadEquations(fmt::format("{}: the formula is {} at the initial state", spec.energy->where, e));
+  }
+  if (!exact_.empty()) {
+    const Eigen::VectorXd at0 = exact(0);
+    const double mismatch = (at0 - y0_).cwiseAbs().maxCoeff();
+    if (!(mismatch <= 1e-9 * std::max(1.0, y0_.cwiseAbs().maxCoeff())))
+      evaluation_.exact_note = fmt::format("[exact] at t = 0 is {:.3g} from the initial state (the initial values or parameters differ from those it "
+                                           "solves): errors are not measured against it", mismatch);
+  }
+
+  // ---- compiled: the tapes printed as C, built once and cached
+  if (!compile) {
+    evaluation_.detail = "the interpreter was asked for";
+    return;
+  }
+  std::string source = "#include <math.h>\n";
+  source += c_integer_power;
+  source += "void stepwise_rhs(double t, const double* y, const double* p, double* out) {\n  (void)t; (void)y; (void)p;\n";
+  for (size_t i = 0; i < n; ++i) source += c_of(rhs_[i], fmt::format("out[{}]", i));
+  source += "}\nvoid stepwise_jacobian(double t, const double* y, const double* p, double* out) {\n  (void)t; (void)y; (void)p;\n";
+  for (size_t k = 0; k < jacobian_.size(); ++k) source += c_of(jacobian_[k], fmt::format("out[{}]", k));
+  source += "}\n";
+  std::string why;
+  native_ = load_native(source, why);
+  if (native_) {
+    native_rhs_ = reinterpret_cast<NativeFn>(native_->symbol("stepwise_rhs"));
+    native_jacobian_ = reinterpret_cast<NativeFn>(native_->symbol("stepwise_jacobian"));
+  }
+  if (!native_rhs_ || !native_jacobian_) {
+    native_rhs_ = native_jacobian_ = nullptr;
+    evaluation_.detail = why.empty() ? "the compiled object lacks its functions" : why;
+    return;
+  }
+  evaluation_.compiled = true;
+  evaluation_.detail = native_->path();
+}
+
+}  // namespace
+
+std::unique_ptr<Model> make_equations(const EquationsSpec& spec, const Params& values, bool compile) {
+  return std::make_unique<Equations>(spec, values, compile);
+}
+
+std::vector<std::string> equations_keys(const EquationsSpec& spec) {
+  std::vector<std::string> keys;
+  for (const auto& [name, value] : spec.parameters) keys.push_back(name);
+  for (const auto& v : spec.variables) keys.push_back(v);
+  return keys;
+}
+
+std::optional<EquationsEvaluation> equations_evaluation(const Model& model) {
+  if (const auto* e = dynamic_cast<const Equations*>(&model)) return e->evaluation();
+  return std::nullopt;
+}
+
+}  // namespace stepwise

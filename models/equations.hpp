@@ -1,0 +1,80 @@
+// A user's own system, written as equations in a scene file (docs/scenes.md, "Your own equations"):
+//
+//   model = "equations"
+//   variables = ["x", "v"]            # the state, in this order
+//   [initial]   x = 2.9  v = 0.0       # one value per variable
+//   [parameters] g = 9.81              # optional; every name overridable by --set, as the initial values are
+//   [equations] x = "v"  v = "-g*sin(x)"   # d(variable)/dt in the variables, the parameters and t
+//   [exact]     ...                    # optional: each variable as a formula in t and the parameters
+//   energy = "..."                     # optional: an invariant to chart, in the variables and parameters
+//
+// GiNaC parses each formula against a symbol table holding only those names (and the functions of the
+// whitelist in equations.cpp), differentiates it for the exact Jacobian and its sparsity pattern, and prints C
+// source from the expression tree; that source is compiled once into a shared object cached by content hash
+// (models/native_code.hpp). Where no compiler is, a tape interpreter over the same tree evaluates f and df/dy.
+// GiNaC's types stay in equations.cpp. The model then is an ordinary Model.
+#pragma once
+
+#include "model.hpp"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace stepwise {
+
+// one formula of the scene file, as written
+struct Formula {
+  std::string name;   // the variable it is for ("v"), or "energy"
+  std::string text;   // the formula
+  std::string where;  // "file:line: equations.v", for messages
+  int line = 0;       // where the formula's text starts in the file (0: unknown)
+  int column = 0;     // the file column of its first character (0: unknown)
+};
+
+// the scene file's equations, as written (checked for names and shape on making the model)
+struct EquationsSpec {
+  std::string file;
+  std::vector<std::string> variables;
+  std::string variables_where;  // "file:line: variables"
+  Params initial;               // one per variable
+  Params parameters;            // [parameters]
+  std::vector<Formula> equations, exact;
+  std::optional<Formula> energy;
+};
+
+// the largest system and formula the equations model takes: hand-written equations are far below both, and a
+// larger one would spend minutes differentiating (n^2 derivatives) before any step
+inline constexpr size_t max_equations = 1000;
+inline constexpr size_t max_formula_chars = 10000;
+// the deepest nesting of parentheses and signs in a formula: GiNaC's parser recurses once a level
+inline constexpr int max_formula_depth = 100;
+
+// a formula or a system that cannot be made: the whole one-line message, naming the file, line, key and column
+struct BadEquations : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+// what the model says of itself, for summary.json: how f is evaluated (a compiled shared object, or the
+// interpreter, and why), and whether [exact] is used
+struct EquationsEvaluation {
+  bool compiled = false;
+  std::string detail;      // the cache file loaded, or why the interpreter runs
+  std::string exact_note;  // empty, or why [exact] is not used (it does not match the initial state)
+  int second_order = 0;    // positions n where the equations read x' = v (SecondOrderView), else 0
+};
+
+// the model with `values` (parameters and initial values by name, over the spec's) applied; BadParameter naming
+// the key for an unknown name or a non-finite value, BadEquations for a system or formula at fault (one that does
+// not parse, names an unknown symbol, calls a function outside the whitelist, or is not finite at the initial
+// state), all before anything is compiled.
+// `compile`: try the compiler (false: the interpreter, as where none is)
+std::unique_ptr<Model> make_equations(const EquationsSpec& spec, const Params& values, bool compile = true);
+
+// the parameter and initial-value names a spec takes (for --set and messages)
+std::vector<std::string> equations_keys(const EquationsSpec& spec);
+
+// how the model evaluates f (empty for a model that is not an equations model)
+std::optional<EquationsEvaluation> equations_evaluation(const Model& model);
+
+}  // namespace stepwise
