@@ -10,6 +10,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <map>
+#include <mutex>
 #include <numbers>
 #include <ranges>
 #include <regex>
@@ -162,10 +164,23 @@ std::string c_of(const Tape& tape, const std::string& target) {
   return fmt::format("  {{\n{}    {} = {};\n  }}\n", body, target, stack.back());
 }
 
-// ---- GiNaC: the symbols of a system and the formulas parsed against them
+// ---- GiNaC: the symbols of a system and the formulas parsed against them.
+// GiNaC is not thread-safe (its reference counts and shared numbers are plain integers): every use of it, from
+// parsing to the last expression's destruction, holds this lock (a sweep's threads may make models at once)
+std::mutex ginac_mutex;
+
+// one symbol per name for the life of the process: GiNaC orders a sum's terms by hash, which follows the
+// symbols' serial numbers, and normalises by that order (cos(a - b) or cos(b - a)); fresh symbols for each
+// parse of the same formula could make a different tree, and differently rounded code
+const GiNaC::realsymbol& symbol_named(const std::string& name) {
+  static std::map<std::string, GiNaC::realsymbol, std::less<>> symbols;
+  const auto it = symbols.find(name);
+  return it != symbols.end() ? it->second : symbols.emplace(name, GiNaC::realsymbol(name)).first->second;
+}
+
 struct Symbols {
   std::vector<GiNaC::realsymbol> variables, parameters;
-  GiNaC::realsymbol t{"t"};
+  GiNaC::realsymbol t = symbol_named("t");
   std::vector<std::string> variable_names, parameter_names;
   std::string defined;  // the names in words, for a message about an unknown one
 };
@@ -276,57 +291,78 @@ class TapeBuilder {
   }
 
  private:
-  void emit(const GiNaC::ex& e, Tape& tape) {
+  // appends e's postfix to the tape and returns its key: a text that names the expression whatever order GiNaC
+  // keeps its terms in. GiNaC orders a sum's or product's operands by hash, which follows the symbols' serial
+  // numbers, so the same formula parsed twice in one process may list them otherwise; the operands are emitted
+  // sorted by their keys, so one formula always gives one tape (one C source, one cache entry, the same bits)
+  std::string emit(const GiNaC::ex& e, Tape& tape) {
     using namespace GiNaC;
+    const auto push = [&](Op op, int arg, double value, std::string key) {
+      tape.code.push_back({op, arg, value});
+      return key;
+    };
     if (is_a<numeric>(e)) {
       const numeric& n = ex_to<numeric>(e);
       if (!n.is_real()) throw BadEquations(fmt::format("{}: {} is not a real number", at("I"), text_of(e)));
       const double v = n.to_double();
       if (!std::isfinite(v)) throw BadEquations(fmt::format("{}: the number {} is beyond the range of a double", where_, text_of(e)));
-      tape.code.push_back({Op::number, 0, v});
-    } else if (is_a<constant>(e)) {
+      return push(Op::number, 0, v, fmt::format("{:a}", v));
+    }
+    if (is_a<constant>(e)) {
       const ex value = e.evalf();
       if (!is_a<numeric>(value) || !ex_to<numeric>(value).is_real()) throw BadEquations(fmt::format("{}: the constant {} is not a real number", at(text_of(e)), text_of(e)));
-      tape.code.push_back({Op::number, 0, ex_to<numeric>(value).to_double()});
-    } else if (is_a<symbol>(e)) {
+      const double v = ex_to<numeric>(value).to_double();
+      return push(Op::number, 0, v, fmt::format("{:a}", v));
+    }
+    if (is_a<symbol>(e)) {
       for (size_t i = 0; i < s_.variables.size(); ++i)
-        if (e.is_equal(s_.variables[i])) return tape.code.push_back({Op::variable, static_cast<int>(i), 0});
+        if (e.is_equal(s_.variables[i])) return push(Op::variable, static_cast<int>(i), 0, fmt::format("y{}", i));
       for (size_t i = 0; i < s_.parameters.size(); ++i)
-        if (e.is_equal(s_.parameters[i])) return tape.code.push_back({Op::parameter, static_cast<int>(i), 0});
-      if (e.is_equal(s_.t)) return tape.code.push_back({Op::time, 0, 0});
+        if (e.is_equal(s_.parameters[i])) return push(Op::parameter, static_cast<int>(i), 0, fmt::format("p{}", i));
+      if (e.is_equal(s_.t)) return push(Op::time, 0, 0, "t");
       throw BadEquations(fmt::format("{}: unknown symbol {}", where_, text_of(e)));
-    } else if (is_a<add>(e) || is_a<mul>(e)) {
-      for (size_t i = 0; i < e.nops(); ++i) emit(e.op(i), tape);
-      tape.code.push_back({is_a<add>(e) ? Op::add : Op::mul, static_cast<int>(e.nops()), 0});
-    } else if (is_a<power>(e)) {
-      const ex exponent = e.op(1);
-      if (is_a<numeric>(exponent) && ex_to<numeric>(exponent).is_integer() && abs(ex_to<numeric>(exponent)) <= 64) {
-        emit(e.op(0), tape);
-        tape.code.push_back({Op::integer_power, ex_to<numeric>(exponent).to_int(), 0});
-      } else if (exponent.is_equal(numeric(1, 2)) || exponent.is_equal(numeric(-1, 2))) {
-        emit(e.op(0), tape);
-        tape.code.push_back({Op::call, static_cast<int>(std::find_if(functions1.begin(), functions1.end(), [](const Function1& f) { return f.name == "sqrt"; }) - functions1.begin()), 0});
-        if (exponent.is_equal(numeric(-1, 2))) tape.code.push_back({Op::integer_power, -1, 0});
-      } else {
-        emit(e.op(0), tape);
-        emit(exponent, tape);
-        tape.code.push_back({Op::power, 0, 0});
+    }
+    if (is_a<add>(e) || is_a<mul>(e)) {
+      std::vector<std::pair<std::string, Tape>> operands(e.nops());
+      for (size_t i = 0; i < e.nops(); ++i) operands[i].first = emit(e.op(i), operands[i].second);
+      std::stable_sort(operands.begin(), operands.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      std::string key = is_a<add>(e) ? "+(" : "*(";
+      for (const auto& [k, part] : operands) {
+        tape.code.insert(tape.code.end(), part.code.begin(), part.code.end());
+        key += k + ",";
       }
-    } else if (is_a<function>(e)) {
+      return push(is_a<add>(e) ? Op::add : Op::mul, static_cast<int>(e.nops()), 0, key + ")");
+    }
+    if (is_a<power>(e)) {
+      const ex exponent = e.op(1);
+      const std::string base = emit(e.op(0), tape);
+      if (is_a<numeric>(exponent) && ex_to<numeric>(exponent).is_integer() && abs(ex_to<numeric>(exponent)) <= 64) {
+        const int n = ex_to<numeric>(exponent).to_int();
+        return push(Op::integer_power, n, 0, fmt::format("^({},{})", base, n));
+      }
+      if (exponent.is_equal(numeric(1, 2)) || exponent.is_equal(numeric(-1, 2))) {
+        const std::string root = push(Op::call, function_index("sqrt"), 0, fmt::format("sqrt({})", base));
+        return exponent.is_equal(numeric(1, 2)) ? root : push(Op::integer_power, -1, 0, fmt::format("^({},-1)", root));
+      }
+      const std::string power_of = emit(exponent, tape);
+      return push(Op::power, 0, 0, fmt::format("pow({},{})", base, power_of));
+    }
+    if (is_a<function>(e)) {
       const std::string name = ex_to<function>(e).get_name();
       if (name == functions2 && e.nops() == 2) {
-        emit(e.op(0), tape);
-        emit(e.op(1), tape);
-        return tape.code.push_back({Op::atan2, 0, 0});
+        const std::string y = emit(e.op(0), tape), x = emit(e.op(1), tape);
+        return push(Op::atan2, 0, 0, fmt::format("atan2({},{})", y, x));
       }
-      const auto f = std::find_if(functions1.begin(), functions1.end(), [&](const Function1& g) { return g.name == name; });
-      if (f == functions1.end() || e.nops() != 1)
-        throw BadEquations(fmt::format("{}: the function {} is not one a formula may call ({})", at(name), name, function_list));
-      emit(e.op(0), tape);
-      tape.code.push_back({Op::call, static_cast<int>(f - functions1.begin()), 0});
-    } else {
-      throw BadEquations(fmt::format("{}: cannot evaluate {} (a formula may use numbers, its symbols, + - * / ^ and {})", where_, text_of(e), function_list));
+      const int f = function_index(name);
+      if (f < 0 || e.nops() != 1) throw BadEquations(fmt::format("{}: the function {} is not one a formula may call ({})", at(name), name, function_list));
+      const std::string argument = emit(e.op(0), tape);
+      return push(Op::call, f, 0, fmt::format("{}({})", name, argument));
     }
+    throw BadEquations(fmt::format("{}: cannot evaluate {} (a formula may use numbers, its symbols, + - * / ^ and {})", where_, text_of(e), function_list));
+  }
+  static int function_index(std::string_view name) {
+    const auto f = std::find_if(functions1.begin(), functions1.end(), [&](const Function1& g) { return g.name == name; });
+    return f == functions1.end() ? -1 : static_cast<int>(f - functions1.begin());
   }
   // where a name (a function, a constant) is in the formula's text, where that can be told
   std::string at(const std::string& name) const {
@@ -346,6 +382,7 @@ using NativeFn = void (*)(double t, const double* y, const double* p, double* ou
 class Equations final : public Model {
  public:
   Equations(const EquationsSpec& spec, const Params& values, bool compile) {
+    std::lock_guard lock(ginac_mutex);
     build(spec, values, compile);
   }
 
@@ -473,11 +510,11 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
   // ---- the symbols and the formulas
   Symbols s;
   for (const auto& v : spec.variables) {
-    s.variables.emplace_back(v);
+    s.variables.push_back(symbol_named(v));
     s.variable_names.push_back(v);
   }
   for (const auto& [name, value] : parameters) {
-    s.parameters.emplace_back(name);
+    s.parameters.push_back(symbol_named(name));
     s.parameter_names.push_back(name);
     p_.push_back(value);
   }

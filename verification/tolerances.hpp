@@ -496,4 +496,11 @@ inline double coverage_px(double outline_px) { return outline_px; }
 // quick report's cloth tables). The ranks test (mpi_ranks.py reads this line) asks the residual itself.
 inline constexpr double kept_factor_reproducibility = 1e-8;
 
+// the equations model against a hand-written twin (the built-in pendulum, a hand-coded f): the same formula with
+// its operations in another order or grouping (g/L once, or g times 1/L each call) differs by a few ulps a call,
+// 4 eps |f| bounding it; over a run of N steps those differences add, at most linearly on a non-chaotic orbit:
+// 1e4 steps x 4 eps ~ 1e-11 of |y| (1e-10 holds it, where a wrong formula or sign is off by O(dt) or more)
+inline constexpr double formula_roundoff = 4 * 2.220446049250313e-16;
+inline constexpr double equations_run_roundoff = 1e-10;
+
 }  // namespace stepwise::tolerance

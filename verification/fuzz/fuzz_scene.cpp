@@ -1,6 +1,6 @@
 // libFuzzer target: a scene file's text -> its parameters -> the model -> a few steps of the scene's method,
 // the path every `stepwise run` takes (run/prepare.hpp). Bad input must come back as InputError or BadMethod
-// (the command line's exit 2); a crash, a sanitizer report, a hang or any other exception is a bug.
+// (the command line's exit 2), equations scenes included (seeded with the shipped ones); a crash, a sanitizer report, a hang or any other exception is a bug.
 //   cmake --preset fuzz && cmake --build --preset fuzz
 //   build/fuzz/verification/fuzz/fuzz_scene -max_total_time=60 verification/fuzz/corpus
 #include "fuzz_limits.hpp"
@@ -11,9 +11,16 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <stdlib.h>
 #include <string_view>
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) { return stepwise::fuzz::limit_memory(); }
+// an equations scene is evaluated by the interpreter here: a compiler started for every new formula would take
+// a tenth of a second an input (the compiled path is test_equations'), and its objects would fill a cache
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  ::setenv("STEPWISE_CC", "/nonexistent/stepwise-fuzz-uses-the-interpreter", 1);
+  ::setenv("STEPWISE_CACHE", "/tmp/stepwise-fuzz-cache", 1);
+  return stepwise::fuzz::limit_memory();
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace stepwise;
