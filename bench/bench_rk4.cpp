@@ -8,6 +8,7 @@
 #include "solvers/capabilities/inline_rhs.hpp"
 #include "solvers/capabilities/second_order.hpp"
 #include "ratio_reporter.hpp"
+#include "users_pendulum.hpp"
 #include "solvers/method_table.hpp"
 
 #include <fmt/format.h>
@@ -24,23 +25,9 @@ namespace odeint = boost::numeric::odeint;
 
 constexpr double dt = 1e-3, t_end = 10.0, theta0 = 1.0, w2 = 9.81;
 
-// the pendulum as a user's own system would be: its f (the model's formula, kernels/pendulum.hpp) through the
-// virtual rhs only, no inline f offered; y = (x, v) for symplectic Euler
-class UsersPendulum final : public stepwise::OdeSystem {
- public:
-  int size() const override { return 2; }
-  void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override { f_(t, y.data(), dydt.data()); }
-  bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return stepwise::offer(type, second_order_); }
-
- private:
-  stepwise::PendulumRhs f_{w2};
-  stepwise::SecondOrderView second_order_{1};
-};
-
 void run_stepwise(benchmark::State& state, const char* method, bool inline_f = true) {
   const auto model = stepwise::make_model("pendulum", {{"theta0", theta0}, {"g", w2}});
-  const UsersPendulum users;
+  const stepwise::bench::UsersPendulum users(w2);
   const stepwise::OdeSystem& system = inline_f ? static_cast<const stepwise::OdeSystem&>(*model) : users;
   const auto integrator = stepwise::make_integrator(method, stepwise::StepControl::fixed(dt));
   for (auto _ : state) {

@@ -1,6 +1,7 @@
 #include "equations.hpp"
 
 #include "native_code.hpp"
+#include "solvers/capabilities/inline_rhs.hpp"
 #include "solvers/capabilities/second_order.hpp"
 
 #include <fmt/format.h>
@@ -269,94 +270,177 @@ std::string text_of(const GiNaC::ex& e) {
 }
 
 // ---- the tape of a parsed formula: what the interpreter runs, and the check that it can be evaluated at all
+int depth_of(const Tape& tape) {
+  int depth = 0, deepest = 0;
+  for (const Instruction& in : tape.code) {
+    switch (in.op) {
+      case Op::number: case Op::variable: case Op::parameter: case Op::time: ++depth; break;
+      case Op::add: case Op::mul: depth -= in.arg - 1; break;
+      case Op::power: case Op::atan2: --depth; break;
+      default: break;
+    }
+    deepest = std::max(deepest, depth);
+  }
+  return deepest;
+}
+
+// the parts of the formulas that depend on the parameters alone (g / L in -(g/L) sin x), computed once when the
+// model is made rather than at every call of f: each is a slot after the parameters in the array f reads, so the
+// C source stays free of the parameters' values (one cache entry whatever --set says)
+struct Derived {
+  int first_slot = 0;  // the number of parameters
+  std::vector<Tape> tapes;
+  std::map<std::string, int, std::less<>> slot_of;  // by key: one slot for a part that recurs (f and its Jacobian)
+  int slot(const std::string& key, Tape tape) {
+    if (const auto it = slot_of.find(key); it != slot_of.end()) return it->second;
+    tape.depth = depth_of(tape);
+    tapes.push_back(std::move(tape));
+    return slot_of[key] = first_slot + static_cast<int>(tapes.size()) - 1;
+  }
+};
+
+// ---- the tape of a parsed formula: what the interpreter runs, and the check that it can be evaluated at all
 class TapeBuilder {
  public:
   // `formula`: the user's text the tree was parsed from, where a message can point to a column; null for a
   // derivative
-  TapeBuilder(const Symbols& s, std::string where, const Formula* formula = nullptr) : s_(s), where_(std::move(where)), formula_(formula) {}
+  TapeBuilder(const Symbols& s, Derived& derived, std::string where, const Formula* formula = nullptr)
+      : s_(s), derived_(derived), where_(std::move(where)), formula_(formula) {}
   Tape build(const GiNaC::ex& e) {
     Tape tape;
     emit(e, tape);
-    int depth = 0;
-    for (const Instruction& in : tape.code) {
-      switch (in.op) {
-        case Op::number: case Op::variable: case Op::parameter: case Op::time: ++depth; break;
-        case Op::add: case Op::mul: depth -= in.arg - 1; break;
-        case Op::power: case Op::atan2: --depth; break;
-        default: break;
-      }
-      tape.depth = std::max(tape.depth, depth);
-    }
+    tape.depth = depth_of(tape);
     return tape;
   }
 
  private:
-  // appends e's postfix to the tape and returns its key: a text that names the expression whatever order GiNaC
-  // keeps its terms in. GiNaC orders a sum's or product's operands by hash, which follows the symbols' serial
-  // numbers, so the same formula parsed twice in one process may list them otherwise; the operands are emitted
-  // sorted by their keys, so one formula always gives one tape (one C source, one cache entry, the same bits)
-  std::string emit(const GiNaC::ex& e, Tape& tape) {
+  struct Emitted {
+    std::string key;  // a text that names the expression whatever order GiNaC keeps its terms in
+    bool varying;     // depends on the state or t (else on the parameters and numbers alone)
+  };
+
+  // a part on the parameters alone, longer than one instruction, as a derived slot; else as it is
+  Emitted folded(Emitted e, Tape& part) {
+    if (e.varying || part.code.size() <= 1) return e;
+    const int slot = derived_.slot(e.key, std::move(part));
+    part = Tape{{{Op::parameter, slot, 0}}, 1};
+    return {fmt::format("p{}", slot), false};
+  }
+
+  // appends e's postfix to the tape. GiNaC orders a sum's or product's operands by hash, which follows the
+  // symbols' serial numbers: the operands are emitted sorted by their keys, so one formula gives one tape. A sum
+  // or product of both kinds has its parameter-only operands gathered into one derived slot
+  Emitted emit(const GiNaC::ex& e, Tape& tape) {
     using namespace GiNaC;
-    const auto push = [&](Op op, int arg, double value, std::string key) {
+    const auto push = [&](Op op, int arg, double value, std::string key, bool varying) {
       tape.code.push_back({op, arg, value});
-      return key;
+      return Emitted{std::move(key), varying};
     };
     if (is_a<numeric>(e)) {
       const numeric& n = ex_to<numeric>(e);
       if (!n.is_real()) throw BadEquations(fmt::format("{}: {} is not a real number", at("I"), text_of(e)));
       const double v = n.to_double();
       if (!std::isfinite(v)) throw BadEquations(fmt::format("{}: the number {} is beyond the range of a double", where_, text_of(e)));
-      return push(Op::number, 0, v, fmt::format("{:a}", v));
+      return push(Op::number, 0, v, fmt::format("{:a}", v), false);
     }
     if (is_a<constant>(e)) {
       const ex value = e.evalf();
       if (!is_a<numeric>(value) || !ex_to<numeric>(value).is_real()) throw BadEquations(fmt::format("{}: the constant {} is not a real number", at(text_of(e)), text_of(e)));
       const double v = ex_to<numeric>(value).to_double();
-      return push(Op::number, 0, v, fmt::format("{:a}", v));
+      return push(Op::number, 0, v, fmt::format("{:a}", v), false);
     }
     if (is_a<symbol>(e)) {
       for (size_t i = 0; i < s_.variables.size(); ++i)
-        if (e.is_equal(s_.variables[i])) return push(Op::variable, static_cast<int>(i), 0, fmt::format("y{}", i));
+        if (e.is_equal(s_.variables[i])) return push(Op::variable, static_cast<int>(i), 0, fmt::format("y{}", i), true);
       for (size_t i = 0; i < s_.parameters.size(); ++i)
-        if (e.is_equal(s_.parameters[i])) return push(Op::parameter, static_cast<int>(i), 0, fmt::format("p{}", i));
-      if (e.is_equal(s_.t)) return push(Op::time, 0, 0, "t");
+        if (e.is_equal(s_.parameters[i])) return push(Op::parameter, static_cast<int>(i), 0, fmt::format("p{}", i), false);
+      if (e.is_equal(s_.t)) return push(Op::time, 0, 0, "t", true);
       throw BadEquations(fmt::format("{}: unknown symbol {}", where_, text_of(e)));
     }
     if (is_a<add>(e) || is_a<mul>(e)) {
-      std::vector<std::pair<std::string, Tape>> operands(e.nops());
-      for (size_t i = 0; i < e.nops(); ++i) operands[i].first = emit(e.op(i), operands[i].second);
-      std::stable_sort(operands.begin(), operands.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-      std::string key = is_a<add>(e) ? "+(" : "*(";
-      for (const auto& [k, part] : operands) {
-        tape.code.insert(tape.code.end(), part.code.begin(), part.code.end());
-        key += k + ",";
+      const Op op = is_a<add>(e) ? Op::add : Op::mul;
+      struct Operand {
+        Emitted emitted;
+        Tape part;
+      };
+      std::vector<Operand> operands(e.nops());
+      for (size_t i = 0; i < e.nops(); ++i) operands[i].emitted = emit(e.op(i), operands[i].part);
+      std::stable_sort(operands.begin(), operands.end(), [](const Operand& a, const Operand& b) { return a.emitted.key < b.emitted.key; });
+      const bool varying = std::any_of(operands.begin(), operands.end(), [](const Operand& o) { return o.emitted.varying; });
+      const std::string name = op == Op::add ? "+" : "*";
+      if (varying) {
+        // the parameter-only operands as one (their sum or product, in key order), then the others
+        Operand fixed{{name + "c(", false}, {}};
+        std::vector<Operand> kept;
+        int count = 0;
+        for (auto& o : operands) {
+          if (o.emitted.varying) {
+            kept.push_back(std::move(o));
+            continue;
+          }
+          fixed.part.code.insert(fixed.part.code.end(), o.part.code.begin(), o.part.code.end());
+          fixed.emitted.key += o.emitted.key + ",";
+          ++count;
+        }
+        if (count > 1) fixed.part.code.push_back({op, count, 0});
+        fixed.emitted.key += ")";
+        if (count > 0) {
+          fixed.emitted = folded(fixed.emitted, fixed.part);
+          kept.insert(kept.begin(), std::move(fixed));
+        }
+        operands = std::move(kept);
       }
-      return push(is_a<add>(e) ? Op::add : Op::mul, static_cast<int>(e.nops()), 0, key + ")");
+      std::string key = name + "(";
+      for (const auto& o : operands) {
+        tape.code.insert(tape.code.end(), o.part.code.begin(), o.part.code.end());
+        key += o.emitted.key + ",";
+      }
+      if (operands.size() > 1) tape.code.push_back({op, static_cast<int>(operands.size()), 0});
+      return {key + ")", varying};
     }
+    // an operand of a node that varies: folded where it is on the parameters alone
+    const auto operand = [&](const ex& x, bool& varying) {
+      Tape part;
+      Emitted emitted = emit(x, part);
+      varying = varying || emitted.varying;
+      return std::pair{emitted, part};
+    };
+    const auto append = [&](std::pair<Emitted, Tape>& o, bool varying) {
+      if (varying) o.first = folded(o.first, o.second);
+      tape.code.insert(tape.code.end(), o.second.code.begin(), o.second.code.end());
+      return o.first.key;
+    };
     if (is_a<power>(e)) {
       const ex exponent = e.op(1);
-      const std::string base = emit(e.op(0), tape);
+      bool varying = false;
+      auto base = operand(e.op(0), varying);
       if (is_a<numeric>(exponent) && ex_to<numeric>(exponent).is_integer() && abs(ex_to<numeric>(exponent)) <= 64) {
         const int n = ex_to<numeric>(exponent).to_int();
-        return push(Op::integer_power, n, 0, fmt::format("^({},{})", base, n));
+        const std::string b = append(base, varying);
+        return push(Op::integer_power, n, 0, fmt::format("^({},{})", b, n), varying);
       }
       if (exponent.is_equal(numeric(1, 2)) || exponent.is_equal(numeric(-1, 2))) {
-        const std::string root = push(Op::call, function_index("sqrt"), 0, fmt::format("sqrt({})", base));
-        return exponent.is_equal(numeric(1, 2)) ? root : push(Op::integer_power, -1, 0, fmt::format("^({},-1)", root));
+        const std::string b = append(base, varying);
+        const Emitted root = push(Op::call, function_index("sqrt"), 0, fmt::format("sqrt({})", b), varying);
+        return exponent.is_equal(numeric(1, 2)) ? root : push(Op::integer_power, -1, 0, fmt::format("^({},-1)", root.key), varying);
       }
-      const std::string power_of = emit(exponent, tape);
-      return push(Op::power, 0, 0, fmt::format("pow({},{})", base, power_of));
+      auto power_of = operand(exponent, varying);
+      const std::string b = append(base, varying), x = append(power_of, varying);
+      return push(Op::power, 0, 0, fmt::format("pow({},{})", b, x), varying);
     }
     if (is_a<function>(e)) {
       const std::string name = ex_to<function>(e).get_name();
+      bool varying = false;
       if (name == functions2 && e.nops() == 2) {
-        const std::string y = emit(e.op(0), tape), x = emit(e.op(1), tape);
-        return push(Op::atan2, 0, 0, fmt::format("atan2({},{})", y, x));
+        auto y = operand(e.op(0), varying), x = operand(e.op(1), varying);
+        const std::string ky = append(y, varying), kx = append(x, varying);
+        return push(Op::atan2, 0, 0, fmt::format("atan2({},{})", ky, kx), varying);
       }
       const int f = function_index(name);
       if (f < 0 || e.nops() != 1) throw BadEquations(fmt::format("{}: the function {} is not one a formula may call ({})", at(name), name, function_list));
-      const std::string argument = emit(e.op(0), tape);
-      return push(Op::call, f, 0, fmt::format("{}({})", name, argument));
+      auto argument = operand(e.op(0), varying);
+      const std::string k = append(argument, varying);
+      return push(Op::call, f, 0, fmt::format("{}({})", name, k), varying);
     }
     throw BadEquations(fmt::format("{}: cannot evaluate {} (a formula may use numbers, its symbols, + - * / ^ and {})", where_, text_of(e), function_list));
   }
@@ -370,6 +454,7 @@ class TapeBuilder {
     return column > 0 ? where_at(*formula_, column) : where_;
   }
   const Symbols& s_;
+  Derived& derived_;
   std::string where_;
   const Formula* formula_;
 };
@@ -432,7 +517,9 @@ class Equations final : public Model {
     return y;
   }
   const void* capability(const std::type_info& type) const override {
-    return second_order_.positions > 0 ? offer(type, second_order_) : nullptr;
+    if (second_order_.positions > 0 && inline_rhs_) return offer(type, second_order_, *inline_rhs_);
+    if (second_order_.positions > 0) return offer(type, second_order_);
+    return inline_rhs_ ? offer(type, *inline_rhs_) : nullptr;
   }
   const EquationsEvaluation& evaluation() const { return evaluation_; }
 
@@ -456,6 +543,7 @@ class Equations final : public Model {
   SecondOrderView second_order_;
   std::shared_ptr<const NativeCode> native_;
   NativeFn native_rhs_ = nullptr, native_jacobian_ = nullptr;
+  std::optional<InlineRhs> inline_rhs_;  // the compiled f for the steppers that call it inline (sizes 2-4)
   EquationsEvaluation evaluation_;
 };
 
@@ -532,7 +620,8 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
     formula_of[i] = &formula;
   }
   autonomous_ = std::none_of(f.begin(), f.end(), [&](const GiNaC::ex& e) { return e.has(s.t); });
-  for (size_t i = 0; i < n; ++i) rhs_.push_back(TapeBuilder(s, formula_of[i]->where, formula_of[i]).build(f[i]));
+  Derived derived{static_cast<int>(p_.size()), {}, {}};
+  for (size_t i = 0; i < n; ++i) rhs_.push_back(TapeBuilder(s, derived, formula_of[i]->where, formula_of[i]).build(f[i]));
 
   // the exact Jacobian and its pattern, column by column; the diagonal always in it (the Newton matrix I - h J has it)
   columns_.push_back(0);
@@ -542,16 +631,19 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
       const GiNaC::ex d = f[r].diff(s.variables[c]);
       if (d.is_zero() && r != c) continue;
       rows_.push_back(static_cast<int>(r));
-      jacobian_.push_back(TapeBuilder(s, fmt::format("{} (its derivative in {})", formula_of[r]->where, names_[c])).build(d));
+      jacobian_.push_back(TapeBuilder(s, derived, fmt::format("{} (its derivative in {})", formula_of[r]->where, names_[c])).build(d));
     }
     columns_.push_back(static_cast<int>(rows_.size()));
   }
   exact_.resize(spec.exact.size());  // one per variable (checked above), in the variables' order
   for (const auto& formula : spec.exact) {
     const size_t i = static_cast<size_t>(std::find(names_.begin(), names_.end(), formula.name) - names_.begin());
-    exact_[i] = TapeBuilder(s, formula.where, &formula).build(parse(formula, s, false, true));
+    exact_[i] = TapeBuilder(s, derived, formula.where, &formula).build(parse(formula, s, false, true));
   }
-  if (spec.energy) energy_ = TapeBuilder(s, spec.energy->where, &*spec.energy).build(parse(*spec.energy, s, true, false));
+  if (spec.energy) energy_ = TapeBuilder(s, derived, spec.energy->where, &*spec.energy).build(parse(*spec.energy, s, true, false));
+  // the derived slots, from the parameters (each reads parameters and numbers only)
+  for (const Tape& t : derived.tapes) depth_ = std::max(depth_, t.depth);
+  for (const Tape& t : derived.tapes) p_.push_back(run(t, 0, nullptr, p_.data(), scratch(depth_)));
   for (const auto* tapes : {&rhs_, &jacobian_, &exact_})
     for (const Tape& t : *tapes) depth_ = std::max(depth_, t.depth);
   if (energy_) depth_ = std::max(depth_, energy_->depth);
@@ -612,6 +704,9 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
   }
   evaluation_.compiled = true;
   evaluation_.detail = native_->path();
+  if (n == 2) inline_rhs_ = InlineRhs{NativeRhs<2>{native_rhs_, p_.data()}};
+  if (n == 3) inline_rhs_ = InlineRhs{NativeRhs<3>{native_rhs_, p_.data()}};
+  if (n == 4) inline_rhs_ = InlineRhs{NativeRhs<4>{native_rhs_, p_.data()}};
 }
 
 }  // namespace

@@ -15,9 +15,21 @@
 
 namespace stepwise {
 
+// f compiled from a scene's own equations (models/equations.cpp: C printed from the parsed formulas, loaded from
+// a shared object): a plain function pointer and the parameters it reads. Called inline, a step makes an indirect
+// call but no virtual one and no round trip through Eigen::Ref; sizes 2 to 4 (the shipped equation scenes;
+// larger systems call through the system, where f's own cost dominates the call's)
+template <int N>
+struct NativeRhs {
+  static constexpr int size = N;
+  void (*f)(double t, const double* y, const double* p, double* dydt) = nullptr;
+  const double* p = nullptr;
+  void operator()(double t, const double* y, double* dydt) const { f(t, y, p, dydt); }
+};
+
 struct InlineRhs {
   // each kernel: `static constexpr int size` and `void operator()(double t, const double* y, double* dydt) const`
-  std::variant<PendulumRhs, ProjectileRhs, FlowParticleRhs> f;
+  std::variant<PendulumRhs, ProjectileRhs, FlowParticleRhs, NativeRhs<2>, NativeRhs<3>, NativeRhs<4>> f;
 };
 
 }  // namespace stepwise
