@@ -7,6 +7,7 @@
 #include "run/scene.hpp"
 
 #include "models/model.hpp"
+#include "report/advise.hpp"
 #include "report/report.hpp"
 #include "solvers/method_table.hpp"
 
@@ -89,6 +90,9 @@ int run(int argc, char** argv) {
   study->add_option("--out", study_out, "output directory")->required();
   int study_threads = 0;
   study->add_option("--threads", study_threads, "threads the sweep's points run on (default: one per core)")->check(CLI::Range(1, 1024));
+  stepwise::RunOptions study_scene;
+  study->add_option("--scene", study_scene.scene_file, fmt::format("run the study on this scene file instead of its own ({})", stepwise::scene_studies));
+  study->add_option("--set", study_scene.sets, "override a parameter of the --scene file, key=value");
 
   std::string report_out;
   bool report_quick = false;
@@ -97,6 +101,16 @@ int run(int argc, char** argv) {
   report->add_option("--out", report_out, "output directory")->required();
   int report_threads = 0;
   report->add_option("--threads", report_threads, "threads the sweeps' points run on (default: one per core)")->check(CLI::Range(1, 1024));
+
+  stepwise::AdviseOptions advise;
+  auto* advise_cmd = app.add_subcommand("advise", "which method is cheapest for this scene at this error: a budgeted, measured sweep");
+  advise_cmd->add_option("scene", advise.run.scene_file, "scene file (TOML)")->required();
+  advise_cmd->add_option("--error", advise.error, "the max-norm error at t_end the method must meet")->required();
+  advise_cmd->add_option("--budget", advise.budget, "wall-clock seconds the advice may take (default 30)");
+  advise_cmd->add_option("--set", advise.run.sets, "override a scene parameter, key=value");
+  advise_cmd->add_option("--t-end", advise.run.t_end, "end time (s)");
+  advise_cmd->add_option("--threads", advise.threads, "threads the sweep runs on (default: one per core)")->check(CLI::Range(1, 1024));
+  advise_cmd->add_option("--out", advise.out, "output directory")->required();
 
   stepwise::RenderOptions render;
   auto* render_cmd = app.add_subcommand("render", "draw a scene's animation headlessly (OpenGL): PNG frames, MP4 and GIF");
@@ -136,7 +150,12 @@ int run(int argc, char** argv) {
   if (*scenes) return list_scenes();
   if (*run_cmd) return stepwise::run_command(run);
   if (*render_cmd) return stepwise::render_command(render);
-  if (*study) return stepwise::study_command(study_name, study_quick, study_threads, study_out);
+  if (*advise_cmd) return stepwise::advise_command(advise);
+  if (*study) {
+    if (study_scene.scene_file.empty() && !study_scene.sets.empty()) throw stepwise::InputError("--set: given without --scene");
+    return stepwise::study_command(study_name, study_quick, study_threads, study_out,
+                                   study_scene.scene_file.empty() ? std::nullopt : std::optional(study_scene));
+  }
   if (*report) return stepwise::report_command(report_quick, report_threads, report_out, stepwise::scenes_directory());
   return 2;
 }

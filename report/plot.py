@@ -12,6 +12,7 @@ import csv
 import ctypes
 import math
 import multiprocessing
+import json
 import os
 import signal
 import sys
@@ -138,6 +139,34 @@ def work_precision(directory, scene, styles):
     axes[1].set_title(f"{scene}: error against evaluations", fontsize=9)
     legend(axes[1], ncol=2, loc="upper right")
     finish(fig, directory, f"work_precision_{scene}")
+
+
+def advice(directory, scene, styles):
+    """stepwise advise's sweep: error against CPU time per method, the target error, the advised point"""
+    rows = [r for r in read(directory, "advice_sweep") if r["scene"] == scene]
+    with open(os.path.join(directory, "advice.json")) as f:
+        advised = json.load(f)
+    fig, ax = plt.subplots(figsize=(9, 6))
+    top = max([r["error"] for r in rows if ok(r)] + [1.0]) * 10
+    for method, points in by_method(rows).items():
+        style = styles(method)
+        good = sorted((r for r in points if ok(r) and r["error"] > 0 and r["cpu_seconds"] > 0), key=lambda r: r["cpu_seconds"])
+        if good:
+            ax.loglog([r["cpu_seconds"] for r in good], [r["error"] for r in good], linestyle="--" if good[0]["mode"] == "adaptive" else "-",
+                      linewidth=1, markersize=3, label=method, **style)
+        failed = [r for r in points if not ok(r) and r["cpu_seconds"] > 0]
+        if failed:
+            ax.loglog([r["cpu_seconds"] for r in failed], [top] * len(failed), color=style["color"], **FAILED_MARKER)
+    ax.axhline(advised["target_error"], color="black", linewidth=1, linestyle=":", label="the error asked")
+    if advised.get("method"):
+        ax.loglog([advised["cpu_seconds"]], [advised["error"]], marker="*", markersize=16, color="gold", markeredgecolor="black",
+                  linestyle="none", label=f"advised: {advised['method']}")
+    ax.set_xlabel("CPU time (s)")
+    ax.set_ylabel("max-norm error at t_end")
+    ax.set_title(f"{scene}: the advice's sweep (dashed: adaptive; x: failed or diverged)", fontsize=9)
+    ax.grid(True, which="major", alpha=0.3)
+    legend(ax, ncol=2, loc="upper right")
+    finish(fig, directory, f"advice_{scene}")
 
 
 def energy(directory, _, styles):
@@ -405,7 +434,7 @@ code {{ background: #f4f4f4; }}
     os.replace(path + ".tmp", path)
 
 
-DRAWERS = {f.__name__: f for f in (convergence, work_precision, energy, adequacy, wave_adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
+DRAWERS = {f.__name__: f for f in (convergence, work_precision, advice, energy, adequacy, wave_adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
                                     cloth_implicit_damping, cloth_realtime, fluid_viscosity, stability_regions, rigid_body_invariants, event_times, contacts)}
 
 

@@ -1,4 +1,5 @@
 #include "report.hpp"
+#include "report/user_scene.hpp"
 
 #include "report/cost_model.hpp"
 #include "run/atomic_write.hpp"
@@ -81,6 +82,8 @@ int fail(const char* command, const std::exception& e, bool together) {
   return 1;
 }
 
+}  // namespace
+
 // the figures' list for plot.py (figures.csv), then plot.py drawing them by `jobs` processes, and with `html`
 // report.md as index.html
 void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, int jobs, bool html) {
@@ -100,6 +103,8 @@ void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, int j
   if (*status != 0)
     throw std::runtime_error(fmt::format("{} {} failed (exit status {}): the figures were not drawn", python, script, *status));
 }
+
+namespace {
 
 // the report's marker: the names it wrote at the top of its directory, so that a later report replaces only those
 void write_report_marker(const fs::path& dir) {
@@ -155,13 +160,27 @@ int threads_or_default(int requested) { return requested > 0 ? requested : stati
 
 }  // namespace
 
-int study_command(const std::string& name, bool quick, int threads, const std::string& out) {
+int study_command(const std::string& name, bool quick, int threads, const std::string& out, const std::optional<RunOptions>& scene) {
   const bool writer = ranks::rank() == 0;
   const Study* study = find_study(name);
   const bool pictures = name == pictures_study;
   if (!study && !pictures) {
     if (writer) print_error("study", fmt::format("unknown study '{}' (one of {})", name, study_names()));
     return 2;
+  }
+  // the user's scene, checked as `stepwise run` checks it, before anything runs
+  std::vector<StudyScene> user_scenes;
+  if (scene) {
+    if (scene_studies.find(name) == std::string_view::npos || pictures) {
+      if (writer) print_error("study", fmt::format("--scene: study {} runs on its own scenes (those that take --scene: {})", name, scene_studies));
+      return 2;
+    }
+    try {
+      user_scenes.push_back(user_study_scene(*scene));
+    } catch (const InputError& e) {
+      if (writer) print_error("study", e.what());
+      return 2;
+    }
   }
   bool usable = true;
   if (writer) try {
@@ -180,6 +199,7 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
     RankLoad load;
     StudyContext ctx{quick, threads_or_default(threads), writer ? &progress : nullptr};
     ctx.load = &load;
+    if (scene) ctx.scenes = &user_scenes;
     std::vector<Figure> figures;
     if (pictures) {  // rank 0's alone, as in the report
       together = false;
@@ -192,7 +212,7 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
     if (!writer) return 0;
     write_file_atomic(fs::path(out) / (name + ".md"), md);
     if (!pictures) draw_figures(figures, out, ctx.threads, false);
-    write_provenance(out, fmt::format("study {}{}", name, quick ? " --quick" : ""), ctx, start);
+    write_provenance(out, fmt::format("study {}{}{}", name, quick ? " --quick" : "", scene ? " --scene " + scene->scene_file : ""), ctx, start);
   } catch (const std::exception& e) {
     return fail("study", e, together);
   }

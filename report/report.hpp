@@ -1,6 +1,14 @@
 // Studies (sweeps written as CSV/JSON) and the report built from them (`stepwise study`, `stepwise report`).
 #pragma once
 
+#include "run/prepare.hpp"
+
+#include <filesystem>
+#include <optional>
+#include <vector>
+#include <string>
+#include <string_view>
+
 #include <string>
 
 namespace stepwise {
@@ -10,7 +18,17 @@ std::string study_names();
 
 // run one study into out/ (CSV, Markdown, its figures); its points on `threads` threads (0: one per core).
 // Exit status 0, 1 when a study or its figures failed, 2 for an unknown name or unwritable out
-int study_command(const std::string& name, bool quick, int threads, const std::string& out);
+// `scene`: the user's scene file (--scene, with its --set) in place of the study's own scenes, for the studies
+// that take one (scene_studies); exit status 2 for another
+int study_command(const std::string& name, bool quick, int threads, const std::string& out, const std::optional<RunOptions>& scene = std::nullopt);
+
+// plot.py's figures (kind and subject: report/studies.hpp's Figure) drawn into dir from its CSVs, by `jobs`
+// processes; with `html`, report.md as index.html too
+struct Figure;
+void draw_figures(const std::vector<Figure>& figures, const std::filesystem::path& dir, int jobs, bool html);
+
+// the studies that take --scene
+inline constexpr std::string_view scene_studies = "work-precision, convergence, stability-regions";
 
 // every study, then out/report.md, the figures and out/index.html; written to a temporary directory and moved
 // into place at the end, so a failed or interrupted run leaves the previous report as it was

@@ -65,6 +65,8 @@ struct SweepError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+struct StudyScene;
+
 // what a study runs with: the sweep size and the pool its points share
 struct StudyContext {
   bool quick = false;
@@ -74,6 +76,8 @@ struct StudyContext {
   // only rank 0 runs (the pictures, drawn where they are written)
   bool distribute = true;
   RankLoad* load = nullptr;
+  // `stepwise study NAME --scene FILE`: the user's scene, in place of the study's own (report/studies/study_scenes.hpp)
+  const std::vector<StudyScene>* scenes = nullptr;
 
   // task(i) for each i < labels.size(), on up to `threads` threads; results in index order, whatever the
   // thread count (a point never reads another's result). An exception from any point is rethrown here.

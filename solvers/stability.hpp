@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 
 #include <complex>
+#include <functional>
 #include <tuple>
 
 namespace stepwise {
@@ -14,9 +15,9 @@ namespace stepwise {
 // The largest h with |R(h lambda)| <= 1 for every eigenvalue (not empty): h is raised by factors of 2 from
 // 1e-3 / max |lambda| until some |R| exceeds 1 + 1e-9, then bisected to 1e-9. Positive real parts below 1e-6 of
 // the largest |lambda| are taken as 0 and smaller eigenvalues left out (a difference Jacobian resolves no
-// finer). 0 where even the first h grows (explicit Euler on an undamped spectrum), infinity where no h up to
-// 1e6 / min |lambda| grows (implicit Euler).
-double largest_stable_step(std::complex<double> (*R)(std::complex<double>), const Eigen::VectorXcd& eigenvalues);
+// finer); larger positive real parts are modes the exact flow grows, left out too. 0 where even the first h grows
+// (explicit Euler on an undamped spectrum), infinity where no h up to 1e6 / min |lambda| grows (implicit Euler).
+double largest_stable_step(const std::function<std::complex<double>(std::complex<double>)>& R, const Eigen::VectorXcd& eigenvalues);
 
 // the eigenvalues of the damped oscillator x'' = -omega^2 x - 2 a x': lambda = -a +- i sqrt(omega^2 - a^2)
 Eigen::Vector2cd oscillator_eigenvalues(double omega, double damping);

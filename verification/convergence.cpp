@@ -24,13 +24,14 @@ std::vector<double> convergence_steps(const Method& method, int halvings, double
 }
 
 ConvergenceSweep convergence_sweep(const Model& model, const Method& method, double t_end, int halvings,
-                                   double coarse) {
+                                   double coarse, const Eigen::VectorXd* reference) {
   ConvergenceSweep sweep;
   for (const double dt : convergence_steps(method, halvings, coarse)) {
     StepControl control;
     control.dt = dt;
     sweep.dt.push_back(*control.dt);
     sweep.runs.push_back(run_and_measure(model, method.name, control, t_end, t_end));
+    if (reference && sweep.runs.back().result.status == Status::ok) sweep.runs.back().error = max_norm_error(sweep.runs.back().result.y_stop, *reference);
     const auto& error = sweep.runs.back().error;
     if (error && *error > tolerance::roundoff_floor && *error < tolerance::asymptotic_ceiling) {
       sweep.fit_dt.push_back(*control.dt);

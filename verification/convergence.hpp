@@ -28,7 +28,8 @@ double coarse_dt(const Method& method, double time_scale);
 // order above 5 (its error would otherwise fall from the asymptotic range to round-off in a halving or two)
 std::vector<double> convergence_steps(const Method& method, int halvings, double coarse);
 
+// errors against the model's exact solution, or against `reference` (the state at t_end) where given
 ConvergenceSweep convergence_sweep(const Model& model, const Method& method, double t_end, int halvings,
-                                   double coarse);
+                                   double coarse, const Eigen::VectorXd* reference = nullptr);
 
 }  // namespace stepwise

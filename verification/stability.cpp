@@ -75,6 +75,48 @@ std::optional<std::complex<double>> stability_function(std::string_view method, 
   return m->stability.R(z);
 }
 
+namespace {
+
+// y' = z y in real pairs: y = (Re, Im), f = (a y0 - b y1, b y0 + a y1)
+class ComplexScalar final : public OdeSystem {
+ public:
+  explicit ComplexScalar(std::complex<double> z) : z_(z) {}
+  int size() const override { return 2; }
+  bool autonomous() const override { return true; }
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) const override {
+    f[0] = z_.real() * y[0] - z_.imag() * y[1];
+    f[1] = z_.imag() * y[0] + z_.real() * y[1];
+  }
+  bool has_jacobian() const override { return true; }
+  void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::MatrixXd> j) const override {
+    j << z_.real(), -z_.imag(), z_.imag(), z_.real();
+  }
+
+ private:
+  std::complex<double> z_;
+};
+
+}  // namespace
+
+std::optional<std::function<std::complex<double>(std::complex<double>)>> measured_stability_function(const Method& method) {
+  if (!method.fixed_step() || method.needs.type || method.order.min != method.order.max || method.family == "gpu") return std::nullopt;
+  const Method* m = &method;
+  return [m](std::complex<double> z) {
+    const ComplexScalar system(z);
+    const std::vector<double> times{1.0};
+    const RunResult r = make_integrator(m->name, StepControl::fixed(1.0))->integrate(system, 0, Eigen::Vector2d(1, 0), times);
+    if (r.status != Status::ok || r.trajectory.y.empty()) return std::complex<double>(std::numeric_limits<double>::infinity(), 0);
+    return std::complex<double>(r.trajectory.y.back()[0], r.trajectory.y.back()[1]);
+  };
+}
+
+std::optional<double> predicted_stable_dt(const Method& method, const Eigen::VectorXcd& eigenvalues) {
+  if (eigenvalues.size() == 0) return std::nullopt;
+  if (method.stability.R) return largest_stable_step(method.stability.R, eigenvalues);
+  if (const auto R = measured_stability_function(method)) return largest_stable_step(*R, eigenvalues);
+  return std::nullopt;
+}
+
 Eigen::VectorXcd jacobian_spectrum(const OdeSystem& system, double t, const Eigen::VectorXd& y) {
   Eigen::MatrixXd j(system.size(), system.size());
   jacobian_or_fd(system, t, y, j);

@@ -60,6 +60,17 @@ double measured_stable_dt(const Model& model, std::string_view method, long step
 // is a map on (x, v) pairs, not a function of z alone; multistep and adaptive methods).
 std::optional<std::complex<double>> stability_function(std::string_view method, std::complex<double> z);
 
+// R(z) of a one-step method, measured where the method table gives none: one fixed step of h = 1 on
+// y' = [[a, -b], [b, a]] y from y = (1, 0), the complex scalar equation y' = z y with z = a + ib written in real
+// pairs, lands on (Re R(z), Im R(z)) for any Runge-Kutta method (its step is a rational function of h A applied to
+// y0), to the tolerance of an implicit method's linear solve. For the fixed-step methods that take a plain system
+// and have one documented order (multistep and extrapolation codes choose theirs: no R); empty otherwise
+std::optional<std::function<std::complex<double>(std::complex<double>)>> measured_stability_function(const Method& method);
+
+// the largest stable step of `method` on `eigenvalues`: from its R(z) where the method table has it, else from
+// the measured one; empty where it has neither
+std::optional<double> predicted_stable_dt(const Method& method, const Eigen::VectorXcd& eigenvalues);
+
 // The eigenvalues of the system's Jacobian df/dy at (t, y) (its own Jacobian, else central differences), dense:
 // for systems of a few hundred unknowns
 Eigen::VectorXcd jacobian_spectrum(const OdeSystem& system, double t, const Eigen::VectorXd& y);

@@ -29,7 +29,15 @@ StudyOutput convergence(const StudyContext& ctx) {
     const StudyScene* scene;
     const Method* method;
   };
-  const auto scenes = ode_scenes();
+  const auto scenes = scenes_or(ctx, ode_scenes());
+  // a user's scene without an exact solution: errors against the converged reference (verification/reference.hpp)
+  std::map<const StudyScene*, Reference> references;
+  for (const auto& scene : scenes)
+    if (const auto model = scene_model(scene); !model->has_exact()) {
+      references.emplace(&scene, converged_reference(*model, scene.t_end));
+      out.markdown += fmt::format("{} has no exact solution: its errors are against {}, which agree to {:.2e}.\n\n", scene.label,
+                                  references.at(&scene).methods, references.at(&scene).agreement);
+    }
   std::vector<Point> plan;
   std::vector<std::string> labels;
   // each point's expected cost (report/cost_model.hpp): its runs at the coarse step and each halving of it
@@ -37,7 +45,7 @@ StudyOutput convergence(const StudyContext& ctx) {
   std::vector<double> costs;
   std::vector<std::string> groups;
   for (const auto& scene : scenes) {
-    const double n = make_model(scene.model, scene.params)->size();
+    const double n = scene_model(scene)->size();
     for (const Method* method : scene_methods(scene, true)) {
       plan.push_back({&scene, method});
       labels.push_back(fmt::format("{} {}", scene.label, method->name));
@@ -49,8 +57,10 @@ StudyOutput convergence(const StudyContext& ctx) {
     }
   }
   const auto sweeps = ctx.sweep<ConvergenceSweep>(labels, [&](size_t i) {
-    const auto model = make_model(plan[i].scene->model, plan[i].scene->params);
-    return convergence_sweep(*model, *plan[i].method, plan[i].scene->t_end, halvings, coarse_dt(*plan[i].method, plan[i].scene->time_scale));
+    const auto model = scene_model(*plan[i].scene);
+    const auto reference = references.find(plan[i].scene);
+    return convergence_sweep(*model, *plan[i].method, plan[i].scene->t_end, halvings, coarse_dt(*plan[i].method, plan[i].scene->time_scale),
+                             reference == references.end() ? nullptr : &reference->second.y);
   }, costs, groups);
 
   std::vector<const StudyScene*> shown;  // the scenes in the plan's order

@@ -9,6 +9,7 @@
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/wave_step.hpp"
 #include "verification/convergence.hpp"
+#include "verification/reference.hpp"
 #include "run/measure.hpp"
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
@@ -35,7 +36,15 @@ struct StudyScene {
   bool dense = true;        // false: methods keeping dense n x n matrices are left out whatever their size
   double implicit_dt = 0;   // s: where the implicit fixed-step methods' sweeps start, if not where accuracy
                             // puts a first-order method's (time_scale / 256: the point of them is larger steps)
+  // a scene of the user's (`stepwise study NAME --scene FILE`): how its model is made (model and params unused)
+  std::function<std::unique_ptr<Model>()> factory = nullptr;
 };
+
+// the scene's model: the user's factory, or the built-in model with the scene's parameters
+inline std::unique_ptr<Model> scene_model(const StudyScene& scene) { return scene.factory ? scene.factory() : make_model(scene.model, scene.params); }
+
+// the study's scenes: the user's where `--scene` gave one, else the study's own
+inline std::vector<StudyScene> scenes_or(const StudyContext& ctx, std::vector<StudyScene> own) { return ctx.scenes ? *ctx.scenes : own; }
 
 // a scene without an exact solution is measured against gsl-rk8pd at this tolerance (atol 1e-3 of it): the
 // cloth's errors flatten at 3e-13 there, the reference's own
@@ -113,7 +122,7 @@ inline bool in_sweep(const Method& method, const Model& model, bool dense) {
 
 // the methods of a scene's sweeps, fixed-step ones only if asked
 inline std::vector<const Method*> scene_methods(const StudyScene& scene, bool fixed_only) {
-  const auto model = make_model(scene.model, scene.params);
+  const auto model = scene_model(scene);
   std::vector<const Method*> chosen;
   for (const auto& method : methods())
     if (in_sweep(method, *model, scene.dense) && (method.fixed_step() || !fixed_only)) chosen.push_back(&method);

@@ -1,0 +1,371 @@
+#include "advise.hpp"
+
+#include "report/cost_model.hpp"
+#include "report/report.hpp"
+#include "report/user_scene.hpp"
+#include "run/atomic_write.hpp"
+#include "run/csv.hpp"
+#include "run/message.hpp"
+#include "verification/stability.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <thread>
+
+namespace stepwise {
+
+std::string AdvisePoint::setting() const { return dt ? fmt::format("dt {:.4g}", *dt) : fmt::format("rtol {:.3g}", rtol); }
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// a point shorter than this is run again (the minimum of three runs): timer resolution and first-touch costs are
+// microseconds, a few percent of a millisecond run
+constexpr double short_run_seconds = 0.05;
+// the share of the budget the sweep may take; the rest is the reference, the spectrum, the reproduction and the
+// outputs (measured: under 5% on the shipped scenes)
+constexpr double sweep_share = 0.8;
+// the finest settings swept: rtol 1e-13, or t_end / 2^26 steps
+constexpr int finest_rtol_exponent = 13, finest_halving = 26;
+
+std::string fmt_seconds(double s) { return fmt::format("{:.3g} s", s); }
+
+// the scene's error at t_end: against the exact solution where the model has one, else the reference state
+AdvisePoint measure(const Model& model, const Method& method, const StepControl& control, double t_end, const Eigen::VectorXd* reference) {
+  AdvisePoint p;
+  p.method = std::string(method.name);
+  p.dt = control.dt;
+  if (!control.dt) {
+    p.rtol = control.rtol;
+    p.atol = control.atol;
+  }
+  Measured best;
+  for (int run = 0; run < 3; ++run) {
+    Measured m = run_and_measure(model, method.name, control, t_end, t_end);
+    if (run == 0 || m.result.stats.cpu_seconds < best.result.stats.cpu_seconds) best = std::move(m);
+    if (best.result.stats.cpu_seconds > short_run_seconds || best.result.status != Status::ok) break;
+  }
+  p.status = best.result.status;
+  p.message = best.result.message;
+  p.cpu_seconds = best.result.stats.cpu_seconds;
+  p.rhs_evals = static_cast<double>(best.result.stats.rhs_evals);
+  p.steps = best.result.stats.steps;
+  if (p.status == Status::ok) p.error = reference ? max_norm_error(best.result.y_stop, *reference) : best.error;
+  return p;
+}
+
+// one method's sweep: coarse to fine until it first meets the target, then the two settings between its last two
+// (a third of the way each, geometrically), under its allowance of CPU seconds and the sweep's deadline
+std::vector<AdvisePoint> sweep_method(const StudyScene& scene, const Method& method, double target, const Eigen::VectorXd* reference,
+                                      Clock::time_point deadline, double allowance) {
+  const auto model = scene_model(scene);
+  std::vector<AdvisePoint> points;
+  double spent = 0;
+  const bool adaptive = method.adaptive();
+  // setting k of the sweep: rtol 10^-(2 + k/3) / dt t_end 2^-(3 + k/3), k in thirds of a decade or of a halving
+  const auto control_at = [&](int thirds) {
+    StepControl c;
+    if (adaptive) {
+      // three significant digits, so that the setting printed for `stepwise run` is the very tolerance swept
+      const double rtol = std::stod(fmt::format("{:.3g}", std::pow(10.0, -2.0 - thirds / 3.0)));
+      c = StepControl::adaptive(rtol, std::stod(fmt::format("{:.3g}", 1e-3 * rtol)));
+    } else {
+      const double steps = std::round(std::pow(2.0, 3.0 + thirds / 3.0));
+      c = StepControl::fixed(scene.t_end / steps);
+    }
+    return c;
+  };
+  const int last = 3 * (adaptive ? finest_rtol_exponent - 2 : finest_halving - 3);
+  const auto met = [&](const AdvisePoint& p) { return p.error && *p.error <= target; };
+  for (int k = 0; k <= last; k += 3) {
+    if (Clock::now() > deadline) break;
+    StepControl control = control_at(k);
+    // the next point's cost from the last one's: twice the steps a halving, an order-p pair's steps 10^(1/(p+1))
+    // a decade (report/cost_model.hpp's rule), or its own last ratio when it has two points
+    if (!points.empty()) {
+      const AdvisePoint& prev = points.back();
+      double growth = adaptive ? std::pow(10.0, 1.0 / (method.order.max + 1)) : 2.0;
+      if (points.size() >= 2 && points[points.size() - 2].cpu_seconds > 0) growth = std::max(growth, prev.cpu_seconds / points[points.size() - 2].cpu_seconds);
+      if (spent + prev.cpu_seconds * growth > allowance) break;
+      // and its steps capped where its allowance would run out (a stiff system holding an explicit method)
+      const double per_step = prev.steps > 0 ? prev.cpu_seconds / static_cast<double>(prev.steps) : 0;
+      if (per_step > 0) control.max_steps = std::max<long>(1000, static_cast<long>((allowance - spent) / per_step));
+    } else {
+      control.max_steps = 2'000'000;
+    }
+    points.push_back(measure(*model, method, control, scene.t_end, reference));
+    spent += points.back().cpu_seconds * (points.back().cpu_seconds > short_run_seconds ? 1 : 3);
+    if (!met(points.back())) continue;
+    // between the last setting that missed and this one: the cheapest that meets it may lie there
+    if (k > 0 && !met(points[points.size() - 2]))
+      for (int between : {k - 2, k - 1}) {
+        if (Clock::now() > deadline) break;
+        points.push_back(measure(*model, method, control_at(between), scene.t_end, reference));
+        spent += points.back().cpu_seconds;
+        if (met(points.back())) break;
+      }
+    break;
+  }
+  return points;
+}
+
+// the spectrum of the exact Jacobian at 16 points along a run of the scene
+void spectrum_along_run(const StudyScene& scene, Advice& advice) {
+  const auto model = scene_model(scene);
+  std::vector<double> times;
+  for (int k = 0; k <= 16; ++k) times.push_back(scene.t_end * k / 16.0);
+  // a stiff run is found out by the explicit one failing its step budget
+  for (const std::string& m : {std::string("verner98"), std::string("cvode-bdf")}) {
+    StepControl c = StepControl::adaptive(1e-8, 1e-11);
+    c.max_steps = 200'000;
+    const RunResult r = make_integrator(m, c)->integrate(*model, 0, model->initial_state(), std::span(times).subspan(1));
+    if (r.status != Status::ok) continue;
+    std::vector<Eigen::VectorXd> states{model->initial_state()};
+    states.insert(states.end(), r.trajectory.y.begin(), r.trajectory.y.end());
+    for (size_t k = 0; k < states.size(); ++k) {
+      const Eigen::VectorXcd lambda = jacobian_spectrum(*model, times[k], states[k]);
+      for (const auto& l : lambda) {
+        advice.fastest_decay = std::max(advice.fastest_decay, -l.real());
+        advice.spectral_radius = std::max(advice.spectral_radius, std::abs(l));
+      }
+    }
+    break;
+  }
+  advice.stiffness = scene.t_end * advice.fastest_decay;
+  advice.stiff = advice.stiffness >= stiffness_threshold;
+}
+
+}  // namespace
+
+Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads) {
+  const auto start = Clock::now();
+  Advice advice;
+  advice.scene = scene.label;
+  advice.target = target;
+  advice.budget_seconds = budget_seconds;
+  const auto model = scene_model(scene);
+
+  // what the errors are measured against
+  std::optional<Eigen::VectorXd> reference;
+  if (model->has_exact()) {
+    advice.reference = "the exact solution";
+  } else {
+    const Reference r = converged_reference(*model, scene.t_end);
+    reference = r.y;
+    advice.reference = r.methods;
+    advice.reference_agreement = r.agreement;
+  }
+  spectrum_along_run(scene, advice);
+  // the worst-case spectrum for the stability predictions: the eigenvalues at the start and the fastest decay seen
+  Eigen::VectorXcd spectrum = jacobian_spectrum(*model, 0, model->initial_state());
+  spectrum.conservativeResize(spectrum.size() + 1);
+  spectrum[spectrum.size() - 1] = std::complex<double>(-advice.fastest_decay, 0);
+
+  // the candidates: every method that applies (the GPU's need a device and a grid; dense matrices within the studies' budget)
+  std::vector<const Method*> candidates;
+  for (const auto& method : methods())
+    if (method.family != "gpu" && in_sweep(method, *model, true)) candidates.push_back(&method);
+  const double elapsed_before = std::chrono::duration<double>(Clock::now() - start).count();
+  const double sweep_seconds = std::max(0.0, budget_seconds * sweep_share - elapsed_before);
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(sweep_seconds));
+  // each method's CPU allowance: its share of the sweep's seconds on all threads, four times over (most methods
+  // finish in a small part of theirs; the deadline bounds the whole)
+  const double allowance = 4 * sweep_seconds * threads / static_cast<double>(std::max<size_t>(1, candidates.size()));
+
+  StudyContext ctx{false, threads, nullptr};
+  ctx.distribute = false;
+  std::vector<std::string> labels;
+  std::vector<double> costs;
+  for (const Method* m : candidates) {
+    labels.push_back(std::string(m->name));
+    costs.push_back(expected_run_ns(*m, m->adaptive() ? StepControl::adaptive(1e-8, 1e-11) : StepControl::fixed(scene.time_scale), scene.t_end,
+                                    scene.time_scale, model->size()));
+  }
+  const auto sweeps = ctx.sweep<std::vector<AdvisePoint>>(labels, [&](size_t i) {
+    return sweep_method(scene, *candidates[i], target, reference ? &*reference : nullptr, deadline, allowance);
+  }, costs);
+
+  // each method's verdict
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const Method& method = *candidates[i];
+    const auto& pts = sweeps[i];
+    advice.points.insert(advice.points.end(), pts.begin(), pts.end());
+    Candidate c{std::string(method.name), "", "", std::nullopt, predicted_stable_dt(method, spectrum)};
+    for (const auto& p : pts)
+      if (p.error && *p.error <= target && (!c.cheapest || p.cpu_seconds < c.cheapest->cpu_seconds)) c.cheapest = p;
+    if (c.cheapest) {
+      c.status = "meets";
+    } else {
+      const auto diverged = std::count_if(pts.begin(), pts.end(), [](const AdvisePoint& p) { return p.status == Status::diverged; });
+      const auto failed = std::find_if(pts.begin(), pts.end(), [](const AdvisePoint& p) { return p.status == Status::failed; });
+      const AdvisePoint* best = nullptr;
+      for (const auto& p : pts)
+        if (p.error && (!best || *p.error < *best->error)) best = &p;
+      const std::string stable = c.predicted_stable_dt && std::isfinite(*c.predicted_stable_dt)
+                                     ? fmt::format("; the spectrum (fastest decay {:.3g}/s) and its stability function predict stability for dt < {:.3g} s",
+                                                   advice.fastest_decay, *c.predicted_stable_dt)
+                                     : "";
+      if (diverged > 0 && (!best || diverged * 2 >= static_cast<long>(pts.size()) || pts.front().status == Status::diverged)) {
+        c.status = "unstable";
+        c.reason = fmt::format("diverged at the cheap steps ({} of its {} settings{}){}", diverged, pts.size(),
+                               best ? fmt::format("; its best error {:.2e} cost {}", *best->error, fmt_seconds(best->cpu_seconds)) : "", stable);
+      } else if (failed != pts.end() && !best) {
+        c.status = "failed";
+        c.reason = fmt::format("{} ({})", failed->message, failed->setting());
+      } else {
+        c.status = "too costly";
+        c.reason = best ? fmt::format("its best error {:.2e} (at {}) cost {} and the next setting would pass its share of the budget{}", *best->error,
+                                      best->setting(), fmt_seconds(best->cpu_seconds), stable)
+                        : fmt::format("no setting finished within its share of the budget{}", stable);
+      }
+    }
+    advice.candidates.push_back(std::move(c));
+  }
+  std::stable_sort(advice.candidates.begin(), advice.candidates.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.cheapest.has_value() != b.cheapest.has_value()) return a.cheapest.has_value();
+    return a.cheapest && a.cheapest->cpu_seconds < b.cheapest->cpu_seconds;
+  });
+  if (!advice.candidates.empty() && advice.candidates[0].cheapest) {
+    Candidate& best = advice.candidates[0];
+    best.status = "advised";
+    for (size_t k = 1; k < advice.candidates.size(); ++k) {
+      Candidate& c = advice.candidates[k];
+      if (!c.cheapest) break;
+      c.status = k == 1 ? "runner-up" : "meets";
+      c.reason = fmt::format("{:.2f} times the advised method's CPU time ({} against {})", c.cheapest->cpu_seconds / best.cheapest->cpu_seconds,
+                             fmt_seconds(c.cheapest->cpu_seconds), fmt_seconds(best.cheapest->cpu_seconds));
+    }
+    // the advised setting run again as `stepwise run` runs it: the same model, method and step control
+    StepControl control = best.cheapest->dt ? StepControl::fixed(*best.cheapest->dt) : StepControl::adaptive(best.cheapest->rtol, best.cheapest->atol);
+    advice.reproduced = measure(*scene_model(scene), *find_method(best.method), control, scene.t_end, reference ? &*reference : nullptr);
+  }
+  advice.elapsed_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return advice;
+}
+
+namespace {
+
+nlohmann::json point_json(const AdvisePoint& p) {
+  nlohmann::json j{{"method", p.method}, {"cpu_seconds", p.cpu_seconds}, {"steps", p.steps}, {"rhs_evals", p.rhs_evals},
+                   {"status", std::string(to_string(p.status))}};
+  if (p.dt) j["dt"] = *p.dt;
+  else {
+    j["rtol"] = p.rtol;
+    j["atol"] = p.atol;
+  }
+  j["error"] = p.error ? nlohmann::json(*p.error) : nlohmann::json(nullptr);
+  return j;
+}
+
+std::string advice_markdown(const Advice& a, const std::string& command) {
+  std::string md = fmt::format("# Advice for {}: error {:.1e} at t_end\n\n", a.scene, a.target);
+  const Candidate* best = !a.candidates.empty() && a.candidates[0].cheapest ? &a.candidates[0] : nullptr;
+  if (best) {
+    const AdvisePoint& p = *best->cheapest;
+    md += fmt::format("**Use `{}` at {}{}**: error {:.2e} in {} of CPU.", best->method, p.setting(),
+                      p.dt ? "" : fmt::format(", atol {:.3g}", p.atol), *p.error, fmt_seconds(p.cpu_seconds));
+    if (a.candidates.size() > 1 && a.candidates[1].cheapest)
+      md += fmt::format(" Runner-up: `{}` at {}, {:.2f} times its cost.", a.candidates[1].method, a.candidates[1].cheapest->setting(),
+                        a.candidates[1].cheapest->cpu_seconds / p.cpu_seconds);
+    md += fmt::format("\n\n    stepwise run SCENE --method {} {} --out DIR\n\n", best->method,
+                      p.dt ? fmt::format("--dt {:.17g}", *p.dt) : fmt::format("--rtol {:g} --atol {:g}", p.rtol, p.atol));
+    if (a.reproduced)
+      md += fmt::format("Run again so, it gave error {} ({}).\n\n", a.reproduced->error ? fmt::format("{:.2e}", *a.reproduced->error) : "none",
+                        to_string(a.reproduced->status));
+  } else {
+    md += "**No method met this error within the budget**: a larger --budget, or a larger error.\n\n";
+  }
+  md += fmt::format("The system is {}: the exact Jacobian's fastest decay along the run is {:.3g}/s (spectral radius {:.3g}/s), {:.3g} times "
+                    "the run's length of {:.3g} s{}.\n\n",
+                    a.stiff ? "**stiff**" : "not stiff", a.fastest_decay, a.spectral_radius, a.stiffness, a.stiffness / std::max(a.fastest_decay, 1e-300),
+                    a.stiff ? fmt::format(" (at least {}): an explicit method is held to steps near 2.8 / {:.3g} s (rk4's region) whatever the error asked, "
+                                          "while an implicit one's steps follow the accuracy",
+                                          stiffness_threshold, a.fastest_decay)
+                            : fmt::format(" (below {}): explicit methods are limited by accuracy, not stability", stiffness_threshold));
+  md += fmt::format("Errors are max-norm at t_end against {}{}. The sweep ran every method that applies, coarse to fine until it met the error "
+                    "(then between its last two settings), each within its share of a {} budget: {} in all.\n\n",
+                    a.reference, a.reference_agreement > 0 ? fmt::format(" (their runs agree to {:.2e})", a.reference_agreement) : "",
+                    fmt_seconds(a.budget_seconds), fmt_seconds(a.elapsed_seconds));
+  md += "![Work-precision of the advice's sweep](advice_" + a.scene + ".png)\n\n";
+  md += "| method | verdict | setting | error | CPU (s) | stable dt from the spectrum (s) | why |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& c : a.candidates)
+    md += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", c.method, c.status, c.cheapest ? c.cheapest->setting() : "",
+                      c.cheapest ? fmt::format("{:.2e}", *c.cheapest->error) : "", c.cheapest ? fmt::format("{:.2e}", c.cheapest->cpu_seconds) : "",
+                      !c.predicted_stable_dt ? "" : std::isinf(*c.predicted_stable_dt) ? "any" : fmt::format("{:.3g}", *c.predicted_stable_dt), c.reason);
+  md += fmt::format("\nCommand: `{}`. The sweep's every point is in advice_sweep.csv; advice.json holds the same as data.\n", command);
+  return md;
+}
+
+}  // namespace
+
+int advise_command(const AdviseOptions& o) {
+  // the inputs, before anything runs: the error, the budget, the scene as `stepwise run` checks it, the output
+  if (!(std::isfinite(o.error) && o.error > 0)) throw InputError(fmt::format("--error: must be a positive finite number, got {}", o.error));
+  if (!(std::isfinite(o.budget) && o.budget >= 1 && o.budget <= 86400))
+    throw InputError(fmt::format("--budget: must be between 1 and 86400 seconds, got {}", o.budget));
+  PreparedRun prepared;
+  const StudyScene scene = user_study_scene(o.run, &prepared);
+  ensure_writable_directory(o.out);
+  const int threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const Advice a = advise(scene, o.error, o.budget, threads);
+
+  std::string command = fmt::format("stepwise advise {} --error {:g} --budget {:g}", o.run.scene_file, o.error, o.budget);
+  for (const auto& s : o.run.sets) command += " --set " + s;
+  Table sweep{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}};
+  for (const auto& p : a.points)
+    sweep.rows.push_back({a.scene, p.method, std::string(p.dt ? "fixed" : "adaptive"), p.dt.value_or(NAN), p.dt ? NAN : p.rtol, p.error.value_or(NAN),
+                          p.rhs_evals, p.steps, p.cpu_seconds, std::string(to_string(p.status))});
+  nlohmann::json j;
+  j["scene"] = a.scene;
+  j["scene_file"] = o.run.scene_file;
+  j["target_error"] = a.target;
+  j["budget_seconds"] = a.budget_seconds;
+  j["elapsed_seconds"] = a.elapsed_seconds;
+  j["reference"] = a.reference;
+  j["reference_agreement"] = a.reference_agreement;
+  j["stiff"] = a.stiff;
+  j["stiffness"] = a.stiffness;
+  j["fastest_decay"] = a.fastest_decay;
+  j["spectral_radius"] = a.spectral_radius;
+  const Candidate* best = !a.candidates.empty() && a.candidates[0].cheapest ? &a.candidates[0] : nullptr;
+  j["method"] = best ? nlohmann::json(best->method) : nlohmann::json(nullptr);
+  if (best) {
+    const AdvisePoint& p = *best->cheapest;
+    if (p.dt) j["dt"] = *p.dt;
+    else {
+      j["rtol"] = p.rtol;
+      j["atol"] = p.atol;
+    }
+    j["error"] = *p.error;
+    j["cpu_seconds"] = p.cpu_seconds;
+  }
+  j["runner_up"] = nullptr;
+  if (a.candidates.size() > 1 && a.candidates[1].cheapest) {
+    j["runner_up"] = point_json(*a.candidates[1].cheapest);
+    j["runner_up"]["cpu_over_advised"] = a.candidates[1].cheapest->cpu_seconds / best->cheapest->cpu_seconds;
+  }
+  j["reproduced"] = a.reproduced ? point_json(*a.reproduced) : nlohmann::json(nullptr);
+  j["candidates"] = nlohmann::json::array();
+  for (const auto& c : a.candidates) {
+    nlohmann::json e{{"method", c.method}, {"status", c.status}, {"reason", c.reason}};
+    if (c.cheapest) e["cheapest"] = point_json(*c.cheapest);
+    e["predicted_stable_dt"] = c.predicted_stable_dt && std::isfinite(*c.predicted_stable_dt) ? nlohmann::json(*c.predicted_stable_dt) : nlohmann::json(nullptr);
+    j["candidates"].push_back(e);
+  }
+  const fs::path out(o.out);
+  write_file_atomic(out / "advice_sweep.csv", to_csv(sweep));
+  write_file_atomic(out / "advice.json", j.dump(2) + "\n");
+  write_file_atomic(out / "advice.md", advice_markdown(a, command));
+  draw_figures({{"advice", a.scene}}, out, 1, false);
+  fmt::print("{}", advice_markdown(a, command).substr(0, advice_markdown(a, command).find("The system is")));
+  return best ? 0 : 1;
+}
+
+}  // namespace stepwise

@@ -1,0 +1,75 @@
+// `stepwise advise SCENE.toml --error E [--budget S] --out DIR`: which method is cheapest for this scene at this
+// accuracy, measured rather than guessed. A short work-precision sweep of every method that applies, each method
+// refined until it first meets E (then between its last two settings, for the cheapest that does), under a
+// budget of wall-clock seconds; the stiffness read off the exact Jacobian's spectrum along a reference run; and
+// why each other method lost. DESIGN.md: the advisor is a budgeted study on one scene.
+#pragma once
+
+#include "report/studies/study_scenes.hpp"
+#include "run/prepare.hpp"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace stepwise {
+
+// one run of the sweep
+struct AdvisePoint {
+  std::string method;
+  std::optional<double> dt;  // fixed step, or
+  double rtol = 0, atol = 0;  // the tolerances of an adaptive run
+  std::optional<double> error;  // at t_end against the exact solution or the reference; empty: diverged or failed
+  double cpu_seconds = 0, rhs_evals = 0;
+  long steps = 0;
+  Status status = Status::ok;
+  std::string message;
+  static auto fields(auto& s) { return std::tie(s.method, s.dt, s.rtol, s.atol, s.error, s.cpu_seconds, s.rhs_evals, s.steps, s.status, s.message); }
+  std::string setting() const;  // "dt 0.001" or "rtol 1e-06"
+};
+
+// one method's verdict
+struct Candidate {
+  std::string method;
+  std::string status;  // "advised", "runner-up", "meets", "too costly", "unstable", "failed"
+  std::string reason;  // why it lost, in words (empty for the advised method)
+  std::optional<AdvisePoint> cheapest;   // its cheapest point meeting E
+  std::optional<double> predicted_stable_dt;  // from the spectrum and its stability function, where it has one
+};
+
+struct Advice {
+  std::string scene;
+  double target = 0;           // E
+  double budget_seconds = 0;
+  double elapsed_seconds = 0;  // the advice's wall clock, all of it
+  std::string reference;       // what the errors are measured against
+  double reference_agreement = 0;  // the two reference runs' difference (0 against an exact solution)
+  // the spectrum of the exact Jacobian along the reference run
+  double fastest_decay = 0;    // max over the run of -Re(lambda) (1/s)
+  double spectral_radius = 0;  // max over the run of |lambda| (1/s)
+  double stiffness = 0;        // t_end x fastest_decay: the steps a stable explicit method cannot go below, within a factor
+  bool stiff = false;
+  std::vector<AdvisePoint> points;
+  std::vector<Candidate> candidates;  // the advised method first, then the runner-up, then by cost
+  std::optional<AdvisePoint> reproduced;  // the advised setting run again as `stepwise run` runs it
+};
+
+// a stiffness this large (t_end times the fastest decay rate) holds an explicit method to steps far below what
+// accuracy asks: rk4 is stable for h |lambda| < 2.8, so it needs at least stiffness / 2.8 steps whatever E
+inline constexpr double stiffness_threshold = 1000;
+
+// the advice for a scene; `threads` runs the sweep's methods side by side
+Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads);
+
+// the command: checks the inputs (exit 2), then writes DIR/advice.md, advice.json, advice_sweep.csv and the
+// figure; exit 0 when a method met E, 1 when none did
+struct AdviseOptions {
+  RunOptions run;  // the scene file and --set
+  double error = 0;
+  double budget = 30;
+  int threads = 0;
+  std::string out;
+};
+int advise_command(const AdviseOptions& options);
+
+}  // namespace stepwise
