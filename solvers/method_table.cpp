@@ -10,6 +10,7 @@ void register_euler_methods(MethodTable& table);
 void register_symplectic_euler_methods(MethodTable& table);
 void register_rk4_methods(MethodTable& table);
 void register_embedded_pair_methods(MethodTable& table);
+void register_rosenbrock_methods(MethodTable& table);
 void register_implicit_euler_methods(MethodTable& table);
 void register_cvode_methods(MethodTable& table);
 void register_arkode_methods(MethodTable& table);
@@ -34,6 +35,7 @@ const MethodTable& table() {
     register_rk4_methods(t);
     register_embedded_pair_methods(t);
     register_implicit_euler_methods(t);
+    register_rosenbrock_methods(t);
     register_cvode_methods(t);
     register_arkode_methods(t);
     register_gsl_methods(t);
