@@ -14,7 +14,6 @@
 #include <map>
 #include <mutex>
 #include <numbers>
-#include <ranges>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -587,10 +586,12 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
   Params parameters = spec.parameters, initial = spec.initial;
   for (const auto& [key, value] : values) {
     Params* target = parameters.count(key) ? &parameters : initial.count(key) ? &initial : nullptr;
-    if (!target)
+    if (!target) {
+      std::vector<std::string> names;
+      for (const auto& [name, v] : parameters) names.push_back(name);
       throw BadParameter(key, fmt::format("unknown parameter '{}' of this equations scene (parameters: {}; variables: {})", key,
-                                          parameters.empty() ? std::string("none") : fmt::format("{}", fmt::join(std::views::keys(parameters), ", ")),
-                                          fmt::join(spec.variables, ", ")));
+                                          names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", ")), fmt::join(spec.variables, ", ")));
+    }
     if (!std::isfinite(value)) throw BadParameter(key, fmt::format("'{}' must be a finite number, got {}", key, value));
     (*target)[key] = value;
   }

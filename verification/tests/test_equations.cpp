@@ -5,6 +5,7 @@
 #include "run/scene.hpp"
 #include "solvers/fd_jacobian.hpp"
 #include "verification/convergence.hpp"
+#include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
 
 #include <gtest/gtest.h>
@@ -229,6 +230,37 @@ TEST_F(Equations, TheCacheLoadsOnlyWhatItWrote) {
   ::unsetenv("STEPWISE_CC");
   EXPECT_FALSE(equations_evaluation(*third)->compiled);
   EXPECT_NE(equations_evaluation(*third)->detail.find("no C compiler"), std::string::npos) << equations_evaluation(*third)->detail;
+}
+
+}  // namespace
+}  // namespace stepwise
+
+namespace stepwise {
+namespace {
+
+// the Rosenbrock methods' stability functions: from the tableau in closed form, as measured by one step on
+// y' = z y, of their order, A-stable and L-stable
+TEST(Rosenbrock, StabilityFunctionsAreOfTheirOrderAndLStable) {
+  for (const char* name : {"rodas4", "rodas5"}) {
+    const Method& method = *find_method(name);
+    ASSERT_TRUE(method.stability.R) << name;
+    const auto measured = measured_stability_function(method);
+    ASSERT_TRUE(measured.has_value()) << name;
+    for (const std::complex<double> z : {std::complex<double>(-0.5, 0.3), {-20, 5}, {-3, 0}, {0.2, 1.5}}) {
+      const std::complex<double> r = method.stability.R(z), m = (*measured)(z);
+      // the step solves W k = r by LU: round-off of a few eps x the stages' size (|k| up to ~30 |y| for these tableaus)
+      EXPECT_NEAR(std::abs(r - m), 0.0, 1e-12 * (1 + std::abs(r))) << name << " at z = " << z;
+    }
+    // order p: R(z) - e^z = C z^(p+1) + ..., so halving z divides the difference by 2^(p+1); within the band
+    const int p = method.order.max;
+    const std::complex<double> z(-0.08, 0.04);  // R - e^z ~ 1e-11 here, far above the round-off of R (1e-15)
+    const double slope = std::log2(std::abs(method.stability.R(z) - std::exp(z)) / std::abs(method.stability.R(z / 2.0) - std::exp(z / 2.0)));
+    EXPECT_NEAR(slope, p + 1, tolerance::order_band) << name;
+    // A-stable: |R| <= 1 on the imaginary axis (the left half-plane's boundary; R is analytic there), L-stable:
+    // R -> 0 at infinity (stiffly accurate: R(infinity) = 0 exactly)
+    for (double y = 0.01; y < 1e6; y *= 1.5) EXPECT_LE(std::abs(method.stability.R({0, y})), 1 + 1e-12) << name << " at iy, y = " << y;
+    EXPECT_LT(std::abs(method.stability.R({-1e8, 0})), 1e-6) << name;
+  }
 }
 
 }  // namespace

@@ -36,6 +36,8 @@ constexpr LongRun long_runs[] = {
     // Tsitouras 5(4) was built, like Dormand-Prince, for a small principal error coefficient (slopes 4.9 to
     // 5.35 over the scenes above)
     {"tsitouras54", "pendulum", 40.0, 0.0625, 4},
+    // Rodas5, a Rosenbrock 5(4) likewise built for a small error constant: 4.86 to 5.17 over the scenes above
+    {"rodas5", "pendulum", 40.0, 0.0625, 4},
     // Verner 9(8): slopes from 8.6 to 10.5 with the problem and the window (flow field 8 s: 8.60 from dt 1,
     // 8.78 from dt 0.5; pendulum 40 s: 10.05 to 10.53), superconvergent where the error runs down to round-off:
     // only the lower side, as for Fehlberg below; its tableau is checked against the quadrature conditions
