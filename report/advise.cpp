@@ -64,7 +64,7 @@ AdvisePoint measure(const Model& model, const Method& method, const StepControl&
 // one method's sweep: coarse to fine until it first meets the target, then the two settings between its last two
 // (a third of the way each, geometrically), under its allowance of CPU seconds and the sweep's deadline
 std::vector<AdvisePoint> sweep_method(const StudyScene& scene, const Method& method, double target, const Eigen::VectorXd* reference,
-                                      Clock::time_point deadline, double allowance) {
+                                      Clock::time_point deadline, double allowance, int stride = 3) {
   const auto model = scene_model(scene);
   std::vector<AdvisePoint> points;
   double spent = 0;
@@ -84,7 +84,7 @@ std::vector<AdvisePoint> sweep_method(const StudyScene& scene, const Method& met
   };
   const int last = 3 * (adaptive ? finest_rtol_exponent - 2 : finest_halving - 3);
   const auto met = [&](const AdvisePoint& p) { return p.error && *p.error <= target; };
-  for (int k = 0; k <= last; k += 3) {
+  for (int k = 0; k <= last; k += stride) {
     if (Clock::now() > deadline) break;
     StepControl control = control_at(k);
     // the next point's cost from the last one's: twice the steps a halving, an order-p pair's steps 10^(1/(p+1))
@@ -104,7 +104,7 @@ std::vector<AdvisePoint> sweep_method(const StudyScene& scene, const Method& met
     spent += points.back().cpu_seconds * (points.back().cpu_seconds > short_run_seconds ? 1 : 3);
     if (!met(points.back())) continue;
     // between the last setting that missed and this one: the cheapest that meets it may lie there
-    if (k > 0 && !met(points[points.size() - 2]))
+    if (k > 0 && stride == 3 && !met(points[points.size() - 2]))
       for (int between : {k - 2, k - 1}) {
         if (Clock::now() > deadline) break;
         points.push_back(measure(*model, method, control_at(between), scene.t_end, reference));
@@ -143,6 +143,11 @@ void spectrum_along_run(const StudyScene& scene, Advice& advice) {
 }
 
 }  // namespace
+
+std::vector<AdvisePoint> full_sweep(const StudyScene& scene, const Method& method, double target, const Eigen::VectorXd* reference, double seconds) {
+  return sweep_method(scene, method, target, reference, Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds)),
+                      seconds, 1);
+}
 
 Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads) {
   const auto start = Clock::now();
@@ -264,8 +269,10 @@ nlohmann::json point_json(const AdvisePoint& p) {
   return j;
 }
 
-std::string advice_markdown(const Advice& a, const std::string& command) {
-  std::string md = fmt::format("# Advice for {}: error {:.1e} at t_end\n\n", a.scene, a.target);
+}  // namespace
+
+std::string advice_markdown(const Advice& a, const std::string& command, const std::string& heading) {
+  std::string md = fmt::format("{} Advice for {}: error {:.1e} at t_end\n\n", heading, a.scene, a.target);
   const Candidate* best = !a.candidates.empty() && a.candidates[0].cheapest ? &a.candidates[0] : nullptr;
   if (best) {
     const AdvisePoint& p = *best->cheapest;
@@ -282,9 +289,9 @@ std::string advice_markdown(const Advice& a, const std::string& command) {
   } else {
     md += "**No method met this error within the budget**: a larger --budget, or a larger error.\n\n";
   }
-  md += fmt::format("The system is {}: the exact Jacobian's fastest decay along the run is {:.3g}/s (spectral radius {:.3g}/s), {:.3g} times "
-                    "the run's length of {:.3g} s{}.\n\n",
-                    a.stiff ? "**stiff**" : "not stiff", a.fastest_decay, a.spectral_radius, a.stiffness, a.stiffness / std::max(a.fastest_decay, 1e-300),
+  md += fmt::format("The system is {}: the exact Jacobian's fastest decay along the run is {:.3g}/s (spectral radius {:.3g}/s); times the run's "
+                    "{:.3g} s, a stiffness of {:.3g}{}.\n\n",
+                    a.stiff ? "**stiff**" : "not stiff", a.fastest_decay, a.spectral_radius, a.stiffness / std::max(a.fastest_decay, 1e-300), a.stiffness,
                     a.stiff ? fmt::format(" (at least {}): an explicit method is held to steps near 2.8 / {:.3g} s (rk4's region) whatever the error asked, "
                                           "while an implicit one's steps follow the accuracy",
                                           stiffness_threshold, a.fastest_decay)
@@ -299,11 +306,23 @@ std::string advice_markdown(const Advice& a, const std::string& command) {
     md += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", c.method, c.status, c.cheapest ? c.cheapest->setting() : "",
                       c.cheapest ? fmt::format("{:.2e}", *c.cheapest->error) : "", c.cheapest ? fmt::format("{:.2e}", c.cheapest->cpu_seconds) : "",
                       !c.predicted_stable_dt ? "" : std::isinf(*c.predicted_stable_dt) ? "any" : fmt::format("{:.3g}", *c.predicted_stable_dt), c.reason);
-  md += fmt::format("\nCommand: `{}`. The sweep's every point is in advice_sweep.csv; advice.json holds the same as data.\n", command);
+  md += fmt::format("\nCommand: `{}`. The sweep's every point is in advice_sweep.csv.\n", command);
   return md;
 }
 
-}  // namespace
+AdviceTables advice_tables(const std::vector<Advice>& advices) {
+  AdviceTables t{{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}},
+                 {{"scene", "target_error", "method", "setting", "error", "cpu_seconds", "stiff", "stiffness", "elapsed_seconds"}, {}}};
+  for (const Advice& a : advices) {
+    for (const auto& p : a.points)
+      t.sweep.rows.push_back({a.scene, p.method, std::string(p.dt ? "fixed" : "adaptive"), p.dt.value_or(NAN), p.dt ? NAN : p.rtol, p.error.value_or(NAN),
+                              p.rhs_evals, p.steps, p.cpu_seconds, std::string(to_string(p.status))});
+    const AdvisePoint* best = !a.candidates.empty() && a.candidates[0].cheapest ? &*a.candidates[0].cheapest : nullptr;
+    t.summary.rows.push_back({a.scene, a.target, best ? best->method : std::string("none"), best ? best->setting() : std::string(),
+                              best ? *best->error : NAN, best ? best->cpu_seconds : NAN, static_cast<long>(a.stiff), a.stiffness, a.elapsed_seconds});
+  }
+  return t;
+}
 
 int advise_command(const AdviseOptions& o) {
   // the inputs, before anything runs: the error, the budget, the scene as `stepwise run` checks it, the output
@@ -318,10 +337,7 @@ int advise_command(const AdviseOptions& o) {
 
   std::string command = fmt::format("stepwise advise {} --error {:g} --budget {:g}", o.run.scene_file, o.error, o.budget);
   for (const auto& s : o.run.sets) command += " --set " + s;
-  Table sweep{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}};
-  for (const auto& p : a.points)
-    sweep.rows.push_back({a.scene, p.method, std::string(p.dt ? "fixed" : "adaptive"), p.dt.value_or(NAN), p.dt ? NAN : p.rtol, p.error.value_or(NAN),
-                          p.rhs_evals, p.steps, p.cpu_seconds, std::string(to_string(p.status))});
+  const AdviceTables tables = advice_tables({a});
   nlohmann::json j;
   j["scene"] = a.scene;
   j["scene_file"] = o.run.scene_file;
@@ -360,11 +376,13 @@ int advise_command(const AdviseOptions& o) {
     j["candidates"].push_back(e);
   }
   const fs::path out(o.out);
-  write_file_atomic(out / "advice_sweep.csv", to_csv(sweep));
+  write_file_atomic(out / "advice_sweep.csv", to_csv(tables.sweep));
+  write_file_atomic(out / "advice_summary.csv", to_csv(tables.summary));
   write_file_atomic(out / "advice.json", j.dump(2) + "\n");
-  write_file_atomic(out / "advice.md", advice_markdown(a, command));
+  const std::string md = advice_markdown(a, command, "#");
+  write_file_atomic(out / "advice.md", md);
   draw_figures({{"advice", a.scene}}, out, 1, false);
-  fmt::print("{}", advice_markdown(a, command).substr(0, advice_markdown(a, command).find("The system is")));
+  fmt::print("{}", md.substr(0, md.find("The system is")));
   return best ? 0 : 1;
 }
 

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "report/studies/study_scenes.hpp"
+#include "run/csv.hpp"
 #include "run/prepare.hpp"
 
 #include <optional>
@@ -60,6 +61,20 @@ inline constexpr double stiffness_threshold = 1000;
 
 // the advice for a scene; `threads` runs the sweep's methods side by side
 Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads);
+
+// the advice in Markdown under a heading of `heading` ("#", "###"): the answer first, the stiffness, the table of
+// verdicts; `command` is the command line it came from
+std::string advice_markdown(const Advice& advice, const std::string& command, const std::string& heading);
+
+// the sweeps' points (advice_sweep.csv) and one row per advice (advice_summary.csv: what plot.py marks)
+struct AdviceTables {
+  Table sweep, summary;
+};
+AdviceTables advice_tables(const std::vector<Advice>& advices);
+
+// one method's sweep at every third of a decade of rtol (or of a halving of dt) from the coarsest until it meets
+// the target, without the advice's budget (at most `seconds` of CPU): what the advice's pick is checked against
+std::vector<AdvisePoint> full_sweep(const StudyScene& scene, const Method& method, double target, const Eigen::VectorXd* reference, double seconds);
 
 // the command: checks the inputs (exit 2), then writes DIR/advice.md, advice.json, advice_sweep.csv and the
 // figure; exit 0 when a method met E, 1 when none did

@@ -12,7 +12,6 @@ import csv
 import ctypes
 import math
 import multiprocessing
-import json
 import os
 import signal
 import sys
@@ -144,8 +143,7 @@ def work_precision(directory, scene, styles):
 def advice(directory, scene, styles):
     """stepwise advise's sweep: error against CPU time per method, the target error, the advised point"""
     rows = [r for r in read(directory, "advice_sweep") if r["scene"] == scene]
-    with open(os.path.join(directory, "advice.json")) as f:
-        advised = json.load(f)
+    advised = next(r for r in read(directory, "advice_summary") if r["scene"] == scene)
     fig, ax = plt.subplots(figsize=(9, 6))
     top = max([r["error"] for r in rows if ok(r)] + [1.0]) * 10
     for method, points in by_method(rows).items():
@@ -158,7 +156,7 @@ def advice(directory, scene, styles):
         if failed:
             ax.loglog([r["cpu_seconds"] for r in failed], [top] * len(failed), color=style["color"], **FAILED_MARKER)
     ax.axhline(advised["target_error"], color="black", linewidth=1, linestyle=":", label="the error asked")
-    if advised.get("method"):
+    if advised["method"] != "none":
         ax.loglog([advised["cpu_seconds"]], [advised["error"]], marker="*", markersize=16, color="gold", markeredgecolor="black",
                   linestyle="none", label=f"advised: {advised['method']}")
     ax.set_xlabel("CPU time (s)")

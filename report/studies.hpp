@@ -50,6 +50,7 @@ Study cloth_study();
 Study cloth_realtime_study();
 Study fluid_study();
 Study scaling_study();
+Study advice_study();
 
 // adds the figure to the list; returns its Markdown (an image line and a blank line) for the section
 std::string add_figure(std::vector<Figure>& figures, const std::string& kind, const std::string& subject, const std::string& caption);
