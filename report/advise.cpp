@@ -188,10 +188,12 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
   ctx.distribute = false;
   std::vector<std::string> labels;
   std::vector<double> costs;
+  // the sweep runs the costliest point first: given the inverse of each method's expected cost, the methods expected
+  // cheapest (where the advice usually lies) run first, and the deadline falls on the costly ones
   for (const Method* m : candidates) {
     labels.push_back(std::string(m->name));
-    costs.push_back(expected_run_ns(*m, m->adaptive() ? StepControl::adaptive(1e-8, 1e-11) : StepControl::fixed(scene.time_scale), scene.t_end,
-                                    scene.time_scale, model->size()));
+    costs.push_back(1 / expected_run_ns(*m, m->adaptive() ? StepControl::adaptive(1e-8, 1e-11) : StepControl::fixed(scene.time_scale), scene.t_end,
+                                        scene.time_scale, model->size()));
   }
   const auto sweeps = ctx.sweep<std::vector<AdvisePoint>>(labels, [&](size_t i) {
     return sweep_method(scene, *candidates[i], target, reference ? &*reference : nullptr, deadline, allowance);
@@ -207,6 +209,9 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
       if (p.error && *p.error <= target && (!c.cheapest || p.cpu_seconds < c.cheapest->cpu_seconds)) c.cheapest = p;
     if (c.cheapest) {
       c.status = "meets";
+    } else if (pts.empty()) {
+      c.status = "too costly";
+      c.reason = "not swept: the budget ran out first (the methods expected cheapest are swept first)";
     } else {
       const auto diverged = std::count_if(pts.begin(), pts.end(), [](const AdvisePoint& p) { return p.status == Status::diverged; });
       const auto failed = std::find_if(pts.begin(), pts.end(), [](const AdvisePoint& p) { return p.status == Status::failed; });

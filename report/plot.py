@@ -174,7 +174,7 @@ def energy(directory, _, styles):
         style = dict(styles(method), marker=None)
         ax.semilogy([r["t"] for r in points], [max(abs(r["relative_energy_error"]), 1e-17) for r in points], label=method, linewidth=1, **style)
     single(fig, ax, directory, "energy", "t (s)", "|E - E0| / E0",
-           "Pendulum energy over the run (theta0 = 0.5 rad, dt = T/100)", grid="major")
+           "Relative energy error over the run, per method (the text above gives the scene and the step)", grid="major")
 
 
 def adequacy(directory, _, styles):

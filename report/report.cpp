@@ -177,6 +177,8 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
     }
     try {
       user_scenes.push_back(user_study_scene(*scene));
+      if (const auto model = scene_model(user_scenes.back()); name == "energy" && !model->energy(model->initial_state()))
+        throw InputError(fmt::format("--scene: {} has no energy formula (energy = \"...\" above its first table) for the energy study", scene->scene_file));
     } catch (const InputError& e) {
       if (writer) print_error("study", e.what());
       return 2;

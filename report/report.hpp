@@ -28,7 +28,7 @@ struct Figure;
 void draw_figures(const std::vector<Figure>& figures, const std::filesystem::path& dir, int jobs, bool html);
 
 // the studies that take --scene
-inline constexpr std::string_view scene_studies = "work-precision, convergence, stability-regions";
+inline constexpr std::string_view scene_studies = "work-precision, convergence, stability-regions, energy";
 
 // every study, then out/report.md, the figures and out/index.html; written to a temporary directory and moved
 // into place at the end, so a failed or interrupted run leaves the previous report as it was

@@ -1,5 +1,7 @@
 // The report's study: energy: the pendulum over many periods.
 #include "report/studies.hpp"
+#include "report/studies/study_scenes.hpp"
+#include "run/scene.hpp"
 
 #include "models/bouncing_ball.hpp"
 #include "models/model.hpp"
@@ -31,24 +33,36 @@ StudyOutput energy(const StudyContext& ctx) {
   const int periods = quick ? 100 : 1000;
   const int samples = 20;  // per period: the error oscillates within a period, so one sample a period would alias it
   const double theta0 = 0.5;
-  const auto model = make_model("pendulum", {{"theta0", theta0}});
-  const double period = pendulum_period(theta0, 9.81, 1.0);
+  // the pendulum over many periods; or the user's scene (--scene, with an energy formula) over its t_end at a
+  // quarter of its fastest time scale, 2000 samples
+  const StudyScene* user = ctx.scenes ? &ctx.scenes->front() : nullptr;
+  const auto model = user ? scene_model(*user) : make_model("pendulum", {{"theta0", theta0}});
+  if (user && !model->energy(model->initial_state()))
+    throw InputError(fmt::format("--scene: {} has no energy formula (energy = \"...\" above its first table) for the energy study", user->label));
+  const double period = user ? 0 : pendulum_period(theta0, 9.81, 1.0);
+  const double dt = user ? user->time_scale / 4 : period / 100, t_end = user ? user->t_end : periods * period;
+  const double sample_dt = user ? t_end / 2000 : period / samples;
   const double e0 = *model->energy(model->initial_state());
+  const double scale = e0 != 0 ? std::abs(e0) : 1;  // relative to |E0| (an energy may be negative: the double pendulum's)
   Table table{{"method", "t", "relative_energy_error"}, {}};
   Table summary{{"method", "max_first_tenth", "max_last_tenth", "at_end"}, {}};
-  std::string md = fmt::format("Pendulum at theta0 = {} rad over {} periods, dt = T/100: the largest relative energy error "
+  std::string md = user ? fmt::format("{} over {} s, dt = {:.3g} s (a quarter of its fastest time scale): the largest relative energy error "
+                                      "|E - E0|/|E0| over the first and the last tenth of the run (2000 samples), and the error at the end.\n\n",
+                                      user->label, t_end, dt)
+                        : fmt::format("Pendulum at theta0 = {} rad over {} periods, dt = T/100: the largest relative energy error "
                                "|E - E0|/E0 over the first and the last tenth of the run ({} samples a period), and the "
                                "error at the end. A symplectic method keeps it bounded; explicit Euler's grows and "
                                "implicit Euler's decays towards the bottom of the well (-1).\n\n",
                                theta0, periods, samples);
   for (const std::string method : {"euler", "symplectic-euler", "implicit-euler", "rk4"}) {
+    if (!method_applies(*find_method(method), *model)) continue;
     StepControl control;
-    control.dt = period / 100;
-    const Measured m = run_and_measure(*model, method, control, periods * period, period / samples);
+    control.dt = dt;
+    const Measured m = run_and_measure(*model, method, control, t_end, sample_dt);
     const auto& ys = m.result.trajectory.y;
     std::vector<double> errors;
     for (size_t i = 0; i < ys.size(); ++i) {
-      errors.push_back((*model->energy(ys[i]) - e0) / e0);
+      errors.push_back((*model->energy(ys[i]) - e0) / scale);
       table.rows.push_back({method, m.result.trajectory.t[i], errors.back()});
     }
     auto max_abs = [&](size_t begin, size_t end) {
@@ -66,7 +80,7 @@ StudyOutput energy(const StudyContext& ctx) {
                                  {"at_end", "at the end", shown_as("{:+.3e}")}});
   std::vector<Figure> figures;
   md += "\n";
-  md += add_figure(figures, "energy", "", "Relative energy error of the pendulum over time, per method");
+  md += add_figure(figures, "energy", "", fmt::format("Relative energy error of {} over time, per method", user ? user->label : "the pendulum"));
   return {{{"energy", std::move(table)}, {"energy_summary", std::move(summary)}}, md, figures};
 }
 
