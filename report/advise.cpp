@@ -2,11 +2,13 @@
 
 #include "report/cost_model.hpp"
 #include "report/report.hpp"
+#include "report/studies.hpp"
 #include "report/user_scene.hpp"
 #include "run/atomic_write.hpp"
 #include "run/csv.hpp"
 #include "run/message.hpp"
 #include "verification/stability.hpp"
+#include "verification/tolerances.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -189,22 +191,39 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
   std::vector<std::string> labels;
   std::vector<double> costs;
   // the sweep runs the costliest point first: given the inverse of each method's expected cost, the methods expected
-  // cheapest (where the advice usually lies) run first, and the deadline falls on the costly ones
+  // cheapest (where the advice usually lies) run first and the deadline falls on the costly ones. The cost model
+  // knows no stiffness: on a stiff system the methods that solve Newton systems go first (an explicit method's
+  // sweep there runs into its stability limit and would spend the budget before they started)
   for (const Method* m : candidates) {
     labels.push_back(std::string(m->name));
-    costs.push_back(1 / expected_run_ns(*m, m->adaptive() ? StepControl::adaptive(1e-8, 1e-11) : StepControl::fixed(scene.time_scale), scene.t_end,
-                                        scene.time_scale, model->size()));
+    const double expected = expected_run_ns(*m, m->adaptive() ? StepControl::adaptive(1e-8, 1e-11) : StepControl::fixed(scene.time_scale), scene.t_end,
+                                            scene.time_scale, model->size());
+    costs.push_back((advice.stiff && solves_newton_systems(*m) ? 1e6 : 1.0) / expected);
   }
   const auto sweeps = ctx.sweep<std::vector<AdvisePoint>>(labels, [&](size_t i) {
     return sweep_method(scene, *candidates[i], target, reference ? &*reference : nullptr, deadline, allowance);
   }, costs);
+
+  const auto search_deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(0.9 * budget_seconds));
+  // the explicit fixed-step methods' stable steps found by search beside the spectrum's prediction (as the report's
+  // stability section does): bisection between a quarter and 16 times the prediction, 2000 steps from the initial
+  // state staying within 1e6 of it, while the budget lasts
+  const auto searched = ctx.sweep<std::optional<double>>(labels, [&](size_t i) -> std::optional<double> {
+    const Method& method = *candidates[i];
+    if (!method.fixed_step() || solves_newton_systems(method) || Clock::now() > search_deadline) return std::nullopt;
+    const auto predicted = predicted_stable_dt(method, spectrum);
+    if (!predicted || !std::isfinite(*predicted) || !(*predicted > 0)) return std::nullopt;
+    const auto probe = scene_model(scene);
+    return bisect_stability([&](double dt) { return stays_bounded(*probe, method.name, probe->initial_state(), dt, 2000); }, *predicted / 4,
+                            *predicted * 16, tolerance::stability_bisection_width);
+  });
 
   // each method's verdict
   for (size_t i = 0; i < candidates.size(); ++i) {
     const Method& method = *candidates[i];
     const auto& pts = sweeps[i];
     advice.points.insert(advice.points.end(), pts.begin(), pts.end());
-    Candidate c{std::string(method.name), "", "", std::nullopt, predicted_stable_dt(method, spectrum)};
+    Candidate c{std::string(method.name), "", "", std::nullopt, predicted_stable_dt(method, spectrum), searched[i]};
     for (const auto& p : pts)
       if (p.error && *p.error <= target && (!c.cheapest || p.cpu_seconds < c.cheapest->cpu_seconds)) c.cheapest = p;
     if (c.cheapest) {
@@ -306,19 +325,37 @@ std::string advice_markdown(const Advice& a, const std::string& command, const s
                     a.reference, a.reference_agreement > 0 ? fmt::format(" (their runs agree to {:.2e})", a.reference_agreement) : "",
                     fmt_seconds(a.budget_seconds), fmt_seconds(a.elapsed_seconds));
   md += "![Work-precision of the advice's sweep](advice_" + a.scene + ".png)\n\n";
-  md += "| method | verdict | setting | error | CPU (s) | stable dt from the spectrum (s) | why |\n|---|---|---|---|---|---|---|\n";
-  for (const auto& c : a.candidates)
-    md += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", c.method, c.status, c.cheapest ? c.cheapest->setting() : "",
-                      c.cheapest ? fmt::format("{:.2e}", *c.cheapest->error) : "", c.cheapest ? fmt::format("{:.2e}", c.cheapest->cpu_seconds) : "",
-                      !c.predicted_stable_dt ? "" : std::isinf(*c.predicted_stable_dt) ? "any" : fmt::format("{:.3g}", *c.predicted_stable_dt), c.reason);
+  const Table candidates = advice_tables({a}).candidates;
+  const auto dt_shown = [](const Cell& cell) {
+    const double dt = std::get<double>(cell);
+    return std::isinf(dt) ? std::string("any") : std::isnan(dt) ? std::string() : fmt::format("{:.3g}", dt);
+  };
+  const auto blank_nan = [](std::string spec) {
+    return [spec](const Cell& cell) { return std::isnan(std::get<double>(cell)) ? std::string() : fmt::format(fmt::runtime(spec), std::get<double>(cell)); };
+  };
+  md += "Data: [advice_sweep.csv](advice_sweep.csv) (every point), [advice_candidates.csv](advice_candidates.csv) (this table), "
+        "[advice_summary.csv](advice_summary.csv).\n\n";
+  md += markdown_table(candidates, {{"method", "method"},
+                                    {"verdict", "verdict"},
+                                    {"setting", "setting"},
+                                    {"error", "error", blank_nan("{:.2e}")},
+                                    {"cpu_seconds", "CPU (s)", blank_nan("{:.2e}")},
+                                    {"predicted_stable_dt", "stable dt from the spectrum (s)", dt_shown},
+                                    {"searched_stable_dt", "found by search (s)", dt_shown},
+                                    {"reason", "why"}});
   md += fmt::format("\nCommand: `{}`. The sweep's every point is in advice_sweep.csv.\n", command);
   return md;
 }
 
 AdviceTables advice_tables(const std::vector<Advice>& advices) {
   AdviceTables t{{{"scene", "method", "mode", "dt", "rtol", "error", "rhs_evals", "steps", "cpu_seconds", "status"}, {}},
-                 {{"scene", "target_error", "method", "setting", "error", "cpu_seconds", "stiff", "stiffness", "elapsed_seconds"}, {}}};
+                 {{"scene", "target_error", "method", "setting", "error", "cpu_seconds", "stiff", "stiffness", "elapsed_seconds"}, {}},
+                 {{"scene", "method", "verdict", "setting", "error", "cpu_seconds", "predicted_stable_dt", "searched_stable_dt", "reason"}, {}}};
   for (const Advice& a : advices) {
+    for (const auto& c : a.candidates)
+      t.candidates.rows.push_back({a.scene, c.method, c.status, c.cheapest ? c.cheapest->setting() : std::string(), c.cheapest ? *c.cheapest->error : NAN,
+                                   c.cheapest ? c.cheapest->cpu_seconds : NAN, c.predicted_stable_dt.value_or(NAN), c.searched_stable_dt.value_or(NAN),
+                                   c.reason});
     for (const auto& p : a.points)
       t.sweep.rows.push_back({a.scene, p.method, std::string(p.dt ? "fixed" : "adaptive"), p.dt.value_or(NAN), p.dt ? NAN : p.rtol, p.error.value_or(NAN),
                               p.rhs_evals, p.steps, p.cpu_seconds, std::string(to_string(p.status))});
@@ -378,11 +415,13 @@ int advise_command(const AdviseOptions& o) {
     nlohmann::json e{{"method", c.method}, {"status", c.status}, {"reason", c.reason}};
     if (c.cheapest) e["cheapest"] = point_json(*c.cheapest);
     e["predicted_stable_dt"] = c.predicted_stable_dt && std::isfinite(*c.predicted_stable_dt) ? nlohmann::json(*c.predicted_stable_dt) : nlohmann::json(nullptr);
+    e["searched_stable_dt"] = c.searched_stable_dt ? nlohmann::json(*c.searched_stable_dt) : nlohmann::json(nullptr);
     j["candidates"].push_back(e);
   }
   const fs::path out(o.out);
   write_file_atomic(out / "advice_sweep.csv", to_csv(tables.sweep));
   write_file_atomic(out / "advice_summary.csv", to_csv(tables.summary));
+  write_file_atomic(out / "advice_candidates.csv", to_csv(tables.candidates));
   write_file_atomic(out / "advice.json", j.dump(2) + "\n");
   const std::string md = advice_markdown(a, command, "#");
   write_file_atomic(out / "advice.md", md);

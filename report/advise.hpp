@@ -36,6 +36,7 @@ struct Candidate {
   std::string reason;  // why it lost, in words (empty for the advised method)
   std::optional<AdvisePoint> cheapest;   // its cheapest point meeting E
   std::optional<double> predicted_stable_dt;  // from the spectrum and its stability function, where it has one
+  std::optional<double> searched_stable_dt;   // an explicit fixed-step method's, found by bisection from the initial state
 };
 
 struct Advice {
@@ -68,7 +69,7 @@ std::string advice_markdown(const Advice& advice, const std::string& command, co
 
 // the sweeps' points (advice_sweep.csv) and one row per advice (advice_summary.csv: what plot.py marks)
 struct AdviceTables {
-  Table sweep, summary;
+  Table sweep, summary, candidates;  // candidates: each method's verdict (advice_candidates.csv)
 };
 AdviceTables advice_tables(const std::vector<Advice>& advices);
 

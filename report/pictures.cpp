@@ -80,6 +80,16 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
   const auto start = std::chrono::steady_clock::now();
   // each scene's expected cost (report/cost_model.hpp): its run, and its frames by what they show
   std::vector<double> costs;
+  // a scene whose model has nothing to draw (a user's equations: a state without a place in space) is left out
+  std::vector<std::string> undrawn;
+  std::erase_if(scenes, [&](const std::string& scene) {
+    RunOptions run;
+    run.scene_file = (scenes_dir / (scene + ".toml")).string();
+    const PreparedRun p = prepare_run(run);
+    if (p.model->shapes(p.model->initial_state())) return false;
+    undrawn.push_back(scene);
+    return true;
+  });
   for (const auto& scene : scenes) {
     RunOptions run;
     run.scene_file = (scenes_dir / (scene + ".toml")).string();
@@ -151,8 +161,10 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
   write_file_atomic(dir / "pictures.csv", to_csv(table));
   std::string md = "## Pictures\n\n";
   md += fmt::format("Every scene run through its own method and drawn headlessly as `stepwise render` draws it ({} frames at {}, OpenGL on {}). "
-                    "Data: [pictures.csv](pictures.csv).\n\n",
-                    frames, size, std::get<std::string>(table.rows.front().back()));
+                    "Data: [pictures.csv](pictures.csv).{}\n\n",
+                    frames, size, std::get<std::string>(table.rows.front().back()),
+                    undrawn.empty() ? std::string()
+                                    : fmt::format(" Not drawn, having nothing in space to show (a user's equations): {}.", fmt::join(undrawn, ", ")));
   md += markdown_table(table, {{"scene", "scene"},
                                {"method", "method"},
                                {"frames", "frames", shown_as("{:.0f}")},

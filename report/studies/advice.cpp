@@ -44,7 +44,7 @@ StudyOutput advice_section(const StudyContext& ctx) {
                       stiff.scene, stiff.stiffness, stiff.fastest_decay, picked.name, unknowns);
   }
   AdviceTables tables = advice_tables(advices);
-  out.tables = {{"advice_sweep", std::move(tables.sweep)}, {"advice_summary", std::move(tables.summary)}};
+  out.tables = {{"advice_sweep", std::move(tables.sweep)}, {"advice_summary", std::move(tables.summary)}, {"advice_candidates", std::move(tables.candidates)}};
   return out;
 }
 

@@ -36,7 +36,10 @@ TIMING = {"cpu_seconds", "cpu_per_simulated_second", "draw_ms_per_frame", "colla
 # tables whose rows are chosen by CPU time (the cheapest method for an error, the fronts, the real-time verdicts)
 CHOSEN_BY_TIME = {"recommendations.csv", "work_precision_pareto.csv", "cloth_realtime_verdicts.csv",
                   # the scaling model's tables: a cell's measured cost times the model
-                  "scaling_cell.csv", "scaling_model.csv", "scaling_crossover.csv"}
+                  "scaling_cell.csv", "scaling_model.csv", "scaling_crossover.csv",
+                  # the advice: its sweep stops where a method first meets the error within a wall-clock budget, and
+                  # its verdicts rank the methods by CPU time
+                  "advice_sweep.csv", "advice_summary.csv", "advice_candidates.csv"}
 # tables of implicit-euler's cloth, and the rows of implicit-euler's methods elsewhere, reproducible to its
 # kept-factor residual
 KEPT_FACTOR = {"cloth_families.csv", "cloth_momentum.csv", "cloth_realtime.csv"}
