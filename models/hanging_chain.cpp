@@ -29,10 +29,13 @@ std::vector<Spring> chain_springs(int nodes, const Params& p) {
   return springs;
 }
 
+// the nodes, checked against the memory rule (a node's state, springs, pattern and a dense-free Newton system: ~1 KiB)
+int node_count(const Params& p) { return particle_count(p, "nodes", 1024, "nodes"); }
+
 class HangingChain final : public Model {
  public:
   explicit HangingChain(const Params& p)
-      : n_(particle_count(p, "nodes", 1024, "nodes")),
+      : n_(node_count(p)),
         mass_(p.at("mass")),
         drag_(p.at("drag")),
         g_(p.at("g")),
@@ -128,6 +131,8 @@ class HangingChain final : public Model {
 }  // namespace
 
 std::span<const ParamSpec> hanging_chain_params() { return params; }
+double hanging_chain_columns(const Params& p) { return 6.0 * node_count(p) + 2; }
+
 std::unique_ptr<Model> make_hanging_chain(const Params& p) { return std::make_unique<HangingChain>(p); }
 
 std::vector<double> chain_equilibrium(int nodes, double mass, double stiffness, double rest_length, double g) {

@@ -19,6 +19,10 @@ namespace stepwise {
 std::span<const ParamSpec> hanging_chain_params();
 std::unique_ptr<Model> make_hanging_chain(const Params& params);
 
+// the columns its trajectory writes (the state, y_bottom and the energy: summary_names), from the parameters alone;
+// BadParameter for a node count the memory rule refuses
+double hanging_chain_columns(const Params& params);
+
 // the equilibrium heights y_1..y_N above
 std::vector<double> chain_equilibrium(int nodes, double mass, double stiffness, double rest_length, double g);
 

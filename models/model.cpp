@@ -68,7 +68,8 @@ const std::array model_table{
               rigid_body_params(), [](const Params& p) { return make_rigid_body(p); },
               [](const Params& p, const TriangleMesh& mesh) { return make_rigid_body(p, mesh); }},
     ModelInfo{"hanging-chain", "N masses on Voigt springs hanging from a pin, gravity along -y; its static equilibrium is exact",
-              hanging_chain_params(), [](const Params& p) { return make_hanging_chain(p); }},
+              hanging_chain_params(), [](const Params& p) { return make_hanging_chain(p); }, nullptr, nullptr,
+              hanging_chain_columns},
     ModelInfo{"cloth", "a mass-spring cloth: structural, shear and bend Voigt springs, pins, gravity, wind through the normals, a "
               "picked node, a sphere and the ground", cloth_params(), [](const Params& p) { return make_cloth(p); }, nullptr,
               [](const Params& p, std::span<const GridNode> pins) { return make_cloth(p, pins); }},

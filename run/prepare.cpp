@@ -58,6 +58,24 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   if (!info && !s.equations) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
   if (s.mesh && (!info || !info->make_with_mesh)) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
   if (s.pins && (!info || !info->make_with_pins)) throw InputError(fmt::format("{}: model {} takes no pins", s.where("pins"), s.model));
+  const std::string output_dt_origin = o.output_dt ? std::string("--output-dt")
+                                       : s.output_dt ? s.where("run.output_dt")
+                                                     : std::string("the default output step (t_end / 1000)");
+  // the output budget before a model whose size its parameters set is made: at least the rows an output step
+  // gives once rounded to a fixed step (at most 1.5 times longer) times its columns, against the space where it goes
+  if (info && info->output_columns && !o.out.empty()) try {
+      const Params resolved = resolve_params(*info, values);
+      const double t_end = o.t_end.value_or(s.t_end.value_or(10.0)), output_dt = o.output_dt.value_or(s.output_dt.value_or(t_end / 1000));
+      const double columns = info->output_columns(resolved) + 2;
+      const double at_least = (std::floor(t_end / (1.5 * output_dt)) + 2) * columns * 25;
+      const auto free_bytes = free_bytes_at(o.out);
+      if (std::isfinite(t_end) && t_end > 0 && output_dt > 0 && free_bytes && at_least > *free_bytes)
+        throw InputError(fmt::format("{}: the trajectory, a row every {:g} s of {:.0f} columns, would take at least {:.3g} GB, more than the {:.3g} GB "
+                                     "free in {}: sample less often (--output-dt)",
+                                     output_dt_origin, output_dt, columns, at_least / 1e9, *free_bytes / 1e9, o.out));
+    } catch (const BadParameter&) {
+      // the model's own check below names it
+    }
   try {
     if (s.equations) {
       // the user's equations: parameters and initial values by name, --set on either (models/equations.hpp)
@@ -182,7 +200,7 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
                  limit, mode.omega, mode.damping);
   }
   p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
-  p.output_dt_origin = o.output_dt ? "--output-dt" : s.output_dt ? s.where("run.output_dt") : "the default output step (t_end / 1000)";
+  p.output_dt_origin = output_dt_origin;
   // budgets, from the inputs alone, before anything runs: the steps and the output rows
   const double max_steps = o.max_steps.value_or(default_max_steps);
   if (o.max_steps && !(max_steps >= 1 && max_steps <= 1e15 && std::floor(max_steps) == max_steps))

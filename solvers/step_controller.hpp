@@ -3,8 +3,12 @@
 // plus one (err ~ h^k as h -> 0), err the estimate scaled so that 1 is the tolerance.
 #pragma once
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <string_view>
 
 namespace stepwise {
 
@@ -29,6 +33,23 @@ class PiStepController {
   double rejected(double err) const { return std::isfinite(err) ? std::max(min_factor, safety * std::pow(err, -1 / k_)) : min_factor; }
 
   void reset() { log_err_prev_ = 0; }
+
+  // the next trial step after an accepted step of dt; `clamped`: the step was cut short to land on t_limit, and the
+  // trial step h it was cut from is kept where it is the larger
+  double next_after_accepted(double err, double dt, double h, bool clamped) {
+    const double next = dt * accepted(err);
+    return clamped ? std::max(h, next) : next;
+  }
+
+  // h for the retry after a rejected step of dt at t; false where it falls to 1e-14 (1 + |t|) or below, with
+  // `failure` naming the method and the step size underflow (empty where the estimate was not finite: the
+  // adaptive loop then reports the run diverged)
+  bool retry_after_rejected(double err, double dt, double t, double& h, std::string_view method, std::string& failure) const {
+    h = dt * rejected(err);
+    if (h > 1e-14 * std::max(1.0, std::abs(t))) return true;
+    failure = std::isfinite(err) ? fmt::format("{}: step size underflow (h = {:.3g}) at t = {:.9g}", method, h, t) : std::string();
+    return false;
+  }
 
  private:
   double k_, alpha_, beta_;

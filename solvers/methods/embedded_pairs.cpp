@@ -205,16 +205,11 @@ struct AdaptivePair {
           } else {
             have_first_ = false;
           }
-          const double next = dt * controller_.accepted(err);
-          h = clamped ? std::max(h, next) : next;
+          h = controller_.next_after_accepted(err, dt, h, clamped);
           return true;
         }
         ++rejected;
-        h = dt * controller_.rejected(err);
-        if (!(h > 1e-14 * std::max(1.0, std::abs(t)))) {
-          failure = std::isfinite(err) ? fmt::format("{}: step size underflow (h = {:.3g}) at t = {:.9g}", name_, h, t) : std::string();
-          return false;
-        }
+        if (!controller_.retry_after_rejected(err, dt, t, h, name_, failure)) return false;
       }
     }
 

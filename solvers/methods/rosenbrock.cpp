@@ -225,16 +225,11 @@ class RosenbrockAdaptive final : public AdaptiveStepper {
       if (err <= 1) {
         t = clamped ? t_limit : t + dt;
         y.swap(y1_);
-        const double next = dt * controller_.accepted(err);
-        h = clamped ? std::max(h, next) : next;
+        h = controller_.next_after_accepted(err, dt, h, clamped);
         return true;
       }
       ++rejected;
-      h = dt * controller_.rejected(err);
-      if (!(h > 1e-14 * std::max(1.0, std::abs(t)))) {
-        failure = std::isfinite(err) ? fmt::format("{}: step size underflow (h = {:.3g}) at t = {:.9g}", stages_.name(), h, t) : std::string();
-        return false;
-      }
+      if (!controller_.retry_after_rejected(err, dt, t, h, stages_.name(), failure)) return false;
     }
   }
   bool restep(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_out) override {

@@ -330,6 +330,11 @@ TEST(Frames, EverySceneIsDrawnWhereItsShapesProject) {
     RunOptions options;
     options.scene_file = entry.path().string();
     PreparedRun p = prepare_run(options);
+    // a user's equations have nothing in space to draw (render refuses them: the bad-input catalogue)
+    if (!p.model->shapes(p.model->initial_state())) {
+      EXPECT_EQ(p.scene.model, "equations") << name << ": a built-in model with nothing to draw";
+      continue;
+    }
     // a moment into the run: a quarter of it, at most 0.2 s (a hundred thousand particles take 40 ms a step)
     const double t = std::min(0.25 * p.t_end, 0.2);
     p.control.observe = [](const Eigen::VectorXd& y) { return y; };
