@@ -30,16 +30,20 @@ namespace {
 
 // a stiffly accurate Rosenbrock tableau in Hairer's transformed variables: a[i][j] the stage arguments (the last
 // row, with its 1, gives y1), C[i][j] the stage couplings, c and d per stage
-template <int S>
+template <int S, int D>
 struct RosenbrockTableau {
   static constexpr int stages = S;
+  static constexpr int dense_terms = D;
   double gamma;
   std::array<std::array<double, S - 1>, S> a, C;
   std::array<double, S> c, d;
+  // dense output (Steinebach's continuous extension, as OrdinaryDiffEq.jl gives these coefficients): with
+  // q_r = sum_i H[r][i] k_i, y(t0 + theta h) = (1 - theta) y0 + theta (y1 + (1 - theta)(q_1 + theta (q_2 + theta q_3 ...)))
+  std::array<std::array<double, S>, D> H;
 };
 
 // RODAS4 (Hairer & Wanner, rodas.f)
-constexpr RosenbrockTableau<6> rodas4{
+constexpr RosenbrockTableau<6, 2> rodas4{
     0.25,
     {{{0, 0, 0, 0, 0},
       {1.544, 0, 0, 0, 0},
@@ -54,10 +58,12 @@ constexpr RosenbrockTableau<6> rodas4{
       {7.496443313967647, -10.24680431464352, -33.99990352819905, 11.7089089320616, 0},
       {8.083246795921522, -7.981132988064893, -31.52159432874371, 16.31930543123136, -6.058818238834054}}},
     {0, 0.386, 0.21, 0.63, 1, 1},
-    {0.25, -0.1043, 0.1035, -0.0362, 0, 0}};
+    {0.25, -0.1043, 0.1035, -0.0362, 0, 0},
+    {{{10.12623508344586, -7.487995877610167, -34.80091861555747, -7.992771707568823, 1.025137723295662, 0},
+      {-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386, -6.594389125716872, 0}}}};
 
 // RODAS5 (Di Marzo 1993, as Hairer's group distributes it): order 5(4), 8 stages
-constexpr RosenbrockTableau<8> rodas5{
+constexpr RosenbrockTableau<8, 3> rodas5{
     0.19,
     {{{0, 0, 0, 0, 0, 0, 0},
       {2.0, 0, 0, 0, 0, 0, 0},
@@ -76,7 +82,13 @@ constexpr RosenbrockTableau<8> rodas5{
       {34.20013733472935, -14.1553540271769, 57.823356409884, 25.83362985412365, 1.408950972071624, -6.551835421242162, 0},
       {42.57076742291101, -13.80770672017997, 93.98938432427124, 18.77919633714503, -31.5835918722337, -6.685968952921985, -5.810979938412932}}},
     {0, 0.38, 0.3878509998321533, 0.483971893787384, 0.457047700881958, 1, 1, 1},
-    {0.19, -0.1823079225333714636, -0.319231832186874912, 0.3449828624725343, -0.377417564392089818, 0, 0, 0}};
+    {0.19, -0.1823079225333714636, -0.319231832186874912, 0.3449828624725343, -0.377417564392089818, 0, 0, 0},
+    {{{27.354592673333357, -6.925207756232857, 26.40037733258859, 0.5635230501052979, -4.699151156849391, -1.6008677469422725, -1.5306074446748028,
+       -1.3929872940716344},
+      {44.19024239501722, 1.3677947663381929e-13, 202.93261852171622, -35.5669339789154, -181.91095152160645, 3.4116351403665033, 2.5793540257308067,
+       2.2435122582734066},
+      {-44.0988150021747, -5.755396159656812e-13, -181.26175034586677, 56.99302194811676, 183.21182741427398, -7.480257918273637, -5.792426076169686,
+       -5.32503859794143}}}};
 
 // the stages on y' = z y with h = 1: R(z) = y1
 template <const auto& T>
@@ -183,6 +195,18 @@ class RosenbrockStages {
   }
   // the embedded solution's difference from y1, entry by entry
   auto estimate() const { return k_.col(stages - 1); }
+  // y at t0 + theta h inside the last step from y0 to y1 (the continuous extension of the stages)
+  void interpolate(double theta, const Eigen::VectorXd& y0, const Eigen::VectorXd& y1, Eigen::VectorXd& out) const {
+    constexpr int D = std::remove_cvref_t<decltype(T)>::dense_terms;
+    out.setZero(y0.size());
+    for (int r = D - 1; r >= 0; --r) {
+      // Horner: q_r + theta (q_{r+1} + ...)
+      if (r < D - 1) out *= theta;
+      for (int i = 0; i < stages; ++i)
+        if (const double hri = T.H[static_cast<size_t>(r)][static_cast<size_t>(i)]; hri != 0) out += hri * k_.col(i);
+    }
+    out = (1 - theta) * y0 + theta * (y1 + (1 - theta) * out);
+  }
 
  private:
   const CountedSystem& system_;
@@ -223,8 +247,11 @@ class RosenbrockAdaptive final : public AdaptiveStepper {
       for (Eigen::Index i = 0; i < y.size(); ++i) err = std::max(err, std::abs(e[i]) / (atol_ + rtol_ * std::max(std::abs(y[i]), std::abs(y1_[i]))));
       if (!y1_.allFinite()) err = std::numeric_limits<double>::infinity();
       if (err <= 1) {
+        last_t_ = t;
+        last_h_ = dt;
         t = clamped ? t_limit : t + dt;
-        y.swap(y1_);
+        y.swap(y1_);  // y1_ keeps the step's start, for dense output
+        end_ = y;
         h = controller_.next_after_accepted(err, dt, h, clamped);
         return true;
       }
@@ -237,12 +264,16 @@ class RosenbrockAdaptive final : public AdaptiveStepper {
     return stages_.step(t, h, y, y_out, failure);
   }
   void reset() override { controller_.reset(); }
+  bool dense() const override { return true; }
+  // inside the last accepted step, from its start and end
+  void interpolate(double t, Eigen::VectorXd& out) override { stages_.interpolate((t - last_t_) / last_h_, y1_, end_, out); }
 
  private:
   RosenbrockStages<T> stages_;
   double rtol_, atol_;
-  Eigen::VectorXd y1_;
+  Eigen::VectorXd y1_, end_;  // after a step: its start (y1_) and its end, for the interpolant
   PiStepController controller_;  // the estimate's order plus one: err ~ h^order
+  double last_t_ = 0, last_h_ = 0;
 };
 
 template <const auto& T>

@@ -265,3 +265,28 @@ TEST(Rosenbrock, StabilityFunctionsAreOfTheirOrderAndLStable) {
 
 }  // namespace
 }  // namespace stepwise
+
+namespace stepwise {
+namespace {
+
+// rodas4's and rodas5's dense output: 1000 output times over the damped oscillator, between steps, each within
+// the bound against the exact solution
+TEST(Rosenbrock, DenseOutputFollowsTheSolutionBetweenSteps) {
+  const auto cache = std::filesystem::temp_directory_path() / ("stepwise-test-cache-dense-" + std::to_string(::getpid()));
+  ::setenv("STEPWISE_CACHE", cache.c_str(), 1);
+  const auto model = make_equations(*load_scene(std::string(STEPWISE_SOURCE_DIR) + "/scenes/damped-oscillator.toml").equations, {});
+  const double rtol = 1e-7;
+  for (const char* name : {"rodas4", "rodas5"}) {
+    const Measured m = run_and_measure(*model, name, StepControl::adaptive(rtol, 1e-3 * rtol), 5.0, 5.0 / 1000);
+    ASSERT_EQ(m.result.status, Status::ok) << name;
+    EXPECT_LT(m.result.stats.steps, 1000) << name << ": the steps pass over the output times";
+    double worst = 0;
+    for (size_t k = 0; k < m.result.trajectory.t.size(); ++k)
+      worst = std::max(worst, (m.result.trajectory.y[k] - model->exact(m.result.trajectory.t[k])).cwiseAbs().maxCoeff());
+    EXPECT_LE(worst, tolerance::dense_output_rtols * rtol * 3) << name;  // |y| <= 3: the velocity's amplitude
+  }
+  std::filesystem::remove_all(cache);
+}
+
+}  // namespace
+}  // namespace stepwise
