@@ -290,3 +290,39 @@ TEST(Rosenbrock, DenseOutputFollowsTheSolutionBetweenSteps) {
 
 }  // namespace
 }  // namespace stepwise
+
+#include "report/advise.hpp"
+#include "report/user_scene.hpp"
+
+namespace stepwise {
+namespace {
+
+// the advice's pick on a shipped scene against a full sweep at every third of a decade of the advised method: its
+// setting is the coarsest on that grid meeting the error (settings, not timings: a test asserts no speed)
+TEST(Advice, FindsTheAdvisedMethodsCoarsestSettingMeetingTheError) {
+  const auto cache = std::filesystem::temp_directory_path() / ("stepwise-test-cache-advice-" + std::to_string(::getpid()));
+  ::setenv("STEPWISE_CACHE", cache.c_str(), 1);
+  for (const char* scene_name : {"van-der-pol", "damped-oscillator"}) {
+    RunOptions options;
+    options.scene_file = std::string(STEPWISE_SOURCE_DIR) + "/scenes/" + scene_name + ".toml";
+    const StudyScene scene = user_study_scene(options);
+    const double target = 1e-6;
+    const Advice advice = advise(scene, target, 8, 2);
+    ASSERT_FALSE(advice.candidates.empty());
+    ASSERT_TRUE(advice.candidates[0].cheapest.has_value()) << scene_name;
+    const AdvisePoint& advised = *advice.candidates[0].cheapest;
+    const auto model = scene_model(scene);
+    std::optional<Eigen::VectorXd> reference;
+    if (!model->has_exact()) reference = converged_reference(*model, scene.t_end).y;
+    const auto full = full_sweep(scene, *find_method(advised.method), target, reference ? &*reference : nullptr, 20);
+    ASSERT_FALSE(full.empty());
+    const AdvisePoint& first = full.back();  // the sweep stops at the first setting meeting the target
+    ASSERT_TRUE(first.error && *first.error <= target) << scene_name;
+    EXPECT_EQ(first.setting(), advised.setting()) << scene_name << ": " << advised.method;
+    EXPECT_FALSE(advice.stiff) << scene_name;
+  }
+  std::filesystem::remove_all(cache);
+}
+
+}  // namespace
+}  // namespace stepwise
