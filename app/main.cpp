@@ -47,6 +47,20 @@ int list_scenes() {
   std::sort(files.begin(), files.end());
   for (const auto& file : files) {
     const auto scene = stepwise::load_scene(file.string());
+    if (scene.equations) {
+      // a user's equations: the system as written, and the names --set takes
+      std::string system;
+      for (const auto& v : scene.equations->variables)
+        for (const auto& f : scene.equations->equations)
+          if (f.name == v) system += fmt::format("{}{}' = {}", system.empty() ? "" : ", ", f.name, f.text);
+      if (system.size() > 100) system = system.substr(0, 97) + "...";
+      std::vector<std::string> parameters;
+      for (const auto& [key, value] : scene.equations->parameters) parameters.push_back(key);
+      fmt::print("{:<24} {:<22} equations written in the scene: {}\n", file.filename().string(), scene.model, system);
+      fmt::print("{:<24} parameters: {}; initial values: {}\n", "", parameters.empty() ? std::string("none") : fmt::format("{}", fmt::join(parameters, ", ")),
+                 fmt::join(scene.equations->variables, ", "));
+      continue;
+    }
     const auto* model = stepwise::find_model(scene.model);
     std::string keys;
     if (model)
