@@ -185,13 +185,6 @@ struct Symbols {
   std::string defined;  // the names in words, for a message about an unknown one
 };
 
-std::string where_at(const Formula& f, int column_in_text) {
-  const std::string file = f.where.substr(0, f.where.find(':'));
-  const std::string key = f.where.substr(f.where.rfind(' ') + 1);
-  if (f.line > 0 && f.column > 0) return fmt::format("{}:{}:{}: {}", file, f.line, f.column + column_in_text - 1, key);
-  return fmt::format("{}, column {}", f.where, column_in_text);
-}
-
 // the column (from 1) of the whole word `word` in `text`, searching back from `before`; 0 if absent
 int column_of(const std::string& text, const std::string& word, size_t before = std::string::npos) {
   if (word.empty()) return 0;
@@ -206,8 +199,8 @@ int column_of(const std::string& text, const std::string& word, size_t before = 
 GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, bool allow_time) {
   const std::string& text = f.text;
   if (text.size() > max_formula_chars)
-    throw BadEquations(fmt::format("{}: the formula is {} characters long, more than the {} a formula may hold", f.where, text.size(), max_formula_chars));
-  if (text.find_first_not_of(" \t") == std::string::npos) throw BadEquations(fmt::format("{}: the formula is empty", f.where));
+    throw BadEquations(fmt::format("{}: the formula is {} characters long, more than the {} a formula may hold", f.where(), text.size(), max_formula_chars));
+  if (text.find_first_not_of(" \t") == std::string::npos) throw BadEquations(fmt::format("{}: the formula is empty", f.where()));
   // nesting: parentheses, and runs of signs (GiNaC's parser recurses once for each)
   int depth = 0, deepest = 0, signs = 0;
   for (size_t i = 0; i < text.size(); ++i) {
@@ -216,7 +209,7 @@ GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, 
     signs = c == '+' || c == '-' ? signs + 1 : c == ' ' || c == '\t' ? signs : 0;
     deepest = std::max({deepest, depth, signs});
     if (deepest > max_formula_depth)
-      throw BadEquations(fmt::format("{}: nested more than {} deep", where_at(f, static_cast<int>(i) + 1), max_formula_depth));
+      throw BadEquations(fmt::format("{}: nested more than {} deep", f.where(static_cast<int>(i) + 1), max_formula_depth));
   }
   GiNaC::symtab table;
   if (allow_variables)
@@ -248,7 +241,7 @@ GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, 
                          std::any_of(functions1.begin(), functions1.end(), [&](const Function1& g) { return g.name == function; });
       what = fmt::format("{} '{}' (a formula may call {})", known ? "wrong number of arguments to" : "unknown function", function, function_list);
     }
-    throw BadEquations(fmt::format("{}: {}", where_at(f, column), what));
+    throw BadEquations(fmt::format("{}: {}", f.where(column), what));
   } catch (const std::invalid_argument& e) {
     // the strict symbol table: `find_or_insert_symbol: symbol "y" not found`
     const std::string what = e.what();
@@ -257,7 +250,7 @@ GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, 
     std::string defined = allow_variables ? symbols.defined : fmt::format("parameters {}", fmt::join(symbols.parameter_names, ", "));
     if (!allow_variables && symbols.parameter_names.empty()) defined = "no parameters";
     const bool variable = std::find(symbols.variable_names.begin(), symbols.variable_names.end(), name) != symbols.variable_names.end();
-    throw BadEquations(fmt::format("{}: {} '{}' (defined: {}{})", where_at(f, std::max(1, column_of(text, name))),
+    throw BadEquations(fmt::format("{}: {} '{}' (defined: {}{})", f.where(std::max(1, column_of(text, name))),
                                    variable ? "this formula cannot use the variable" : "unknown symbol", name, defined, allow_time ? "; and t" : ""));
   }
 }
@@ -450,7 +443,7 @@ class TapeBuilder {
   // where a name (a function, a constant) is in the formula's text, where that can be told
   std::string at(const std::string& name) const {
     const int column = formula_ ? column_of(formula_->text, name) : 0;
-    return column > 0 ? where_at(*formula_, column) : where_;
+    return column > 0 ? formula_->where(column) : where_;
   }
   const Symbols& s_;
   Derived& derived_;
@@ -567,7 +560,7 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
   const auto check_cover = [&](const std::vector<Formula>& formulas, std::string_view table, bool required) {
     for (const auto& f : formulas)
       if (!seen.count(f.name))
-        throw BadEquations(fmt::format("{}: an {} for '{}', which is not a variable (variables: {}){}", f.where, table == "equations" ? "equation" : "exact solution",
+        throw BadEquations(fmt::format("{}: an {} for '{}', which is not a variable (variables: {}){}", f.where(), table == "equations" ? "equation" : "exact solution",
                                        f.name, fmt::join(spec.variables, ", "),
                                        f.name == "energy" ? "; an energy formula goes above the first [table], as TOML puts a key under the table before it" : ""));
     if (required || !formulas.empty())
@@ -622,7 +615,7 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
   }
   autonomous_ = std::none_of(f.begin(), f.end(), [&](const GiNaC::ex& e) { return e.has(s.t); });
   Derived derived{static_cast<int>(p_.size()), {}, {}};
-  for (size_t i = 0; i < n; ++i) rhs_.push_back(TapeBuilder(s, derived, formula_of[i]->where, formula_of[i]).build(f[i]));
+  for (size_t i = 0; i < n; ++i) rhs_.push_back(TapeBuilder(s, derived, formula_of[i]->where(), formula_of[i]).build(f[i]));
 
   // the exact Jacobian and its pattern, column by column; the diagonal always in it (the Newton matrix I - h J has it)
   columns_.push_back(0);
@@ -632,16 +625,16 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
       const GiNaC::ex d = f[r].diff(s.variables[c]);
       if (d.is_zero() && r != c) continue;
       rows_.push_back(static_cast<int>(r));
-      jacobian_.push_back(TapeBuilder(s, derived, fmt::format("{} (its derivative in {})", formula_of[r]->where, names_[c])).build(d));
+      jacobian_.push_back(TapeBuilder(s, derived, fmt::format("{} (its derivative in {})", formula_of[r]->where(), names_[c])).build(d));
     }
     columns_.push_back(static_cast<int>(rows_.size()));
   }
   exact_.resize(spec.exact.size());  // one per variable (checked above), in the variables' order
   for (const auto& formula : spec.exact) {
     const size_t i = static_cast<size_t>(std::find(names_.begin(), names_.end(), formula.name) - names_.begin());
-    exact_[i] = TapeBuilder(s, derived, formula.where, &formula).build(parse(formula, s, false, true));
+    exact_[i] = TapeBuilder(s, derived, formula.where(), &formula).build(parse(formula, s, false, true));
   }
-  if (spec.energy) energy_ = TapeBuilder(s, derived, spec.energy->where, &*spec.energy).build(parse(*spec.energy, s, true, false));
+  if (spec.energy) energy_ = TapeBuilder(s, derived, spec.energy->where(), &*spec.energy).build(parse(*spec.energy, s, true, false));
   // the derived slots, from the parameters (each reads parameters and numbers only)
   for (const Tape& t : derived.tapes) depth_ = std::max(depth_, t.depth);
   for (const Tape& t : derived.tapes) p_.push_back(run(t, 0, nullptr, p_.data(), scratch(depth_)));
@@ -663,14 +656,14 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
     double* stack = scratch(depth_);
     for (size_t i = 0; i < n; ++i)
       if (const double v = run(rhs_[i], 0, y0_.data(), p_.data(), stack); !std::isfinite(v))
-        throw BadEquations(fmt::format("{}: the formula is {} at the initial state (t = 0, {})", formula_of[i]->where, v, [&] {
+        throw BadEquations(fmt::format("{}: the formula is {} at the initial state (t = 0, {})", formula_of[i]->where(), v, [&] {
           std::string state;
           for (size_t k = 0; k < n; ++k) state += fmt::format("{}{} = {:g}", k ? ", " : "", names_[k], y0_[static_cast<Eigen::Index>(k)]);
           return state;
         }()));
     if (energy_)
       if (const double e = run(*energy_, 0, y0_.data(), p_.data(), stack); !std::isfinite(e))
-        throw BadEquations(fmt::format("{}: the formula is {} at the initial state", spec.energy->where, e));
+        throw BadEquations(fmt::format("{}: the formula is {} at the initial state", spec.energy->where(), e));
   }
   if (!exact_.empty()) {
     const Eigen::VectorXd at0 = exact(0);
@@ -711,6 +704,12 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
 }
 
 }  // namespace
+
+std::string Formula::where(int column_in_text) const {
+  if (column_in_text > 0 && line > 0 && column > 0) return fmt::format("{}:{}:{}: {}", file, line, column + column_in_text - 1, key);
+  if (column_in_text > 0) return fmt::format("{}: {}, column {}", file, key, column_in_text);
+  return line > 0 ? fmt::format("{}:{}: {}", file, line, key) : fmt::format("{}: {}", file, key);
+}
 
 std::unique_ptr<Model> make_equations(const EquationsSpec& spec, const Params& values, bool compile) {
   return std::make_unique<Equations>(spec, values, compile);

@@ -27,9 +27,12 @@ namespace stepwise {
 struct Formula {
   std::string name;   // the variable it is for ("v"), or "energy"
   std::string text;   // the formula
-  std::string where;  // "file:line: equations.v", for messages
+  std::string file;   // the scene file
+  std::string key;    // "equations.v", for messages
   int line = 0;       // where the formula's text starts in the file (0: unknown)
   int column = 0;     // the file column of its first character (0: unknown)
+  // "file:line: key", or "file:line:column: key" for a column of the formula's text (from 1)
+  std::string where(int column_in_text = 0) const;
 };
 
 // the scene file's equations, as written (checked for names and shape on making the model)

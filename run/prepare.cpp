@@ -28,6 +28,10 @@ std::optional<double> parse_number(std::string_view text) {
   return value;
 }
 
+// a trajectory's bytes: a row of t, the columns and the energy, 17 significant digits and a sign, exponent and
+// comma each (25 bytes a cell), and the header and first row
+double trajectory_bytes(double rows, double columns) { return (rows + 2) * (columns + 2) * 25; }
+
 void require_positive(std::optional<double> value, const std::string& where) {
   if (value && !(std::isfinite(*value) && *value > 0))
     throw InputError(fmt::format("{}: must be a positive finite number, got {}", where, *value));
@@ -66,13 +70,13 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   if (info && info->output_columns && !o.out.empty()) try {
       const Params resolved = resolve_params(*info, values);
       const double t_end = o.t_end.value_or(s.t_end.value_or(10.0)), output_dt = o.output_dt.value_or(s.output_dt.value_or(t_end / 1000));
-      const double columns = info->output_columns(resolved) + 2;
-      const double at_least = (std::floor(t_end / (1.5 * output_dt)) + 2) * columns * 25;
+      const double columns = info->output_columns(resolved);
+      const double at_least = trajectory_bytes(std::floor(t_end / (1.5 * output_dt)), columns);
       const auto free_bytes = free_bytes_at(o.out);
       if (std::isfinite(t_end) && t_end > 0 && output_dt > 0 && free_bytes && at_least > *free_bytes)
         throw InputError(fmt::format("{}: the trajectory, a row every {:g} s of {:.0f} columns, would take at least {:.3g} GB, more than the {:.3g} GB "
                                      "free in {}: sample less often (--output-dt)",
-                                     output_dt_origin, output_dt, columns, at_least / 1e9, *free_bytes / 1e9, o.out));
+                                     output_dt_origin, output_dt, columns + 2, at_least / 1e9, *free_bytes / 1e9, o.out));
     } catch (const BadParameter&) {
       // the model's own check below names it
     }
@@ -221,9 +225,8 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   if (rows > max_steps)
     throw InputError(fmt::format("{}: t_end / output_dt = {:.3g} output rows, more than the {:.3g} allowed: sample less often, or raise "
                                  "the limit with --max-steps", p.output_dt_origin, rows, max_steps));
-  // a row: t, the samples and the energy, 17 significant digits and a sign, exponent and comma each
-  const double columns = 2.0 + static_cast<double>(p.model->summary_names().empty() ? p.model->state_names().size() : p.model->summary_names().size());
-  p.output_bytes = (rows + 2) * columns * 25;
+  const double columns = static_cast<double>(p.model->summary_names().empty() ? p.model->state_names().size() : p.model->summary_names().size());
+  p.output_bytes = trajectory_bytes(rows, columns);
   return p;
 }
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -164,13 +165,18 @@ std::vector<GridNode> pins_table(const toml::node& node, Scene& scene) {
   return rows_of<int, 2>(*nodes, scene, "pins.nodes", "grid indices (row, column)");
 }
 
+// the keys of an equations scene (model = "equations"), each a table or value of its own
+constexpr std::array<std::string_view, 5> equations_keys{"variables", "initial", "equations", "exact", "energy"};
+bool equations_key(std::string_view key) {
+  const std::string_view top = key.substr(0, key.find('.'));
+  return std::find(equations_keys.begin(), equations_keys.end(), top) != equations_keys.end();
+}
+
 // a string value: its text, line and the file column of its first character (after the opening quote or quotes)
 Formula formula_of(const toml::node& node, const Scene& scene, const std::string& key, const std::string& name) {
   const auto* text = node.as_string();
   if (!text) throw InputError(fmt::format("{}:{}: {}: expected a formula in quotes", scene.file, line_of(node), key));
-  Formula f{name, text->get(), fmt::format("{}:{}: {}", scene.file, line_of(node), key), line_of(node),
-            static_cast<int>(node.source().begin.column) + 1};
-  return f;
+  return Formula{name, text->get(), scene.file, key, line_of(node), static_cast<int>(node.source().begin.column) + 1};
 }
 
 // the equations model's tables: variables, [initial], [equations], [exact], energy
@@ -282,7 +288,7 @@ Scene load_scene_text(std::string_view text, const std::string& file) {
       scene.pins = pins_table(node, scene);
     } else if (key == "render") {
       scene.look = render_table(node, scene);
-    } else if (key == "variables" || key == "initial" || key == "equations" || key == "exact" || key == "energy") {
+    } else if (equations_key(key)) {
       equations_entry(key, node, scene);
     } else {
       throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run], [mesh], [pins], [render]; an equations "
@@ -295,10 +301,9 @@ Scene load_scene_text(std::string_view text, const std::string& file) {
       throw InputError(fmt::format("{}: variables: missing (an equations scene names its state: variables = [\"x\", \"v\"])", file));
     scene.equations->parameters = scene.parameters;
   } else if (scene.equations) {
+    // the first of them in the file
     const auto first = std::min_element(scene.lines.begin(), scene.lines.end(), [](const auto& a, const auto& b) {
-      const bool ea = a.first.starts_with("variables") || a.first.starts_with("initial") || a.first.starts_with("equations") || a.first.starts_with("exact") || a.first == "energy";
-      const bool eb = b.first.starts_with("variables") || b.first.starts_with("initial") || b.first.starts_with("equations") || b.first.starts_with("exact") || b.first == "energy";
-      return ea != eb ? ea : a.second < b.second;
+      return equations_key(a.first) != equations_key(b.first) ? equations_key(a.first) : a.second < b.second;
     });
     throw InputError(fmt::format("{}: only a scene with model = \"equations\" has variables, [initial], [equations], [exact] or energy (this is model {})",
                                  scene.where(first->first), scene.model));
