@@ -17,7 +17,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <thread>
 
 namespace stepwise {
 
@@ -374,7 +373,7 @@ int advise_command(const AdviseOptions& o) {
   PreparedRun prepared;
   const StudyScene scene = user_study_scene(o.run, &prepared);
   ensure_writable_directory(o.out);
-  const int threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = threads_or_default(o.threads);
   const Advice a = advise(scene, o.error, o.budget, threads);
 
   std::string command = fmt::format("stepwise advise {} --error {:g} --budget {:g}", o.run.scene_file, o.error, o.budget);

@@ -155,10 +155,9 @@ void swap_report(const fs::path& staging, const fs::path& target) {
     print_error("report", fmt::format("{}: kept, with {} file(s) of yours the new report has a file of the same name for", old.string(), kept.size()));
 }
 
-// the threads asked for, or one per core
-int threads_or_default(int requested) { return requested > 0 ? requested : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
-
 }  // namespace
+
+int threads_or_default(int requested) { return requested > 0 ? requested : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 int study_command(const std::string& name, bool quick, int threads, const std::string& out, const std::optional<RunOptions>& scene) {
   const bool writer = ranks::rank() == 0;

@@ -27,6 +27,9 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
 struct Figure;
 void draw_figures(const std::vector<Figure>& figures, const std::filesystem::path& dir, int jobs, bool html);
 
+// the threads asked for, or one per core
+int threads_or_default(int requested);
+
 // the studies that take --scene
 inline constexpr std::string_view scene_studies = "work-precision, convergence, stability-regions, energy";
 

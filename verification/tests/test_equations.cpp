@@ -24,15 +24,17 @@ EquationsSpec spec_of(const std::string& name) { return *load_scene(scene_path(n
 
 const char* shipped[] = {"pendulum-equations", "van-der-pol", "van-der-pol-stiff", "lorenz", "double-pendulum", "duffing", "damped-oscillator"};
 
+// a compile cache of the test's own, removed after it
+struct TemporaryCache {
+  std::filesystem::path dir = std::filesystem::temp_directory_path() / ("stepwise-test-cache-" + std::to_string(::getpid()));
+  TemporaryCache() { ::setenv("STEPWISE_CACHE", dir.c_str(), 1); }
+  ~TemporaryCache() { std::filesystem::remove_all(dir); }
+};
+
 // each test compiles into a cache of its own
 class Equations : public ::testing::Test {
  protected:
-  void SetUp() override {
-    cache_ = std::filesystem::temp_directory_path() / ("stepwise-test-cache-" + std::to_string(::getpid()));
-    ::setenv("STEPWISE_CACHE", cache_.c_str(), 1);
-  }
-  void TearDown() override { std::filesystem::remove_all(cache_); }
-  std::filesystem::path cache_;
+  TemporaryCache cache_;
 };
 
 Eigen::VectorXd random_state(int n, std::mt19937& rng) {
@@ -272,8 +274,7 @@ namespace {
 // rodas4's and rodas5's dense output: 1000 output times over the damped oscillator, between steps, each within
 // the bound against the exact solution
 TEST(Rosenbrock, DenseOutputFollowsTheSolutionBetweenSteps) {
-  const auto cache = std::filesystem::temp_directory_path() / ("stepwise-test-cache-dense-" + std::to_string(::getpid()));
-  ::setenv("STEPWISE_CACHE", cache.c_str(), 1);
+  const TemporaryCache cache;
   const auto model = make_equations(*load_scene(std::string(STEPWISE_SOURCE_DIR) + "/scenes/damped-oscillator.toml").equations, {});
   const double rtol = 1e-7;
   for (const char* name : {"rodas4", "rodas5"}) {
@@ -285,7 +286,6 @@ TEST(Rosenbrock, DenseOutputFollowsTheSolutionBetweenSteps) {
       worst = std::max(worst, (m.result.trajectory.y[k] - model->exact(m.result.trajectory.t[k])).cwiseAbs().maxCoeff());
     EXPECT_LE(worst, tolerance::dense_output_rtols * rtol * 3) << name;  // |y| <= 3: the velocity's amplitude
   }
-  std::filesystem::remove_all(cache);
 }
 
 }  // namespace
@@ -300,8 +300,7 @@ namespace {
 // the advice's pick on a shipped scene against a full sweep at every third of a decade of the advised method: its
 // setting is the coarsest on that grid meeting the error (settings, not timings: a test asserts no speed)
 TEST(Advice, FindsTheAdvisedMethodsCoarsestSettingMeetingTheError) {
-  const auto cache = std::filesystem::temp_directory_path() / ("stepwise-test-cache-advice-" + std::to_string(::getpid()));
-  ::setenv("STEPWISE_CACHE", cache.c_str(), 1);
+  const TemporaryCache cache;
   for (const char* scene_name : {"van-der-pol", "damped-oscillator"}) {
     RunOptions options;
     options.scene_file = std::string(STEPWISE_SOURCE_DIR) + "/scenes/" + scene_name + ".toml";
@@ -321,7 +320,6 @@ TEST(Advice, FindsTheAdvisedMethodsCoarsestSettingMeetingTheError) {
     EXPECT_EQ(first.setting(), advised.setting()) << scene_name << ": " << advised.method;
     EXPECT_FALSE(advice.stiff) << scene_name;
   }
-  std::filesystem::remove_all(cache);
 }
 
 }  // namespace
