@@ -65,44 +65,53 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m) {
 
 }  // namespace
 
-RunOutputs::RunOutputs(const std::filesystem::path& out, const PreparedRun& p) : out_(out), p_(p), trajectory_(out / "trajectory.csv") {
-  const Model& model = *p.model;
-  std::vector<Cell> header{std::string("t")};
-  for (const auto& name : sample_names(model)) header.emplace_back(name);
+TrajectoryRows::TrajectoryRows(const Model& model) : model_(model), columns_{"t"} {
+  for (const auto& name : sample_names(model)) columns_.push_back(name);
   with_energy_ = model.summary_names().empty() && model.energy(model.initial_state()).has_value();
-  if (with_energy_) header.emplace_back(std::string("energy"));
-  trajectory_.write(csv_row(header));
-  sample(0.0, model.summary(model.initial_state()));
+  if (with_energy_) columns_.emplace_back("energy");
 }
 
-// a sample is the state itself (energy computed from it), or already the model's summary of it
-std::string RunOutputs::sample(double t, const Eigen::VectorXd& sample) {
+std::vector<Cell> TrajectoryRows::row(double t, const Eigen::VectorXd& sample, std::string& problem) const {
   std::vector<Cell> row{t};
   row.reserve(static_cast<size_t>(sample.size()) + 2);
   for (const double v : sample) row.emplace_back(v);
-  if (with_energy_) row.emplace_back(*p_.model->energy(sample));
-  trajectory_.write(csv_row(row));
-  last_t_ = t;
-  for (size_t i = 1; i < row.size(); ++i)
+  if (with_energy_) row.emplace_back(*model_.energy(sample));
+  for (size_t i = 1; i < row.size() && problem.empty(); ++i)
     if (!std::isfinite(std::get<double>(row[i])))
-      return fmt::format("{} overflowed ({})", i == static_cast<size_t>(sample.size()) + 1 ? std::string("the energy") : "a sampled value",
-                         std::get<double>(row[i]));
-  return {};
+      problem = fmt::format("{} overflowed ({})", i == static_cast<size_t>(sample.size()) + 1 ? std::string("the energy") : "a sampled value",
+                            std::get<double>(row[i]));
+  return row;
+}
+
+std::optional<std::vector<Cell>> TrajectoryRows::stop_row(const Measured& m, double last_t) const {
+  if (m.result.status == Status::ok || m.result.t_stop <= last_t || !m.result.y_stop.allFinite()) return std::nullopt;
+  std::string ignored;
+  return row(m.result.t_stop, model_.summary(m.result.y_stop), ignored);
+}
+
+std::string summary_text(const PreparedRun& p, const Measured& m) { return summary_json(p, m).dump(2) + "\n"; }
+
+RunOutputs::RunOutputs(const std::filesystem::path& out, const PreparedRun& p) : out_(out), p_(p), trajectory_(out / "trajectory.csv"), rows_(*p.model) {
+  std::vector<Cell> header;
+  for (const auto& name : rows_.columns()) header.emplace_back(name);
+  trajectory_.write(csv_row(header));
+  sample(0.0, p.model->summary(p.model->initial_state()));
+}
+
+std::string RunOutputs::sample(double t, const Eigen::VectorXd& sample) {
+  std::string problem;
+  trajectory_.write(csv_row(rows_.row(t, sample, problem)));
+  last_t_ = t;
+  return problem;
 }
 
 void RunOutputs::finish(const Measured& m) {
   // a run that stopped between output times ends its trajectory where it stopped
-  if (m.result.status != Status::ok && m.result.t_stop > last_t_ && m.result.y_stop.allFinite()) {
-    const Eigen::VectorXd last = p_.model->summary(m.result.y_stop);
-    std::vector<Cell> row{m.result.t_stop};
-    for (const double v : last) row.emplace_back(v);
-    if (with_energy_) row.emplace_back(*p_.model->energy(last));
-    trajectory_.write(csv_row(row));
-  }
+  if (const auto last = rows_.stop_row(m, last_t_)) trajectory_.write(csv_row(*last));
   std::error_code ignored;
   std::filesystem::remove(out_ / "summary.json", ignored);  // the manifest goes first and comes back last
   trajectory_.commit();
-  write_file_atomic(out_ / "summary.json", summary_json(p_, m).dump(2) + "\n");
+  write_file_atomic(out_ / "summary.json", summary_text(p_, m));
 }
 
 }  // namespace stepwise

@@ -8,12 +8,38 @@
 #pragma once
 
 #include "run/atomic_write.hpp"
+#include "run/csv.hpp"
 #include "run/measure.hpp"
 #include "run/prepare.hpp"
 
 #include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
 
 namespace stepwise {
+
+// the trajectory's columns and rows: trajectory.csv's, and the Python module's run() (python/module.cpp) holds the
+// same numbers
+class TrajectoryRows {
+ public:
+  explicit TrajectoryRows(const Model& model);
+  // "t", the state's names or the model's summary names, and "energy" where the model has one
+  const std::vector<std::string>& columns() const { return columns_; }
+  // a sample's row: the state itself (energy computed from it), or already the model's summary of it; `problem`
+  // receives why the run ends there (a value not finite), else stays empty
+  std::vector<Cell> row(double t, const Eigen::VectorXd& sample, std::string& problem) const;
+  // the row a run that stopped between output times ends with (after the last output at `last_t`), if any
+  std::optional<std::vector<Cell>> stop_row(const Measured& m, double last_t) const;
+
+ private:
+  const Model& model_;
+  std::vector<std::string> columns_;
+  bool with_energy_ = false;
+};
+
+// summary.json's text (DESIGN.md's fields) for a finished run
+std::string summary_text(const PreparedRun& p, const Measured& m);
 
 class RunOutputs {
  public:
@@ -29,7 +55,7 @@ class RunOutputs {
   std::filesystem::path out_;
   const PreparedRun& p_;
   AtomicFile trajectory_;
-  bool with_energy_ = false;
+  TrajectoryRows rows_;
   double last_t_ = 0;  // the last row's time
 };
 

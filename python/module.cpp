@@ -1,0 +1,503 @@
+// The Python module's compiled half (`stepwise._stepwise`): the public surface (<stepwise/stepwise.hpp>) made
+// callable from Python. python/stepwise/__init__.py gives it SciPy's shapes (solve_ivp's signature and result);
+// what is here runs the solves: a Python `fun` as an OdeSystem, a system of equations compiled once, a scene
+// file run as `stepwise run` runs it, the advice and the studies on a scene.
+//
+// Errors: bad input (a scene's, a method's, a formula's) raises ValueError with the command line's one-line
+// message; an exception raised by `fun` propagates from inside the solve (every backend's resources are freed
+// as it unwinds) with a note saying at which t; Ctrl-C raises KeyboardInterrupt at the next call of f or output.
+// The GIL is released while a compiled system (equations, a scene's model) runs, and taken back to look for a
+// signal every few thousand calls of f and at every output.
+#include "report/report.hpp"
+#include "report/studies.hpp"
+#include "stepwise/stepwise.hpp"
+
+#include <fmt/format.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+namespace py = pybind11;
+
+namespace stepwise {
+namespace {
+
+// a signal's Python handler has run (Ctrl-C: KeyboardInterrupt is set): raise it here, from inside the solve
+void raise_if_signalled() {
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+}
+
+// the same from a thread that released the GIL
+void raise_if_signalled_released() {
+  py::gil_scoped_acquire gil;
+  raise_if_signalled();
+}
+
+// a Python callable f(t, y) -> dy/dt (and jac(t, y) -> df/dy, or a constant matrix) as an OdeSystem, in s = sign t
+// (sign -1: a reversed t_span integrated forwards in s = -t, as every method steps forwards)
+class PythonSystem final : public OdeSystem {
+ public:
+  PythonSystem(py::object fun, py::object jac, int n, double sign) : fun_(std::move(fun)), jac_(std::move(jac)), n_(n), sign_(sign) {}
+
+  int size() const override { return n_; }
+
+  void rhs(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    const double t = sign_ * s;
+    raise_if_signalled();
+    const auto out = call(fun_, t, y, "fun");
+    if (out.ndim() != 1 || out.shape(0) != n_)
+      throw py::value_error(fmt::format("fun returned an array of shape {} at t = {}; y0 has {} values, so it must return shape ({},)", shape(out), t, n_, n_));
+    const double* v = out.data();
+    for (int i = 0; i < n_; ++i) {
+      if (!std::isfinite(v[i])) throw py::value_error(fmt::format("fun returned a value that is not finite ({}) in component {} at t = {}", v[i], i, t));
+      dydt[i] = sign_ * v[i];
+    }
+  }
+
+  bool has_jacobian() const override { return !jac_.is_none(); }
+  void jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+    const double t = sign_ * s;
+    const auto out = PyCallable_Check(jac_.ptr()) ? call(jac_, t, y, "jac") : as_array(jac_, t, "jac");
+    if (out.ndim() != 2 || out.shape(0) != n_ || out.shape(1) != n_)
+      throw py::value_error(fmt::format("jac gave an array of shape {} at t = {}; it must be ({}, {})", shape(out), t, n_, n_));
+    for (int i = 0; i < n_; ++i)
+      for (int j = 0; j < n_; ++j) {
+        const double v = out.at(i, j);
+        if (!std::isfinite(v)) throw py::value_error(fmt::format("jac gave a value that is not finite ({}) at ({}, {}), t = {}", v, i, j, t));
+        dfdy(i, j) = sign_ * v;
+      }
+  }
+
+ private:
+  using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+  static std::string shape(const Array& a) {
+    std::string text = "(";
+    for (py::ssize_t k = 0; k < a.ndim(); ++k) text += fmt::format("{}{}", k ? ", " : "", a.shape(k));
+    return text + (a.ndim() == 1 ? ",)" : ")");
+  }
+
+  static Array as_array(const py::object& value, double t, const char* what) {
+    auto a = Array::ensure(value);
+    if (!a) throw py::type_error(fmt::format("{} returned {} at t = {}, not an array of real numbers", what, std::string(py::str(py::type::of(value).attr("__name__"))), t));
+    return a;
+  }
+
+  // f or jac at (t, y) on a fresh array (the callable may keep or change it); an exception it raises leaves with a
+  // note saying where
+  Array call(const py::object& callable, double t, const Eigen::Ref<const Eigen::VectorXd>& y, const char* what) const {
+    py::array_t<double> ya(n_);
+    std::copy(y.data(), y.data() + n_, ya.mutable_data());
+    try {
+      return as_array(callable(t, ya), t, what);
+    } catch (py::error_already_set& e) {
+      if (py::hasattr(e.value(), "add_note")) e.value().attr("add_note")(fmt::format("(raised by {} at t = {}, inside stepwise.solve_ivp)", what, t));
+      throw;
+    }
+  }
+
+  py::object fun_, jac_;
+  int n_;
+  double sign_;
+};
+
+// a compiled system (a user's equations, a scene's model) run with the GIL released: in s = sign t, and
+// looking for a signal every `check_every` calls of f. Capabilities pass through forwards in time only (x' = v
+// read backwards is no longer x' = v)
+class ReleasedSystem final : public OdeSystem {
+ public:
+  ReleasedSystem(const OdeSystem& inner, double sign) : inner_(inner), sign_(sign) {}
+  static constexpr long check_every = 4096;
+
+  int size() const override { return inner_.size(); }
+  bool autonomous() const override { return inner_.autonomous(); }
+  void rhs(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    if (++calls_ % check_every == 0) raise_if_signalled_released();
+    inner_.rhs(sign_ * s, y, dydt);
+    if (sign_ < 0) dydt = -dydt;
+  }
+  bool has_jacobian() const override { return inner_.has_jacobian(); }
+  void jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+    inner_.jacobian(sign_ * s, y, dfdy);
+    if (sign_ < 0) dfdy = -dfdy;
+  }
+  bool has_sparse_jacobian() const override { return inner_.has_sparse_jacobian(); }
+  void sparse_jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
+    inner_.sparse_jacobian(sign_ * s, y, dfdy);
+    if (sign_ < 0) dfdy = -dfdy;
+  }
+  const void* capability(const std::type_info& type) const override { return sign_ > 0 ? inner_.capability(type) : nullptr; }
+
+ private:
+  const OdeSystem& inner_;
+  double sign_;
+  mutable long calls_ = 0;
+};
+
+// a system of equations written as text (models/equations.hpp), parsed, differentiated and compiled once when
+// made; solve_ivp then runs it with no Python in the loop
+class Equations {
+ public:
+  Equations(EquationsSpec spec, const Params& values, bool compile) : spec_(std::move(spec)), model_(make_equations(spec_, values, compile)) {}
+  const Model& model() const { return *model_; }
+  const EquationsSpec& spec() const { return spec_; }
+
+ private:
+  EquationsSpec spec_;
+  std::unique_ptr<Model> model_;
+};
+
+Formula formula(const std::string& name, const std::string& text, const std::string& section) {
+  Formula f;
+  f.name = name;
+  f.text = text;
+  f.file = "stepwise.Equations";
+  f.key = section + "." + name;
+  return f;
+}
+
+// Equations(equations={"x": "v", "v": "-g*sin(x)"}, parameters={"g": 9.81}, ...): the variables in the order
+// the equations are given
+Equations make_python_equations(const py::dict& equations, const std::map<std::string, double>& parameters, const std::optional<std::map<std::string, double>>& initial,
+                                const std::optional<std::string>& energy, const std::optional<std::map<std::string, std::string>>& exact, bool compile) {
+  EquationsSpec spec;
+  spec.file = "stepwise.Equations";
+  spec.variables_where = "stepwise.Equations: equations";
+  for (const auto& [key, value] : equations) {
+    const auto name = py::cast<std::string>(key);
+    spec.variables.push_back(name);
+    spec.equations.push_back(formula(name, py::cast<std::string>(value), "equations"));
+    spec.initial[name] = 0.0;
+  }
+  if (initial)
+    for (const auto& [name, value] : *initial) {
+      if (!spec.initial.contains(name)) throw py::value_error(fmt::format("stepwise.Equations: initial.{}: not one of the variables", name));
+      spec.initial[name] = value;
+    }
+  for (const auto& [name, value] : parameters) spec.parameters[name] = value;
+  if (energy) spec.energy = formula("energy", *energy, "energy");
+  if (exact)
+    for (const auto& [name, text] : *exact) spec.exact.push_back(formula(name, text, "exact"));
+  return Equations(std::move(spec), {}, compile);
+}
+
+Equations equations_from_scene(const std::string& file, bool compile) {
+  Scene scene = load_scene(file);
+  if (!scene.equations) throw InputError(fmt::format("{}: model is \"{}\", not \"equations\"", scene.where("model"), scene.model));
+  return Equations(*scene.equations, {}, compile);
+}
+
+py::array_t<double> vector_array(const std::vector<double>& v) { return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data()); }
+
+// samples as an (n, N) array, SciPy's layout: one row a component, one column a time
+py::array_t<double> columns_array(const std::vector<Eigen::VectorXd>& samples, py::ssize_t n) {
+  py::array_t<double> a({n, static_cast<py::ssize_t>(samples.size())});
+  auto m = a.mutable_unchecked<2>();
+  for (size_t k = 0; k < samples.size(); ++k)
+    for (py::ssize_t i = 0; i < n; ++i) m(i, static_cast<py::ssize_t>(k)) = samples[k][i];
+  return a;
+}
+
+py::dict stats_dict(const Stats& s) {
+  py::dict d;
+  d["steps"] = s.steps;
+  d["rejected"] = s.rejected;
+  d["rhs_evals"] = s.rhs_evals;
+  d["jac_evals"] = s.jac_evals;
+  d["linear_solves"] = s.linear_solves;
+  d["factorizations"] = s.factorizations;
+  d["events"] = s.events;
+  d["projections"] = s.projections;
+  d["cpu_seconds"] = s.cpu_seconds;
+  return d;
+}
+
+// solve_ivp's compiled half: `fun` a Python callable or an Equations; t_eval, where given, sorted in the direction
+// of integration and within t_span (checked here, SciPy's messages)
+py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<double, py::array::c_style | py::array::forcecast>& y0_array, const std::string& method_name, double rtol, double atol,
+               std::optional<double> dt, double max_step, std::optional<std::vector<double>> t_eval, const py::object& jac, double max_steps) {
+  const Method* method = find_method(method_name);
+  if (!method) throw BadMethod(fmt::format("unknown method \"{}\" (stepwise.methods() lists them)", method_name));
+  if (!std::isfinite(t0) || !std::isfinite(t1)) throw py::value_error(fmt::format("t_span must be finite, not ({}, {})", t0, t1));
+  if (t0 == t1) throw py::value_error(fmt::format("t_span has zero length ({}, {}): nothing to integrate", t0, t1));
+  const double sign = t1 > t0 ? 1.0 : -1.0;
+  if (y0_array.ndim() != 1) throw py::value_error("`y0` must be 1-dimensional.");
+  const Eigen::VectorXd y0 = Eigen::Map<const Eigen::VectorXd>(y0_array.data(), y0_array.shape(0));
+  const int n = static_cast<int>(y0.size());
+  if (n == 0) throw py::value_error("y0 is empty");
+  if (!y0.allFinite()) throw py::value_error("y0 has a value that is not finite");
+
+  const Equations* equations = py::isinstance<Equations>(fun) ? &py::cast<const Equations&>(fun) : nullptr;
+  if (!equations && !PyCallable_Check(fun.ptr())) throw py::type_error("fun must be a callable f(t, y) or a stepwise.Equations");
+  if (equations && !jac.is_none()) throw py::value_error("jac: an Equations system has its exact Jacobian already");
+  if (equations && equations->model().size() != n)
+    throw py::value_error(fmt::format("y0 has {} values; the equations have {} variables ({})", n, equations->model().size(), fmt::join(equations->spec().variables, ", ")));
+  std::unique_ptr<OdeSystem> system;
+  if (equations) system = std::make_unique<ReleasedSystem>(equations->model(), sign);
+  else system = std::make_unique<PythonSystem>(fun, jac, n, sign);
+  if (!method_applies(*method, *system)) throw BadMethod(fmt::format("{}: {}", method->name, method_requirement(*method, *system)));
+
+  StepControl control;
+  if (dt) {
+    control = StepControl::fixed(*dt);
+  } else {
+    if (!method->adaptive()) throw BadMethod(fmt::format("{} steps with a fixed step: pass dt=", method->name));
+    control = StepControl::adaptive(rtol, atol);
+    control.max_step = max_step;
+  }
+  if (!(max_steps >= 1)) throw py::value_error(fmt::format("max_steps must be at least 1, not {}", max_steps));
+  control.max_steps = static_cast<long>(std::min(max_steps, 1e15));
+  check_step_control(*method, control);
+  if (dt && std::abs(t1 - t0) / *dt > max_steps)
+    throw py::value_error(fmt::format("dt = {} takes {:.3g} steps over t_span, more than max_steps = {:.3g}", *dt, std::abs(t1 - t0) / *dt, max_steps));
+  if (const double bytes = dense_matrix_bytes(*method, *system); over_memory_budget(bytes))
+    throw BadMethod(fmt::format("{} keeps dense {}x{} matrices ({:.3g} GB): {}", method->name, n, n, bytes / 1e9, memory_budget_text()));
+
+  // the output times in s; those at t0 itself are y0
+  std::vector<double> times = t_eval ? *t_eval : std::vector<double>{t0, t1};
+  for (const double t : times)
+    if (!(std::min(t0, t1) <= t && t <= std::max(t0, t1))) throw py::value_error("Values in `t_eval` are not within `t_span`.");
+  for (size_t k = 1; k < times.size(); ++k)
+    if (!(sign * (times[k] - times[k - 1]) > 0)) throw py::value_error("Values in `t_eval` are not properly sorted.");
+  const size_t at_start = times.empty() || times.front() != t0 ? 0 : 1;
+  std::vector<double> s_out;
+  for (size_t k = at_start; k < times.size(); ++k) s_out.push_back(sign * times[k]);
+
+  // the samples as they come (a Python fun's solve holds the GIL; a compiled system's released it)
+  std::vector<double> t_done;
+  std::vector<Eigen::VectorXd> y_done;
+  if (at_start) {
+    t_done.push_back(t0);
+    y_done.push_back(y0);
+  }
+  control.sink = [&t_done, &y_done, sign, released = equations != nullptr](double s, const Eigen::VectorXd& y) {
+    if (released) raise_if_signalled_released();
+    else raise_if_signalled();
+    t_done.push_back(sign * s);
+    y_done.push_back(y);
+    return std::string();
+  };
+  RunResult r;
+  if (s_out.empty()) {
+    r.t_stop = sign * t0;
+    r.y_stop = y0;
+  } else if (equations) {
+    py::gil_scoped_release released;
+    r = make_integrator(method->name, control)->integrate(*system, sign * t0, y0, s_out);
+  } else {
+    r = make_integrator(method->name, control)->integrate(*system, sign * t0, y0, s_out);
+  }
+  py::dict d;
+  d["t"] = vector_array(t_done);
+  d["y"] = columns_array(y_done, n);
+  d["status"] = std::string(to_string(r.status));
+  d["message"] = r.message;
+  d["t_stop"] = sign * r.t_stop;
+  d["stats"] = stats_dict(r.stats);
+  d["method"] = std::string(method->name);
+  return d;
+}
+
+// the scene file: a path, or a shipped scene by name ("pendulum" is scenes/pendulum.toml)
+std::string scene_path(const std::string& scene) {
+  if (std::filesystem::exists(scene) || scene.find('/') != std::string::npos || scene.ends_with(".toml")) return scene;
+  return (std::filesystem::path(scenes_directory()) / (scene + ".toml")).string();
+}
+
+RunOptions run_options(const std::string& scene, const std::map<std::string, double>& sets) {
+  RunOptions o;
+  o.scene_file = scene_path(scene);
+  for (const auto& [key, value] : sets) o.sets.push_back(fmt::format("{}={:.17g}", key, value));
+  return o;
+}
+
+// a scene run as `stepwise run` runs it: the trajectory's columns and rows (trajectory.csv's numbers) and summary.json's text
+py::dict run(const std::string& scene, const std::optional<std::string>& method, std::optional<double> dt, std::optional<double> rtol, std::optional<double> atol,
+             std::optional<double> t_end, std::optional<double> output_dt, const std::map<std::string, double>& sets, std::optional<double> max_steps) {
+  RunOptions o = run_options(scene, sets);
+  o.method = method;
+  o.dt = dt;
+  o.rtol = rtol;
+  o.atol = atol;
+  o.t_end = t_end;
+  o.output_dt = output_dt;
+  o.max_steps = max_steps;
+  PreparedRun p = prepare_run(o);
+  if (over_memory_budget(p.output_bytes))
+    throw InputError(fmt::format("{}: the trajectory would take {:.3g} GB in memory, {} (raise output_dt)", p.output_dt_origin, p.output_bytes / 1e9, memory_budget_text()));
+  const TrajectoryRows rows(*p.model);
+  std::vector<std::vector<Cell>> table;
+  std::string ignored;
+  table.push_back(rows.row(0.0, p.model->summary(p.model->initial_state()), ignored));
+  Measured m;
+  {
+    py::gil_scoped_release released;
+    p.control.sink = [&](double t, const Eigen::VectorXd& sample) {
+      raise_if_signalled_released();
+      std::string problem;
+      table.push_back(rows.row(t, sample, problem));
+      return problem;
+    };
+    m = run_and_measure(*p.model, p.method, p.control, p.t_end, p.output_dt);
+    if (const auto last = rows.stop_row(m, std::get<double>(table.back().front()))) table.push_back(*last);
+  }
+  const auto columns = static_cast<py::ssize_t>(rows.columns().size());
+  py::array_t<double> values({columns, static_cast<py::ssize_t>(table.size())});
+  auto v = values.mutable_unchecked<2>();
+  for (size_t k = 0; k < table.size(); ++k)
+    for (py::ssize_t i = 0; i < columns; ++i) v(i, static_cast<py::ssize_t>(k)) = std::get<double>(table[k][static_cast<size_t>(i)]);
+  py::dict d;
+  d["columns"] = rows.columns();
+  d["values"] = values;
+  d["summary"] = summary_text(p, m);
+  return d;
+}
+
+// a study's or the advice's Table as {column: numpy array (numbers) or list (text)}
+py::dict table_dict(const Table& table) {
+  py::dict d;
+  for (size_t c = 0; c < table.columns.size(); ++c) {
+    const bool numbers = std::all_of(table.rows.begin(), table.rows.end(), [c](const auto& row) { return !std::holds_alternative<std::string>(row[c]); });
+    if (numbers) {
+      std::vector<double> v;
+      for (const auto& row : table.rows) v.push_back(std::visit([](const auto& x) -> double {
+        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, std::string>) return 0;
+        else return static_cast<double>(x);
+      }, row[c]));
+      d[py::str(table.columns[c])] = vector_array(v);
+    } else {
+      py::list l;
+      for (const auto& row : table.rows) l.append(std::holds_alternative<std::string>(row[c]) ? py::cast(std::get<std::string>(row[c])) : py::none());
+      d[py::str(table.columns[c])] = l;
+    }
+  }
+  return d;
+}
+
+py::object optional_number(const std::optional<double>& v) { return v ? py::cast(*v) : py::none(); }
+
+py::dict advise_scene(const std::string& scene, double error, double budget, const std::map<std::string, double>& sets, int threads) {
+  if (!(error > 0) || !std::isfinite(error)) throw py::value_error(fmt::format("error must be a positive number, not {}", error));
+  if (!(budget > 0) || !std::isfinite(budget)) throw py::value_error(fmt::format("budget must be a positive number of seconds, not {}", budget));
+  const RunOptions o = run_options(scene, sets);
+  Advice a;
+  std::string markdown;
+  AdviceTables tables;
+  {
+    py::gil_scoped_release released;
+    const StudyScene s = user_study_scene(o);
+    a = advise(s, error, budget, threads_or_default(threads));
+    markdown = advice_markdown(a, fmt::format("stepwise.advise({:?}, error={})", scene, error), "#");
+    tables = advice_tables({a});
+  }
+  py::list candidates;
+  for (const Candidate& c : a.candidates) {
+    py::dict d;
+    d["method"] = c.method;
+    d["status"] = c.status;
+    d["reason"] = c.reason;
+    d["setting"] = c.cheapest ? py::cast(c.cheapest->setting()) : py::none();
+    d["error"] = c.cheapest ? optional_number(c.cheapest->error) : py::none();
+    d["cpu_seconds"] = c.cheapest ? py::cast(c.cheapest->cpu_seconds) : py::none();
+    d["predicted_stable_dt"] = optional_number(c.predicted_stable_dt);
+    d["searched_stable_dt"] = optional_number(c.searched_stable_dt);
+    candidates.append(d);
+  }
+  py::dict d;
+  d["scene"] = a.scene;
+  d["error"] = a.target;
+  d["advised"] = a.candidates.empty() || a.candidates.front().status != "advised" ? py::none() : py::cast(a.candidates.front().method);
+  d["candidates"] = candidates;
+  d["stiff"] = a.stiff;
+  d["stiffness"] = a.stiffness;
+  d["reference"] = a.reference;
+  d["elapsed_seconds"] = a.elapsed_seconds;
+  d["markdown"] = markdown;
+  d["sweep"] = table_dict(tables.sweep);
+  return d;
+}
+
+// the studies that take a scene of the user's (`stepwise study NAME --scene FILE`)
+py::dict study_scene(const std::string& name, const std::string& scene, const std::map<std::string, double>& sets, bool quick, int threads) {
+  const auto& all = studies();
+  const auto study = std::find_if(all.begin(), all.end(), [&](const Study& s) { return s.name == name; });
+  constexpr std::string_view takes_scene[] = {"work-precision", "convergence", "stability-regions", "energy"};
+  if (study == all.end() || std::find(std::begin(takes_scene), std::end(takes_scene), name) == std::end(takes_scene))
+    throw py::value_error(fmt::format("study: \"{}\" is not a study that takes a scene (those that do: {})", name, fmt::join(takes_scene, ", ")));
+  const RunOptions o = run_options(scene, sets);
+  StudyOutput out;
+  {
+    py::gil_scoped_release released;
+    const std::vector<StudyScene> scenes{user_study_scene(o)};
+    if (name == "energy")
+      if (const auto model = scene_model(scenes.front()); !model->energy(model->initial_state()))
+        throw InputError(fmt::format("{} has no energy formula (energy = \"...\" above its first table) for the energy study", o.scene_file));
+    StudyContext ctx{quick, threads_or_default(threads), nullptr};
+    ctx.distribute = false;
+    ctx.scenes = &scenes;
+    out = study->run(ctx);
+  }
+  py::dict tables;
+  for (const auto& [stem, table] : out.tables) tables[py::str(stem)] = table_dict(table);
+  py::dict d;
+  d["tables"] = tables;
+  d["markdown"] = out.markdown;
+  return d;
+}
+
+py::list method_list() {
+  py::list l;
+  for (const Method& m : methods()) {
+    py::dict d;
+    d["name"] = std::string(m.name);
+    d["family"] = std::string(m.family);
+    d["source"] = std::string(m.source);
+    d["description"] = std::string(m.description);
+    d["order"] = std::string(m.order.text);
+    d["order_min"] = m.order.min;
+    d["order_max"] = m.order.max;
+    d["stepping"] = m.stepping == Stepping::fixed ? "fixed" : m.stepping == Stepping::adaptive ? "adaptive" : "fixed or adaptive";
+    d["needs"] = std::string(m.needs.what);
+    l.append(d);
+  }
+  return l;
+}
+
+}  // namespace
+}  // namespace stepwise
+
+PYBIND11_MODULE(_stepwise, m) {
+  using namespace stepwise;
+  m.doc() = "stepwise's compiled half; use the package `stepwise` (python/stepwise/__init__.py)";
+  // the command line's exit-2 errors are Python's ValueError, with the same message
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const BadMethod& e) {
+      PyErr_SetString(PyExc_ValueError, fmt::format("method: {}", e.what()).c_str());
+    }
+  });
+  m.def("version", [] { return std::string(version()); });
+  m.def("methods", &method_list);
+  m.def("solve", &solve, py::arg("fun"), py::arg("t0"), py::arg("t1"), py::arg("y0"), py::arg("method"), py::arg("rtol"), py::arg("atol"), py::arg("dt"),
+        py::arg("max_step"), py::arg("t_eval"), py::arg("jac"), py::arg("max_steps"));
+  m.def("run", &run, py::arg("scene"), py::arg("method"), py::arg("dt"), py::arg("rtol"), py::arg("atol"), py::arg("t_end"), py::arg("output_dt"), py::arg("set"),
+        py::arg("max_steps"));
+  m.def("advise", &advise_scene, py::arg("scene"), py::arg("error"), py::arg("budget"), py::arg("set"), py::arg("threads"));
+  m.def("study", &study_scene, py::arg("name"), py::arg("scene"), py::arg("set"), py::arg("quick"), py::arg("threads"));
+  py::class_<Equations>(m, "Equations", "a system written as equations: parsed, differentiated and compiled once (models/equations.hpp)")
+      .def(py::init(&make_python_equations), py::arg("equations"), py::arg("parameters") = std::map<std::string, double>{}, py::arg("initial") = py::none(),
+           py::arg("energy") = py::none(), py::arg("exact") = py::none(), py::arg("compile") = true)
+      .def_static("from_scene", &equations_from_scene, py::arg("file"), py::arg("compile") = true)
+      .def_property_readonly("variables", [](const Equations& e) { return e.spec().variables; })
+      .def_property_readonly("parameters", [](const Equations& e) { return std::map<std::string, double>(e.spec().parameters.begin(), e.spec().parameters.end()); })
+      .def_property_readonly("compiled", [](const Equations& e) { return equations_evaluation(e.model())->compiled; })
+      .def_property_readonly("evaluation", [](const Equations& e) { return equations_evaluation(e.model())->detail; })
+      .def("__repr__", [](const Equations& e) { return fmt::format("stepwise.Equations(variables=[{}])", fmt::join(e.spec().variables, ", ")); });
+}
