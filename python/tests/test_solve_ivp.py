@@ -1,0 +1,231 @@
+"""stepwise.solve_ivp: SciPy's signature and result, every method against an exact solution and against SciPy,
+compiled equations, and what bad input, a raising fun and Ctrl-C do."""
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+import scipy.integrate
+
+import stepwise
+from conftest import tolerance
+
+# the harmonic oscillator x' = v, v' = -x from (1, 0): x = cos t, v = -sin t
+T = 2.0
+
+
+def oscillator(t, y):
+    return [y[1], -y[0]]
+
+
+def exact(t):
+    return np.array([np.cos(t), -np.sin(t)])
+
+
+PLAIN = [m for m in stepwise.methods() if not m["needs"]]
+ADAPTIVE = [m["name"] for m in PLAIN if m["stepping"] != "fixed"]
+ORDER = {m["name"]: m["order_min"] for m in PLAIN}
+FIXED = [m for m in PLAIN if m["stepping"] != "adaptive"]
+
+
+def test_result_has_scipys_attributes():
+    sol = stepwise.solve_ivp(oscillator, (0, T), [1.0, 0.0])
+    ref = scipy.integrate.solve_ivp(oscillator, (0, T), [1.0, 0.0])
+    for name in ("t", "y", "sol", "t_events", "y_events", "nfev", "njev", "nlu", "status", "message", "success"):
+        assert hasattr(sol, name), name
+        assert hasattr(ref, name), name
+    assert sol.y.shape == (2, len(sol.t))
+    assert sol.success and sol.status == 0 and sol.t[0] == 0 and sol.t[-1] == T
+    assert sol.nfev == sol.stats["rhs_evals"] > 0
+
+
+@pytest.mark.parametrize("method", ADAPTIVE)
+def test_adaptive_method_meets_its_tolerance(method):
+    """a code controlling the error per step of an order-p solution to rtol takes steps h ~ rtol^(1/(p+1)), and
+    their errors add to ~ rtol^(p/(p+1)) over unit times on a unit-Lipschitz problem (the tolerance slope
+    p/(p+1) of min_tolerance_slope); within adaptive_agreement_factor of that (measured: 1e-5 to 0.4 of it)"""
+    rtol = 1e-6
+    sol = stepwise.solve_ivp(oscillator, (0, T), [1.0, 0.0], method=method, rtol=rtol, atol=rtol * 1e-3)
+    assert sol.success, sol.message
+    err = np.max(np.abs(sol.y[:, -1] - exact(T)))
+    p = max(ORDER[method], 1)
+    assert err <= tolerance("adaptive_agreement_factor") * rtol ** (p / (p + 1)), f"{method}: error {err:.2e}"
+
+
+@pytest.mark.parametrize("method", [m for m in FIXED if m["stepping"] == "fixed"], ids=lambda m: m["name"])
+def test_fixed_step_method_converges_at_its_order(method):
+    """the fixed-step methods (the adaptive ones' fixed steps are verified in C++, test_order): error against dt
+    over four halvings, the least-squares slope is the method's order within order_band"""
+    dts = [T / 32 / 2**k for k in range(4)]
+    errs = []
+    for dt in dts:
+        sol = stepwise.solve_ivp(oscillator, (0, T), [1.0, 0.0], method=method["name"], dt=dt)
+        assert sol.success, sol.message
+        errs.append(np.max(np.abs(sol.y[:, -1] - exact(T))))
+    assert tolerance("roundoff_floor") < min(errs) and max(errs) < tolerance("asymptotic_ceiling"), errs
+    slope = np.polyfit(np.log(dts), np.log(errs), 1)[0]
+    assert abs(slope - method["order_min"]) <= tolerance("order_band"), f"{method['name']}: order {slope:.3f}, errors {errs}"
+
+
+def test_agrees_with_scipy_to_the_tolerance():
+    """Van der Pol mu = 1 to t = 10: stepwise at rtol 1e-8 against SciPy's DOP853 at 1e-12"""
+    def vdp(t, y):
+        return [y[1], (1 - y[0] ** 2) * y[1] - y[0]]
+    t_eval = np.linspace(0, 10, 11)
+    ref = scipy.integrate.solve_ivp(vdp, (0, 10), [2.0, 0.0], method="DOP853", rtol=1e-12, atol=1e-14, t_eval=t_eval)
+    for method in ("verner98", "RK45", "BDF", "rodas5"):
+        rtol = 1e-8
+        sol = stepwise.solve_ivp(vdp, (0, 10), [2.0, 0.0], method=method, rtol=rtol, atol=rtol * 1e-2, t_eval=t_eval)
+        assert np.array_equal(sol.t, ref.t)
+        err = np.max(np.abs(sol.y - ref.y))
+        assert err <= tolerance("adaptive_agreement_factor") * rtol * np.max(np.abs(ref.y)), f"{method}: {err:.2e}"
+
+
+def test_t_eval_and_backwards():
+    t_eval = np.linspace(0, T, 9)
+    sol = stepwise.solve_ivp(oscillator, (0, T), [1.0, 0.0], t_eval=t_eval, rtol=1e-10, atol=1e-12)
+    assert np.array_equal(sol.t, t_eval)
+    assert np.max(np.abs(sol.y - exact(t_eval))) <= tolerance("adaptive_agreement_factor") * 1e-10
+    back = stepwise.solve_ivp(oscillator, (T, 0), sol.y[:, -1], t_eval=t_eval[::-1], rtol=1e-10, atol=1e-12)
+    assert np.array_equal(back.t, t_eval[::-1])
+    assert np.max(np.abs(back.y[:, -1] - [1.0, 0.0])) <= 2 * tolerance("adaptive_agreement_factor") * 1e-10
+
+
+def test_jacobian_is_used():
+    jac = np.array([[0.0, 1.0], [-1.0, 0.0]])
+    sol = stepwise.solve_ivp(oscillator, (0, T), [1.0, 0.0], method="rodas5", jac=jac, rtol=1e-8, atol=1e-10)
+    fd = stepwise.solve_ivp(oscillator, (0, T), [1.0, 0.0], method="rodas5", rtol=1e-8, atol=1e-10)
+    assert sol.njev > 0 and sol.nfev < fd.nfev  # no calls of fun spent on differences
+    assert np.max(np.abs(sol.y[:, -1] - exact(T))) <= tolerance("adaptive_agreement_factor") * 1e-8
+
+
+def test_args_pass_through():
+    sol = stepwise.solve_ivp(lambda t, y, k: -k * y, (0, 1), [1.0], args=(2.0,), rtol=1e-10, atol=1e-12)
+    assert abs(sol.y[0, -1] - np.exp(-2)) <= tolerance("adaptive_agreement_factor") * 1e-10
+
+
+# compiled equations: no Python in the loop
+
+PENDULUM = {"x": "v", "v": "-g/L*sin(x)"}
+
+
+def test_equations_agree_with_the_same_python_fun():
+    eq = stepwise.Equations(PENDULUM, parameters={"g": 9.81, "L": 1.0})
+    assert eq.variables == ["x", "v"] and eq.compiled, eq.evaluation
+    fun = lambda t, y: [y[1], -9.81 * np.sin(y[0])]  # noqa: E731
+    # explicit methods: the same steps on the same f (a Newton method would differ by its Jacobian, exact against
+    # differences of fun)
+    for method in ("verner98", "gsl-rk8pd", "odeint-dopri5"):
+        a = stepwise.solve_ivp(eq, (0, 10), [2.9, 0.0], method=method, rtol=1e-10, atol=1e-12)
+        b = stepwise.solve_ivp(fun, (0, 10), [2.9, 0.0], method=method, rtol=1e-10, atol=1e-12)
+        # the same formula evaluated by C and by numpy: a few ulps a call, summed over the run
+        assert np.max(np.abs(a.y - b.y)) <= tolerance("equations_run_roundoff") * 1e3, method
+    # second order: symplectic-euler applies to the equations, not to a Python fun
+    assert stepwise.solve_ivp(eq, (0, 1), [1.0, 0.0], method="symplectic-euler", dt=1e-3).success
+    with pytest.raises(ValueError, match="symplectic-euler"):
+        stepwise.solve_ivp(fun, (0, 1), [1.0, 0.0], method="symplectic-euler", dt=1e-3)
+
+
+def test_equations_from_a_scene_file():
+    from conftest import scene
+    eq = stepwise.Equations.from_scene(scene("lorenz"))
+    assert eq.variables == ["x", "y", "z"]
+    with pytest.raises(ValueError, match="not \"equations\""):
+        stepwise.Equations.from_scene(scene("pendulum"))
+
+
+def test_equations_errors_name_the_formula():
+    with pytest.raises(ValueError, match="equations.v"):
+        stepwise.Equations({"x": "v", "v": "-g*sinn(x)"}, parameters={"g": 1.0})
+    eq = stepwise.Equations(PENDULUM, parameters={"g": 9.81, "L": 1.0})
+    with pytest.raises(ValueError, match="2 variables"):
+        stepwise.solve_ivp(eq, (0, 1), [1.0, 0.0, 0.0])
+
+
+def test_gil_is_released_while_compiled_equations_run():
+    eq = stepwise.Equations(PENDULUM, parameters={"g": 9.81, "L": 1.0})
+    done = []
+    worker = threading.Thread(target=lambda: done.append(stepwise.solve_ivp(eq, (0, 2000), [2.9, 0.0], rtol=1e-13, atol=1e-15)))
+    worker.start()
+    beats = 0
+    while worker.is_alive():
+        beats += 1
+        time.sleep(0.001)
+    assert done and done[0].success
+    assert beats >= 10, f"the main thread ran {beats} times while the solve ran"
+
+
+# bad input: a clear exception, never a crash
+
+@pytest.mark.parametrize("kwargs, error, text", [
+    (dict(y0=[[1.0, 0.0]]), ValueError, "1-dimensional"),
+    (dict(method="no-such-method"), ValueError, "unknown method"),
+    (dict(method="DOP853"), ValueError, "gsl-rk8pd"),
+    (dict(rtol=-1.0), ValueError, "rtol"),
+    (dict(rtol=float("nan")), ValueError, "rtol"),
+    (dict(atol=[1e-6, 1e-6]), ValueError, "atol"),
+    (dict(t_span=(1.0, 1.0)), ValueError, "zero length"),
+    (dict(method="rk4"), ValueError, "dt="),
+    (dict(t_eval=[0.5, 0.2]), ValueError, "sorted"),
+    (dict(t_eval=[3.0]), ValueError, "within"),
+    (dict(fun=lambda t, y: [1.0, 2.0, 3.0]), ValueError, r"shape \(3,\)"),
+    (dict(fun=lambda t, y: [np.nan, 0.0]), ValueError, "not finite"),
+    (dict(fun=lambda t, y: "no"), TypeError, "real numbers"),
+    (dict(fun=42), TypeError, "callable"),
+    (dict(y0=[1j, 0]), TypeError, "complex"),
+    (dict(dense_output=True), ValueError, "t_eval"),
+    (dict(nonsense=1), TypeError, "nonsense"),
+])
+def test_bad_input_raises(kwargs, error, text):
+    args = dict(fun=oscillator, t_span=(0, 1), y0=[1.0, 0.0])
+    args.update(kwargs)
+    with pytest.raises(error, match=text):
+        stepwise.solve_ivp(**args)
+
+
+class Raised(Exception):
+    pass
+
+
+@pytest.mark.parametrize("method", ADAPTIVE + [m["name"] for m in FIXED if m["stepping"] == "fixed"])
+def test_an_exception_in_fun_propagates_from_every_method(method):
+    calls = [0]
+
+    def fun(t, y):
+        calls[0] += 1
+        if calls[0] == 40:
+            raise Raised("from fun")
+        return [y[1], -y[0]]
+
+    dt = None if method in ADAPTIVE else 1e-3
+    with pytest.raises(Raised) as info:
+        stepwise.solve_ivp(fun, (0, 10), [1.0, 0.0], method=method, dt=dt)
+    assert any("t = " in note for note in getattr(info.value, "__notes__", [])), info.value
+    # and the interpreter goes on
+    assert stepwise.solve_ivp(oscillator, (0, 1), [1.0, 0.0], method=method, dt=dt).success
+
+
+def test_ctrl_c_stops_a_python_solve():
+    calls = [0]
+
+    def fun(t, y):
+        calls[0] += 1
+        if calls[0] == 100:
+            os.kill(os.getpid(), signal.SIGINT)
+        return [y[1], -y[0]]
+
+    with pytest.raises(KeyboardInterrupt):
+        stepwise.solve_ivp(fun, (0, 1e6), [1.0, 0.0], rtol=1e-12, atol=1e-14)
+    assert calls[0] <= 101
+
+
+def test_ctrl_c_stops_a_compiled_solve():
+    eq = stepwise.Equations(PENDULUM, parameters={"g": 9.81, "L": 1.0})
+    timer = threading.Timer(0.2, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        stepwise.solve_ivp(eq, (0, 1e9), [2.9, 0.0], rtol=1e-13, atol=1e-15)
+    assert time.monotonic() - start < 5
