@@ -1,0 +1,81 @@
+"""stepwise.run, advise, study and methods against the command line: the same numbers, to the bit."""
+import csv
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import stepwise
+from conftest import BINARY, scene, tolerance
+
+
+def test_methods_are_the_command_lines_table():
+    cli = json.loads(subprocess.run([BINARY, "methods", "--json"], capture_output=True, text=True, check=True).stdout)
+    ours = stepwise.methods()
+    assert [m["name"] for m in ours] == [m["name"] for m in cli]
+    for a, b in zip(ours, cli):
+        assert (a["family"], a["source"], a["order"]) == (b["family"], b["source"], b["order"])
+        assert (a["stepping"] != "adaptive") == b["fixed_step"] and (a["stepping"] != "fixed") == b["adaptive"]
+
+
+@pytest.mark.parametrize("name, args", [
+    ("pendulum", dict(method="rk4", dt=1e-3)),
+    ("pendulum", dict(method="cvode-bdf", rtol=1e-8, atol=1e-10)),
+    ("pendulum-equations", dict(method="verner98", rtol=1e-9, atol=1e-12)),
+    ("van-der-pol", dict(method="gsl-rk8pd", rtol=1e-8, atol=1e-10, set={"mu": 2.0})),
+    ("bouncing-ball", dict(method="tsitouras54", rtol=1e-8, atol=1e-10)),
+])
+def test_run_equals_the_command_line_bit_for_bit(tmp_path, name, args):
+    r = stepwise.run(scene(name), **args)
+    cmd = [BINARY, "run", scene(name), "--out", str(tmp_path)]
+    for key in ("method", "dt", "rtol", "atol"):
+        if key in args:
+            cmd += [f"--{key}", args[key] if key == "method" else repr(args[key])]
+    for key, value in args.get("set", {}).items():
+        cmd += ["--set", f"{key}={value!r}"]
+    subprocess.run(cmd, check=True, capture_output=True)
+    with open(tmp_path / "trajectory.csv") as f:
+        rows = list(csv.reader(f))
+    # 17 significant digits read back exactly
+    table = np.array([[float(v) for v in row] for row in rows[1:]]).T
+    assert rows[0] == r.columns
+    assert np.array_equal(table[0], r.t)
+    values = np.vstack([r.y] + ([r.energy] if r.energy is not None else []))
+    assert np.array_equal(table[1:], values)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    for key in ("status", "steps", "rejected", "rhs_evals", "jac_evals", "final_state", "error", "events", "parameters"):
+        assert summary[key] == r.summary[key], key
+
+
+def test_run_by_name_and_bad_input():
+    assert stepwise.run("pendulum", t_end=0.5).summary["scene"] == "pendulum"
+    with pytest.raises(ValueError, match="no-such-scene"):
+        stepwise.run("no-such-scene")
+    with pytest.raises(ValueError, match="dt"):
+        stepwise.run("pendulum", dt=-1.0)
+    with pytest.raises(ValueError, match="nonsense"):
+        stepwise.run("pendulum", set={"nonsense": 1.0})
+
+
+def test_advise_meets_the_error_asked():
+    a = stepwise.advise(scene("van-der-pol"), error=1e-6, budget=4)
+    assert a["advised"] in {m["name"] for m in stepwise.methods()}
+    best = a["candidates"][0]
+    assert best["method"] == a["advised"] and best["status"] == "advised"
+    assert best["error"] <= 1e-6
+    assert a["markdown"].startswith("#")
+    assert len(a["sweep"]["method"]) == len(a["sweep"]["cpu_seconds"]) > 0
+
+
+def test_study_convergence_on_a_scene():
+    out = stepwise.study("convergence", scene("damped-oscillator"), quick=True, threads=1)
+    assert out["markdown"]
+    orders = out["tables"]["convergence_orders"]
+    # every fixed-step method's observed order on the user's scene: its documented one within order_band
+    for method, documented, observed in zip(orders["method"], orders["documented_order"], orders["observed_order"]):
+        if method in ("rk4", "euler", "odeint-rk4"):
+            assert abs(observed - documented) <= tolerance("order_band"), (method, observed)
+    assert "rk4" in orders["method"]
+    with pytest.raises(ValueError, match="takes a scene"):
+        stepwise.study("cloth", scene("damped-oscillator"))
