@@ -4,10 +4,13 @@
 // candidate runs at rtol = atol = 10^(-k/2), k = 2..24 (from 0.1: a method whose error estimate is cautious
 // reaches a loose target from a loose tolerance, as a user would set it; the grid began at 1e-3 until
 // 2026-11-25, which had tsitouras54 at 1e-3 reach 1e-4 with a hundredfold to spare); its error (max over the
-// state at t_end against the exact solution) is measured once, its CPU time by Google Benchmark. Then, per error target from 1e-4 to
-// 1e-10, the cheapest setting of each side that reaches it (times: medians where run with
-// --benchmark_repetitions, as docs/performance.md's figures are):
-//   error 1e-06: stepwise <method> <setting> <us> us, peer <name> <setting> <us> us, ratio <r>
+// state at t_end against the exact solution) is measured once, its CPU time by Google Benchmark. Every solve is
+// timed whole, as a user's program makes it: stepwise's integrator constructed by name (make_integrator) for
+// each solve, the peers' steppers, drivers and CVODE's memory likewise. Then, per error target from 1e-4 to 1e-10,
+// each candidate's cost at that error read off its own work-precision curve (log-log interpolation between the
+// two tolerances whose errors bracket it; the cheapest point reaching it where the curve is not monotone there),
+// and each side's best (times: medians where run with --benchmark_repetitions, as docs/performance.md's are):
+//   error 1e-06: stepwise <method> <us> us, peer <name> <us> us, ratio <r>
 #include "models/model.hpp"
 #include "solvers/method_table.hpp"
 
@@ -152,10 +155,12 @@ void register_problem(const Problem<N>& p) {
                   fmt::format("{}/{}/{:.1e}", p.label, method, tol)};
       benchmark::RegisterBenchmark(point.benchmark.c_str(), [&p, method, tol](benchmark::State& state) {
         const auto m = stepwise::make_model(p.model, p.params);
-        const auto integ = stepwise::make_integrator(method, stepwise::StepControl::adaptive(tol, tol));
         const Eigen::VectorXd start = m->initial_state();
         const std::vector<double> t_out{p.t_end};
-        for (auto _ : state) benchmark::DoNotOptimize(integ->solve(*m, 0, start, t_out).y_stop[0]);
+        // constructed by name for each solve, as a user's program does; solve(), the untimed call (integrate()
+        // adds two reads of the thread CPU clock, ~1.1 us, for the stats' cpu_seconds)
+        for (auto _ : state)
+          benchmark::DoNotOptimize(stepwise::make_integrator(method, stepwise::StepControl::adaptive(tol, tol))->solve(*m, 0, start, t_out).y_stop[0]);
       })->MinTime(min_time);
       points.push_back(std::move(point));
     }
@@ -170,6 +175,43 @@ void register_problem(const Problem<N>& p) {
       points.push_back(std::move(point));
     }
   }
+}
+
+// the per-solve cost at equal calls: the pendulum as a user's own OdeSystem (a virtual rhs on Eigen vectors, as
+// examples/cpp writes one), 100 rk4 steps (400 calls) made by name for each solve, against odeint's rk4 over
+// integrate_n_steps on a std::array with the same f
+struct UserPendulum : stepwise::OdeSystem {
+  int size() const override { return 2; }
+  bool autonomous() const override { return true; }
+  void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) const override {
+    f[0] = y[1];
+    f[1] = -g * std::sin(y[0]);
+  }
+};
+
+void register_per_solve() {
+  const double theta0 = 170 * std::numbers::pi / 180, dt = pendulum.t_end / 100;
+  for (const bool timed : {false, true})
+    benchmark::RegisterBenchmark(timed ? "per-solve/stepwise rk4, integrate()" : "per-solve/stepwise rk4, solve()", [=](benchmark::State& state) {
+      const UserPendulum system;
+      const Eigen::Vector2d y0(theta0, 0);
+      const std::vector<double> t_out{pendulum.t_end};
+      for (auto _ : state) {
+        const auto integrator = stepwise::make_integrator("rk4", stepwise::StepControl::fixed(dt));
+        benchmark::DoNotOptimize((timed ? integrator->integrate(system, 0, y0, t_out) : integrator->solve(system, 0, y0, t_out)).y_stop[0]);
+      }
+    })->MinTime(min_time);
+  benchmark::RegisterBenchmark("per-solve/odeint rk4", [=](benchmark::State& state) {
+    const auto f = [](const State<2>& x, State<2>& dxdt, double) {  // the same f, written where odeint can inline it
+      dxdt[0] = x[1];
+      dxdt[1] = -g * std::sin(x[0]);
+    };
+    for (auto _ : state) {
+      State<2> y{theta0, 0};
+      odeint::integrate_n_steps(odeint::runge_kutta4<State<2>>(), f, y, 0.0, dt, 100);
+      benchmark::DoNotOptimize(y[0]);
+    }
+  })->MinTime(min_time);
 }
 
 // the usual table, then per problem and error target the cheapest setting of each side and their ratio
@@ -191,30 +233,57 @@ class WorkPrecisionReporter : public benchmark::ConsoleReporter {
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
+    if (cpu_.contains("per-solve/odeint rk4")) {
+      const double peer = cpu_.at("per-solve/odeint rk4");
+      std::printf("per solve, 400 calls (100 rk4 steps) on a user's own OdeSystem, made by name each solve: odeint rk4 %.2f us\n", peer);
+      for (const char* name : {"per-solve/stepwise rk4, solve()", "per-solve/stepwise rk4, integrate()"})
+        if (cpu_.contains(name)) std::printf("  %s %.2f us: %+.2f us\n", name + 10, cpu_.at(name), cpu_.at(name) - peer);
+    }
     for (const char* problem : {pendulum.label, flow.label, projectile.label}) {
       std::printf("%s\n", problem);
       for (int e = 4; e <= 10; ++e) {
         const double target = std::pow(10.0, -e);
-        const Point *own = cheapest(problem, "stepwise", target), *peer = cheapest(problem, "peer", target);
-        if (!own || !peer) {
-          std::printf("error 1e-%02d: %s\n", e, own ? "no peer setting reaches it" : "no stepwise setting reaches it");
+        const auto [own, a] = best(problem, "stepwise", target);
+        const auto [peer, b] = best(problem, "peer", target);
+        if (own.empty() || peer.empty()) {
+          std::printf("error 1e-%02d: %s\n", e, own.empty() ? "no stepwise setting reaches it" : "no peer setting reaches it");
           continue;
         }
-        const double a = cpu_.at(own->benchmark), b = cpu_.at(peer->benchmark);
-        std::printf("error 1e-%02d: stepwise %s tol %.1e %.1f us, peer %s tol %.1e %.1f us, ratio %.3f\n", e, own->name.c_str(), own->tol, a,
-                    peer->name.c_str(), peer->tol, b, a / b);
+        std::printf("error 1e-%02d: stepwise %s %.2f us, peer %s %.2f us, ratio %.3f\n", e, own.c_str(), a, peer.c_str(), b, a / b);
       }
     }
   }
 
  private:
-  const Point* cheapest(const std::string& problem, const std::string& side, double target) const {
-    const Point* best = nullptr;
+  // a candidate's cost at error `target` on its own curve: its points in the order of decreasing tolerance,
+  // interpolated in log-log between the first successive pair whose errors bracket the target; where no pair
+  // does (a curve that jumps past it), its cheapest point reaching it. Infinite where none does
+  double cost_at(const std::string& problem, const std::string& name, double target) const {
+    std::vector<std::pair<double, double>> curve;  // (error, us)
     for (const auto& p : points)
-      if (p.problem == problem && p.side == side && p.error <= target && cpu_.contains(p.benchmark) &&
-          (!best || cpu_.at(p.benchmark) < cpu_.at(best->benchmark)))
-        best = &p;
-    return best;
+      if (p.problem == problem && p.name == name && std::isfinite(p.error) && p.error > 0 && cpu_.contains(p.benchmark))
+        curve.emplace_back(p.error, cpu_.at(p.benchmark));
+    for (size_t k = 0; k + 1 < curve.size(); ++k) {
+      const auto [e1, c1] = curve[k];
+      const auto [e2, c2] = curve[k + 1];
+      if (e1 >= target && target >= e2 && e1 > e2) {
+        const double w = std::log(e1 / target) / std::log(e1 / e2);
+        return std::exp(std::log(c1) + w * std::log(c2 / c1));
+      }
+    }
+    double cheapest = INFINITY;
+    for (const auto& [e, c] : curve)
+      if (e <= target) cheapest = std::min(cheapest, c);
+    return cheapest;
+  }
+  std::pair<std::string, double> best(const std::string& problem, const std::string& side, double target) const {
+    std::pair<std::string, double> found{"", INFINITY};
+    std::set<std::string> names;
+    for (const auto& p : points)
+      if (p.problem == problem && p.side == side) names.insert(p.name);
+    for (const auto& name : names)
+      if (const double c = cost_at(problem, name, target); c < found.second) found = {name, c};
+    return found;
   }
   std::map<std::string, double> cpu_;
   std::set<std::string> medians_;
@@ -226,6 +295,7 @@ int main(int argc, char** argv) {
   gsl_set_error_handler_off();
   benchmark::Initialize(&argc, argv);
   points.reserve(3 * 23 * 9);
+  register_per_solve();
   register_problem(pendulum);
   register_problem(flow);
   register_problem(projectile);

@@ -105,6 +105,10 @@ _SCIPY_NO_EFFECT = {"first_step", "min_step", "jac_sparsity", "lband", "uband"}
 
 
 def _number(name, value):
+    if type(value) is float:  # the common case, checked first: a solve's own cost is a few microseconds
+        return value
+    if type(value) is int:
+        return float(value)
     if isinstance(value, (bool, np.bool_)) or not np.isscalar(value) or np.iscomplexobj(value):
         raise TypeError(f"{name} must be a real number, not {value!r}")
     try:
@@ -125,7 +129,7 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
     options = dict(options)
     rtol = _number("rtol", options.pop("rtol", 1e-3))
     atol = options.pop("atol", 1e-6)
-    if not np.isscalar(atol):
+    if type(atol) is not float and not np.isscalar(atol):
         raise ValueError("atol: stepwise's tolerance is one number for every component, not an array")
     atol = _number("atol", atol)
     jac = options.pop("jac", None)
@@ -133,11 +137,11 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
     dt = None if dt is None else _number("dt", dt)
     max_step = _number("max_step", options.pop("max_step", np.inf))
     max_steps = _number("max_steps", options.pop("max_steps", 5e6))
-    ignored = sorted(k for k in options if k in _SCIPY_NO_EFFECT)
-    unknown = sorted(k for k in options if k not in _SCIPY_NO_EFFECT)
-    if unknown:
-        raise TypeError(f"solve_ivp() got unexpected keyword arguments: {', '.join(unknown)}")
-    if ignored:
+    if options:
+        ignored = sorted(k for k in options if k in _SCIPY_NO_EFFECT)
+        unknown = sorted(k for k in options if k not in _SCIPY_NO_EFFECT)
+        if unknown:
+            raise TypeError(f"solve_ivp() got unexpected keyword arguments: {', '.join(unknown)}")
         warnings.warn(f"The following arguments have no effect for a chosen solver: {', '.join(ignored)}.", stacklevel=2)
     if dense_output:
         raise ValueError("dense_output: not offered by stepwise.solve_ivp; pass t_eval for the times you need")
@@ -170,14 +174,15 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
     except ValueError as e:
         raise ValueError(f"t_span must be two numbers (t0, t1), not {t_span!r}") from e
     y0 = np.asarray(y0)
-    if np.iscomplexobj(y0):
-        raise TypeError("y0: complex states are not supported; split them into real and imaginary parts")
+    if y0.dtype != np.float64:
+        if y0.dtype.kind == "c":
+            raise TypeError("y0: complex states are not supported; split them into real and imaginary parts")
+        try:
+            y0 = y0.astype(float)
+        except (TypeError, ValueError) as e:
+            raise TypeError(f"y0 must hold real numbers: {e}") from e
     if y0.ndim != 1:
         raise ValueError(f"`y0` must be 1-dimensional, not of shape {y0.shape}.")
-    try:
-        y0 = y0.astype(float)
-    except (TypeError, ValueError) as e:
-        raise TypeError(f"y0 must hold real numbers: {e}") from e
     if t_eval is not None:
         t_eval = np.asarray(t_eval, dtype=float)
         if t_eval.ndim != 1:

@@ -1,0 +1,153 @@
+#!/usr/bin/env python3
+"""stepwise.solve_ivp against scipy.integrate.solve_ivp, at equal error (issue 38).
+
+usage: PYTHONPATH=build/release/python /usr/bin/python3 bench/python_vs_scipy.py [--quick]
+
+Per problem (the pendulum at 170 degrees, Lorenz, Van der Pol mu = 1; Van der Pol mu = 1000 over one relaxation cycle, t = 2000, for the stiff
+methods against Radau, BDF and LSODA), each method is swept over rtol (thirds of a decade, atol = rtol 1e-3) and
+each solve timed (the best of several, wall clock on this otherwise idle machine) with its error at t_end
+against a reference (SciPy's DOP853, or Radau on the stiff problem, at rtol 1e-13). Each side's cost at an error
+E is read off its own work-precision curve (log-log interpolation between the two sweep points around E, not
+the nearest tolerance), its best method's; the ratio is SciPy's best over stepwise's best, for a Python fun and for
+the same equations compiled (stepwise.Equations). `fun share` is the time the Python fun alone takes for the
+calls stepwise's solve made (calls x the fun's own cost per call, timed in a loop), over the solve's time: what
+a compiled stepper cannot remove."""
+import argparse
+import math
+import sys
+import time
+
+import numpy as np
+import scipy.integrate
+
+import stepwise
+
+parser = argparse.ArgumentParser()
+parser.add_argument("--quick", action="store_true", help="fewer repeats and tolerances (a smoke run)")
+args = parser.parse_args()
+REPEATS = 1 if args.quick else 3
+ERRORS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9]
+
+
+def pendulum(t, y):
+    return np.array([y[1], -9.81 * np.sin(y[0])])
+
+
+def lorenz(t, y):
+    return np.array([10.0 * (y[1] - y[0]), y[0] * (28.0 - y[2]) - y[1], y[0] * y[1] - 8.0 / 3.0 * y[2]])
+
+
+def vdp(mu):
+    def f(t, y):
+        return np.array([y[1], mu * (1 - y[0] ** 2) * y[1] - y[0]])
+    return f
+
+
+def vdp_jac(mu):
+    def j(t, y):
+        return np.array([[0.0, 1.0], [-2 * mu * y[0] * y[1] - 1, mu * (1 - y[0] ** 2)]])
+    return j
+
+
+PROBLEMS = [
+    # name, fun, jac, equations, t_end, y0, stepwise methods, SciPy methods, reference method
+    ("pendulum 170 deg", pendulum, None, stepwise.Equations({"x": "v", "v": "-g*sin(x)"}, parameters={"g": 9.81}),
+     10.0, [math.radians(170), 0.0], ["verner98", "tsitouras54", "gsl-rk8pd"], ["RK45", "DOP853", "LSODA"], "DOP853"),
+    ("Lorenz", lorenz, None,
+     stepwise.Equations({"x": "s*(y-x)", "y": "x*(r-z)-y", "z": "x*y-b*z"}, parameters={"s": 10.0, "r": 28.0, "b": 8.0 / 3.0}),
+     2.0, [1.0, 1.0, 1.0], ["verner98", "tsitouras54", "gsl-rk8pd"], ["RK45", "DOP853", "LSODA"], "DOP853"),
+    ("Van der Pol mu=1", vdp(1.0), None, stepwise.Equations({"x": "v", "v": "mu*(1-x^2)*v-x"}, parameters={"mu": 1.0}),
+     10.0, [2.0, 0.0], ["verner98", "tsitouras54", "gsl-rk8pd"], ["RK45", "DOP853", "LSODA"], "DOP853"),
+    ("Van der Pol mu=1000 (stiff)", vdp(1000.0), vdp_jac(1000.0), stepwise.Equations({"x": "v", "v": "mu*(1-x^2)*v-x"}, parameters={"mu": 1000.0}),
+     2000.0, [2.0, 0.0], ["rodas5", "rodas4", "cvode-bdf", "gsl-bsimp"], ["Radau", "BDF", "LSODA"], "Radau"),
+]
+
+
+def timed(solve):
+    best, sol = math.inf, None
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        sol = solve()
+        best = min(best, time.perf_counter() - start)
+    return best, sol
+
+
+def sweep(solve, reference):
+    """[(error, seconds, nfev)] over rtol 1e-2 .. 1e-11 in thirds of a decade, stopping once an error is below
+    the smallest asked"""
+    points = []
+    for k in range(0, 28 if not args.quick else 28, 1 if not args.quick else 2):
+        rtol = 10 ** (-2 - k / 3)
+        seconds, sol = timed(lambda: solve(rtol))
+        if not sol.success:
+            continue
+        err = float(np.max(np.abs(sol.y[:, -1] - reference)))
+        points.append((err, seconds, sol.nfev))
+        if err < ERRORS[-1] / 3 or seconds > 5:
+            break
+    return points
+
+
+def cost_at(points, target):
+    """the cost at error `target` on the curve (log-log interpolation between the first pair of successive
+    points that brackets it), or None where the sweep never reached it"""
+    for (e1, c1, _), (e2, c2, _) in zip(points, points[1:]):
+        if e1 >= target >= e2 and e1 > e2:
+            w = (math.log(e1) - math.log(target)) / (math.log(e1) - math.log(e2))
+            return math.exp(math.log(c1) + w * (math.log(c2) - math.log(c1)))
+    if points and points[0][0] <= target:
+        return points[0][1]
+    return None
+
+
+def best(curves, target):
+    costs = {m: cost_at(p, target) for m, p in curves.items()}
+    costs = {m: c for m, c in costs.items() if c is not None}
+    return min(costs.items(), key=lambda mc: mc[1]) if costs else (None, None)
+
+
+def per_call(fun, y0):
+    n = 20000
+    y = np.array(y0, dtype=float)
+    start = time.perf_counter()
+    for _ in range(n):
+        fun(0.0, y)
+    return (time.perf_counter() - start) / n
+
+
+print(f"stepwise {stepwise.__version__}; SciPy {scipy.__version__}; NumPy {np.__version__}; repeats {REPEATS}")
+summary = []
+for name, fun, jac, equations, t_end, y0, ours, theirs, ref_method in PROBLEMS:
+    ref = scipy.integrate.solve_ivp(fun, (0, t_end), y0, method=ref_method, rtol=1e-13, atol=1e-15, jac=jac).y[:, -1]
+    scipy_curves = {m: sweep(lambda rtol, m=m: scipy.integrate.solve_ivp(fun, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3,
+                                                                        **({"jac": jac} if jac and m != "RK45" else {})), ref) for m in theirs}
+    python_curves = {m: sweep(lambda rtol, m=m: stepwise.solve_ivp(fun, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3, jac=jac), ref)
+                     for m in ours}
+    compiled_curves = {m: sweep(lambda rtol, m=m: stepwise.solve_ivp(equations, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3), ref)
+                       for m in ours}
+    call = per_call(fun, y0)
+    print(f"\n{name} (t_end {t_end}; the Python fun costs {call * 1e6:.2f} us a call)")
+    print(f"{'error':>7} | {'SciPy best':>22} | {'stepwise, Python fun':>24} {'ratio':>6} {'fun share':>9} | {'stepwise, compiled':>24} {'ratio':>7}")
+    for e in ERRORS:
+        sm, sc = best(scipy_curves, e)
+        pm, pc = best(python_curves, e)
+        cm, cc = best(compiled_curves, e)
+        if sc is None:
+            print(f"{e:7.0e} | SciPy's methods did not reach it")
+            continue
+        share = ""
+        if pm:
+            # the calls stepwise's best made near this error: interpolated like the cost
+            pts = python_curves[pm]
+            nfev = next((n for err, _, n in pts if err <= e), pts[-1][2])
+            share = f"{nfev * call / pc:9.0%}"
+        pr = f"{sc / pc:6.1f}" if pc else "     -"
+        cr = f"{sc / cc:7.0f}" if cc else "      -"
+        print(f"{e:7.0e} | {sm:>10} {sc * 1e3:9.3f} ms | {pm or '-':>12} {(pc or 0) * 1e3:8.3f} ms {pr} {share:>9} | {cm or '-':>12} {(cc or 0) * 1e3:8.4f} ms {cr}")
+        summary.append((name, e, sc / pc if pc else None, sc / cc if cc else None))
+
+python_ratios = [r for _, _, r, _ in summary if r]
+compiled_ratios = [r for _, _, _, r in summary if r]
+print(f"\nat equal error, SciPy's best / stepwise's best: Python fun {min(python_ratios):.1f}-{max(python_ratios):.1f}x, "
+      f"compiled equations {min(compiled_ratios):.0f}-{max(compiled_ratios):.0f}x")
+sys.exit(0)
