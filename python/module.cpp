@@ -18,6 +18,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 
@@ -36,6 +37,21 @@ void raise_if_signalled_released() {
   py::gil_scoped_acquire gil;
   raise_if_signalled();
 }
+
+// the same, at most once every 10 ms (the clock read is ~20 ns, taking the GIL back ~1 us): for the outputs of a
+// compiled solve, which may come every few steps
+class SignalCheck {
+ public:
+  void operator()() {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_ < std::chrono::milliseconds(10)) return;
+    last_ = now;
+    raise_if_signalled_released();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
 
 // a Python callable f(t, y) -> dy/dt (and jac(t, y) -> df/dy, or a constant matrix) as an OdeSystem, in s = sign t
 // (sign -1: a reversed t_span integrated forwards in s = -t, as every method steps forwards)
@@ -212,11 +228,11 @@ py::dict stats_dict(const Stats& s) {
   d["factorizations"] = s.factorizations;
   d["events"] = s.events;
   d["projections"] = s.projections;
-  d["cpu_seconds"] = s.cpu_seconds;
   return d;
 }
 
-// solve_ivp's compiled half: `fun` a Python callable or an Equations; t_eval, where given, sorted in the direction
+// solve_ivp's compiled half (the untimed solve(): a caller times it as it likes; the thread CPU clock's two reads
+// would add ~1 us a solve): `fun` a Python callable or an Equations; t_eval, where given, sorted in the direction
 // of integration and within t_span (checked here, SciPy's messages)
 py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<double, py::array::c_style | py::array::forcecast>& y0_array, const std::string& method_name, double rtol, double atol,
                std::optional<double> dt, double max_step, std::optional<std::vector<double>> t_eval, const py::object& jac, double max_steps) {
@@ -274,8 +290,8 @@ py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<do
     t_done.push_back(t0);
     y_done.push_back(y0);
   }
-  control.sink = [&t_done, &y_done, sign, released = equations != nullptr](double s, const Eigen::VectorXd& y) {
-    if (released) raise_if_signalled_released();
+  control.sink = [&t_done, &y_done, sign, released = equations != nullptr, check = SignalCheck()](double s, const Eigen::VectorXd& y) mutable {
+    if (released) check();
     else raise_if_signalled();
     t_done.push_back(sign * s);
     y_done.push_back(y);
@@ -287,9 +303,9 @@ py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<do
     r.y_stop = y0;
   } else if (equations) {
     py::gil_scoped_release released;
-    r = make_integrator(method->name, control)->integrate(*system, sign * t0, y0, s_out);
+    r = make_integrator(method->name, control)->solve(*system, sign * t0, y0, s_out);
   } else {
-    r = make_integrator(method->name, control)->integrate(*system, sign * t0, y0, s_out);
+    r = make_integrator(method->name, control)->solve(*system, sign * t0, y0, s_out);
   }
   py::dict d;
   d["t"] = vector_array(t_done);
@@ -336,8 +352,8 @@ py::dict run(const std::string& scene, const std::optional<std::string>& method,
   Measured m;
   {
     py::gil_scoped_release released;
-    p.control.sink = [&](double t, const Eigen::VectorXd& sample) {
-      raise_if_signalled_released();
+    p.control.sink = [&, check = SignalCheck()](double t, const Eigen::VectorXd& sample) mutable {
+      check();
       std::string problem;
       table.push_back(rows.row(t, sample, problem));
       return problem;
@@ -378,8 +394,6 @@ py::dict table_dict(const Table& table) {
   return d;
 }
 
-py::object optional_number(const std::optional<double>& v) { return v ? py::cast(*v) : py::none(); }
-
 py::dict advise_scene(const std::string& scene, double error, double budget, const std::map<std::string, double>& sets, int threads) {
   if (!(error > 0) || !std::isfinite(error)) throw py::value_error(fmt::format("error must be a positive number, not {}", error));
   if (!(budget > 0) || !std::isfinite(budget)) throw py::value_error(fmt::format("budget must be a positive number of seconds, not {}", budget));
@@ -394,28 +408,8 @@ py::dict advise_scene(const std::string& scene, double error, double budget, con
     markdown = advice_markdown(a, fmt::format("stepwise.advise({:?}, error={})", scene, error), "#");
     tables = advice_tables({a});
   }
-  py::list candidates;
-  for (const Candidate& c : a.candidates) {
-    py::dict d;
-    d["method"] = c.method;
-    d["status"] = c.status;
-    d["reason"] = c.reason;
-    d["setting"] = c.cheapest ? py::cast(c.cheapest->setting()) : py::none();
-    d["error"] = c.cheapest ? optional_number(c.cheapest->error) : py::none();
-    d["cpu_seconds"] = c.cheapest ? py::cast(c.cheapest->cpu_seconds) : py::none();
-    d["predicted_stable_dt"] = optional_number(c.predicted_stable_dt);
-    d["searched_stable_dt"] = optional_number(c.searched_stable_dt);
-    candidates.append(d);
-  }
   py::dict d;
-  d["scene"] = a.scene;
-  d["error"] = a.target;
-  d["advised"] = a.candidates.empty() || a.candidates.front().status != "advised" ? py::none() : py::cast(a.candidates.front().method);
-  d["candidates"] = candidates;
-  d["stiff"] = a.stiff;
-  d["stiffness"] = a.stiffness;
-  d["reference"] = a.reference;
-  d["elapsed_seconds"] = a.elapsed_seconds;
+  d["advice"] = advice_json_text(a, o.scene_file);
   d["markdown"] = markdown;
   d["sweep"] = table_dict(tables.sweep);
   return d;

@@ -365,23 +365,10 @@ AdviceTables advice_tables(const std::vector<Advice>& advices) {
   return t;
 }
 
-int advise_command(const AdviseOptions& o) {
-  // the inputs, before anything runs: the error, the budget, the scene as `stepwise run` checks it, the output
-  if (!(std::isfinite(o.error) && o.error > 0)) throw InputError(fmt::format("--error: must be a positive finite number, got {}", o.error));
-  if (!(std::isfinite(o.budget) && o.budget >= 1 && o.budget <= 86400))
-    throw InputError(fmt::format("--budget: must be between 1 and 86400 seconds, got {}", o.budget));
-  PreparedRun prepared;
-  const StudyScene scene = user_study_scene(o.run, &prepared);
-  ensure_writable_directory(o.out);
-  const int threads = threads_or_default(o.threads);
-  const Advice a = advise(scene, o.error, o.budget, threads);
-
-  std::string command = fmt::format("stepwise advise {} --error {:g} --budget {:g}", o.run.scene_file, o.error, o.budget);
-  for (const auto& s : o.run.sets) command += " --set " + s;
-  const AdviceTables tables = advice_tables({a});
+std::string advice_json_text(const Advice& a, const std::string& scene_file) {
   nlohmann::json j;
   j["scene"] = a.scene;
-  j["scene_file"] = o.run.scene_file;
+  j["scene_file"] = scene_file;
   j["target_error"] = a.target;
   j["budget_seconds"] = a.budget_seconds;
   j["elapsed_seconds"] = a.elapsed_seconds;
@@ -417,11 +404,29 @@ int advise_command(const AdviseOptions& o) {
     e["searched_stable_dt"] = c.searched_stable_dt ? nlohmann::json(*c.searched_stable_dt) : nlohmann::json(nullptr);
     j["candidates"].push_back(e);
   }
+  return j.dump(2) + "\n";
+}
+
+int advise_command(const AdviseOptions& o) {
+  // the inputs, before anything runs: the error, the budget, the scene as `stepwise run` checks it, the output
+  if (!(std::isfinite(o.error) && o.error > 0)) throw InputError(fmt::format("--error: must be a positive finite number, got {}", o.error));
+  if (!(std::isfinite(o.budget) && o.budget >= 1 && o.budget <= 86400))
+    throw InputError(fmt::format("--budget: must be between 1 and 86400 seconds, got {}", o.budget));
+  PreparedRun prepared;
+  const StudyScene scene = user_study_scene(o.run, &prepared);
+  ensure_writable_directory(o.out);
+  const int threads = threads_or_default(o.threads);
+  const Advice a = advise(scene, o.error, o.budget, threads);
+
+  std::string command = fmt::format("stepwise advise {} --error {:g} --budget {:g}", o.run.scene_file, o.error, o.budget);
+  for (const auto& s : o.run.sets) command += " --set " + s;
+  const AdviceTables tables = advice_tables({a});
+  const Candidate* best = !a.candidates.empty() && a.candidates[0].cheapest ? &a.candidates[0] : nullptr;
   const fs::path out(o.out);
   write_file_atomic(out / "advice_sweep.csv", to_csv(tables.sweep));
   write_file_atomic(out / "advice_summary.csv", to_csv(tables.summary));
   write_file_atomic(out / "advice_candidates.csv", to_csv(tables.candidates));
-  write_file_atomic(out / "advice.json", j.dump(2) + "\n");
+  write_file_atomic(out / "advice.json", advice_json_text(a, o.run.scene_file));
   const std::string md = advice_markdown(a, command, "#");
   write_file_atomic(out / "advice.md", md);
   draw_figures({{"advice", a.scene}}, out, 1, false);

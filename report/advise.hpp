@@ -67,6 +67,10 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
 // verdicts; `command` is the command line it came from
 std::string advice_markdown(const Advice& advice, const std::string& command, const std::string& heading);
 
+// advice.json's text: the contract's fields (method, dt or rtol and atol, error, cpu_seconds, stiff, runner_up,
+// candidates) and the spectrum, reference and reproduction behind them; `scene_file` as the user gave it
+std::string advice_json_text(const Advice& advice, const std::string& scene_file);
+
 // the sweeps' points (advice_sweep.csv) and one row per advice (advice_summary.csv: what plot.py marks)
 struct AdviceTables {
   Table sweep, summary, candidates;  // candidates: each method's verdict (advice_candidates.csv)

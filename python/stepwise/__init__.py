@@ -65,9 +65,14 @@ def run(scene, method=None, dt=None, rtol=None, atol=None, t_end=None, output_dt
 
 def advise(scene, error, budget=10.0, set=None, threads=0):
     """``stepwise advise``: the method that reaches ``error`` at t_end cheapest on this scene, measured within
-    ``budget`` seconds. A dict: advised, candidates (each method's verdict), stiff, stiffness, reference,
-    markdown (advice.md's text) and sweep (every run: columns as numpy arrays)."""
-    return _stepwise.advise(str(scene), float(error), float(budget), _sets(set), int(threads))
+    ``budget`` seconds. advice.json's fields as a dict (method, dt or rtol and atol, error, cpu_seconds, stiff,
+    runner_up, candidates: each method's verdict and reason), with markdown (advice.md's text) and sweep (every
+    run: advice_sweep.csv's columns as numpy arrays)."""
+    out = _stepwise.advise(str(scene), float(error), float(budget), _sets(set), int(threads))
+    advice = json.loads(out["advice"])
+    advice["markdown"] = out["markdown"]
+    advice["sweep"] = out["sweep"]
+    return advice
 
 
 def study(name, scene, set=None, quick=True, threads=0):
@@ -78,7 +83,7 @@ def study(name, scene, set=None, quick=True, threads=0):
 
 class OdeResult(dict):
     """SciPy's result: t, y, sol, t_events, y_events, nfev, njev, nlu, status, message, success; and
-    stepwise's own: method, stats (every counter, cpu_seconds)."""
+    stepwise's own: method, stats (every counter: steps, rejected, rhs_evals, ...)."""
 
     def __getattr__(self, name):
         try:

@@ -60,10 +60,10 @@ def test_run_by_name_and_bad_input():
 
 def test_advise_meets_the_error_asked():
     a = stepwise.advise(scene("van-der-pol"), error=1e-6, budget=4)
-    assert a["advised"] in {m["name"] for m in stepwise.methods()}
+    assert a["method"] in {m["name"] for m in stepwise.methods()}
     best = a["candidates"][0]
-    assert best["method"] == a["advised"] and best["status"] == "advised"
-    assert best["error"] <= 1e-6
+    assert best["method"] == a["method"] and best["status"] == "advised"
+    assert a["error"] <= 1e-6 and best["cheapest"]["error"] == a["error"]
     assert a["markdown"].startswith("#")
     assert len(a["sweep"]["method"]) == len(a["sweep"]["cpu_seconds"]) > 0
 
@@ -79,3 +79,23 @@ def test_study_convergence_on_a_scene():
     assert "rk4" in orders["method"]
     with pytest.raises(ValueError, match="takes a scene"):
         stepwise.study("cloth", scene("damped-oscillator"))
+
+
+def test_the_readmes_python_runs():
+    """the README's Python section, as written"""
+    import os
+    import re
+    from conftest import SOURCE
+    text = open(os.path.join(SOURCE, "README.md")).read()
+    code = re.search(r"## From C\+\+ and Python.*?```python\n(.*?)```", text, re.S).group(1)
+    exec(compile(code, "README.md", "exec"), {})
+
+
+def test_the_python_example_draws_its_diagram(tmp_path):
+    import os
+    import sys
+    from conftest import SOURCE
+    out = tmp_path / "wp.png"
+    subprocess.run([sys.executable, os.path.join(SOURCE, "examples", "python", "work_precision.py"), str(out)], check=True,
+                   capture_output=True, timeout=120)
+    assert out.stat().st_size > 10000
