@@ -7,7 +7,11 @@
 - every CSV a section links exists, with a header and at least one row;
 - every number in a section's Markdown tables is a value of that section's CSVs as shown: within half a unit
   of its last digit (the table rounds, the CSV keeps 17 digits). A number typed in, computed only for the
-  table, or left from another run, fails.
+  table, or left from another run, fails;
+- the report opens with its findings ("In short"), each linking to the section that holds its evidence, and
+  every number written with a decimal point or an exponent in a finding is a value of that section's CSVs as
+  shown (whole numbers are counts);
+- index.html's table of contents links every section.
 Prints each problem on a line and exits 1 if there is any.
 """
 import bisect
@@ -93,7 +97,33 @@ def main():
         problems.append(f"index.html has {page.count('<table>')} tables, report.md {md.count(chr(10) + '|---')}")
 
     checked = 0
-    for title, text in sections(md):
+    parts = sections(md)
+    if not parts or parts[0][0] != "In short":
+        problems.append("report.md does not open with its findings (## In short)")
+    findings = [line for line in (parts[0][1].splitlines() if parts else []) if line.startswith("- ")]
+    if len(findings) < 4:
+        problems.append(f"In short: {len(findings)} findings, expected one from each of the work-precision, stability, energy, adequacy and advice studies")
+    anchored = re.findall(r'<a id="([\w-]+)"></a>\s*\n\s*## ([^\n]+)', md)
+    section_of = {anchor: title for anchor, title in anchored}
+    section_text = dict(parts)
+    for line in findings:
+        m = re.search(r"\(\[the evidence\]\(#([\w-]+)\)\)$", line)
+        if not m or m.group(1) not in section_of:
+            problems.append(f"In short: a finding links no section of the report: {line[:80]}")
+            continue
+        links = re.findall(r"\[[^\]]+\.csv\]\(([^)]+\.csv)\)", section_text[section_of[m.group(1)]])
+        values = csv_values(directory, [l for l in links if os.path.isfile(os.path.join(directory, l))])
+        for token in NUMBER.findall(line[:m.start()]):
+            if "." not in token and "e" not in token.lower():
+                continue
+            checked += 1
+            if not matches(float(token), shown_precision(token), values):
+                problems.append(f"In short: {token} in the finding on '{section_of[m.group(1)]}' is in none of its CSVs")
+    nav = re.search(r"<nav.*?</nav>", page, re.S)
+    for title, _ in parts:
+        if not nav or f">{title.replace('&', '&amp;')}</a>" not in nav.group(0):
+            problems.append(f"index.html's contents do not link the section '{title}'")
+    for title, text in parts[1:]:
         links = re.findall(r"\[[^\]]+\.csv\]\(([^)]+\.csv)\)", text)
         if not links:
             problems.append(f"section '{title}': links no CSV")

@@ -13,6 +13,7 @@ import ctypes
 import math
 import multiprocessing
 import os
+import re
 import signal
 import sys
 
@@ -404,26 +405,59 @@ def contacts(directory, _, styles):
 # ---- the page
 
 
+# a table longer than this shows its first rows and a button for the rest
+LONG_TABLE_ROWS = 12
+
+
+def collapse_long_tables(body):
+    """each table of more than LONG_TABLE_ROWS body rows: its first rows shown, the rest one click away"""
+    def wrap(m):
+        table = m.group(0)
+        rows = table.count("<tr>") - 1  # the header's row
+        if rows <= LONG_TABLE_ROWS:
+            return table
+        return (f'<div class="long-table collapsed">{table}<button type="button" onclick="this.parentElement.classList.toggle(\'collapsed\')">'
+                f'<span class="more">show all {rows} rows</span><span class="less">show the first {LONG_TABLE_ROWS}</span></button></div>')
+    return re.sub(r"<table>.*?</table>", wrap, body, flags=re.S)
+
+
 def html(directory):
+    """report.md as index.html: a table of contents at hand beside the text (every section and subsection), the
+    long tables folded to their first rows"""
     try:
         import markdown
     except ImportError:
         print("plot.py: markdown is missing: install Debian's python3-markdown (apt-get install python3-markdown)", file=sys.stderr)
         sys.exit(3)
     with open(os.path.join(directory, "report.md")) as f:
-        body = markdown.markdown(f.read(), extensions=["tables"])
+        converter = markdown.Markdown(extensions=["tables", "toc"], extension_configs={"toc": {"toc_depth": "2-3"}})
+        body = collapse_long_tables(converter.convert(f.read()))
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>stepwise report</title>
 <style>
-body {{ font-family: sans-serif; max-width: 1250px; margin: 2em auto; padding: 0 1em; line-height: 1.45; }}
-table {{ border-collapse: collapse; margin: 1em 0; font-size: 0.85em; }}
+body {{ font-family: sans-serif; margin: 0; line-height: 1.45; }}
+nav {{ position: fixed; top: 0; left: 0; bottom: 0; width: 270px; overflow-y: auto; padding: 1em; box-sizing: border-box;
+       background: #f7f7f7; border-right: 1px solid #ddd; font-size: 0.82em; }}
+nav ul {{ padding-left: 1.1em; margin: 0.2em 0; }}
+nav a {{ text-decoration: none; }}
+main {{ margin-left: 290px; max-width: 1250px; padding: 0 1em 2em; }}
+@media (max-width: 900px) {{ nav {{ position: static; width: auto; border-right: none; }} main {{ margin-left: 0; }} }}
+table {{ border-collapse: collapse; margin: 1em 0 0.3em; font-size: 0.85em; }}
 th, td {{ border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; }}
 th {{ background: #f0f0f0; }}
 td:first-child, th:first-child {{ text-align: left; }}
+.long-table {{ margin-bottom: 1em; }}
+.long-table.collapsed tbody tr:nth-child(n+{LONG_TABLE_ROWS + 1}) {{ display: none; }}
+.long-table .less, .long-table.collapsed .more {{ display: inline; }}
+.long-table .more, .long-table.collapsed .less {{ display: none; }}
 img {{ max-width: 100%; }}
 code {{ background: #f4f4f4; }}
 </style></head><body>
+<nav aria-label="contents"><strong><a href="#in-short">stepwise report</a></strong>
+{converter.toc}</nav>
+<main>
 {body}
+</main>
 </body></html>
 """
     path = os.path.join(directory, "index.html")

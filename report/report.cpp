@@ -47,12 +47,16 @@ const Study* find_study(const std::string& name) {
 }
 
 // run one study, write its CSVs into dir (rank 0: the others compute their share and write nothing), add its
-// figures to the list; return its Markdown section
-std::string run_study(const Study& study, const StudyContext& ctx, const fs::path& dir, std::vector<Figure>& figures) {
+// figures to the list and its findings (each linking to the section, anchored by the study's name) to
+// `findings` where given; return its Markdown section
+std::string run_study(const Study& study, const StudyContext& ctx, const fs::path& dir, std::vector<Figure>& figures,
+                      std::vector<std::string>* findings) {
   const auto start = std::chrono::steady_clock::now();
   if (ctx.progress) ctx.progress->begin_study(fmt::format("{}{}", study.name, ctx.quick ? " (quick)" : ""));
   StudyOutput output = study.run(ctx);
-  std::string md = fmt::format("## {}\n\n{}", study.title, output.markdown);
+  std::string md = fmt::format("<a id=\"{}\"></a>\n\n## {}\n\n{}", study.name, study.title, output.markdown);
+  if (findings)
+    for (const auto& f : output.findings) findings->push_back(fmt::format("- {} ([the evidence](#{}))", f, study.name));
   md += "Data: ";
   for (const auto& [stem, table] : output.tables) {
     if (ranks::rank() == 0) write_file_atomic(dir / (stem + ".csv"), to_csv(table));
@@ -208,7 +212,7 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
       ctx.distribute = false;
       ctx.load = nullptr;
     }
-    const std::string md = pictures ? pictures_section(out, scenes_directory(), ctx) : run_study(*study, ctx, out, figures);
+    const std::string md = pictures ? pictures_section(out, scenes_directory(), ctx) : run_study(*study, ctx, out, figures, nullptr);
     together = false;
     if (!writer) return 0;
     write_file_atomic(fs::path(out) / (name + ".md"), md);
@@ -255,13 +259,19 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
   RankLoad load;
   StudyContext ctx{quick, threads_or_default(threads), writer ? &progress : nullptr};
   ctx.load = &load;
-  std::string md = fmt::format("# stepwise report{}\n\n", quick ? " (quick)" : "");
-  md += "Every table and figure below is computed by this run from the CSV files named under it, in this directory.\n\n";
+  std::string md;
+  std::vector<std::string> findings;
   std::vector<Figure> figures;
   std::error_code ec;
   bool together = true;
   try {
-    for (const auto& study : studies()) md += run_study(study, ctx, staging, figures);
+    for (const auto& study : studies()) md += run_study(study, ctx, staging, figures, &findings);
+    // the answer first: what the studies found, each linking to its evidence, then the sections
+    std::string head = fmt::format("# stepwise report{}\n\n", quick ? " (quick)" : "");
+    head += "Every number, table and figure below is computed by this run from the CSV files named under its section, in this directory.\n\n";
+    head += "<a id=\"in-short\"></a>\n\n## In short\n\n";
+    for (const auto& f : findings) head += f + "\n";
+    md = head + "\n" + md;
     together = false;
     if (!writer) return 0;
     // the pictures on rank 0 alone: each is a directory of frames, drawn where the report is written

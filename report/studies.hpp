@@ -23,6 +23,9 @@ struct StudyOutput {
   std::vector<std::pair<std::string, Table>> tables;  // file stem -> table (written as stem.csv)
   std::string markdown;                               // the study's section of report.md
   std::vector<Figure> figures;                        // drawn after the tables are written, shown after the text
+  // what the study found, for the report's opening summary: a sentence each, whose numbers with a decimal point
+  // are values of the study's own tables as they are shown (check_report.py holds them to the CSVs)
+  std::vector<std::string> findings;
 };
 
 struct Study {

@@ -43,6 +43,24 @@ StudyOutput advice_section(const StudyContext& ctx) {
                       "`--set mu=1e6`, the explicit methods lose by two orders of magnitude: docs/findings.md).\n\n",
                       stiff.scene, stiff.stiffness, stiff.fastest_decay, picked.name, unknowns);
   }
+  // the finding: on the stiff scene, the advised method against the best of the other kind (implicit or explicit), in CPU
+  // seconds as the candidates' table has them
+  if (!stiff.candidates.empty() && stiff.candidates[0].cheapest) {
+    const auto implicit = [](const Candidate& c) {
+      const Method& m = *find_method(c.method);
+      return solves_newton_systems(m) || m.dense != DenseMatrices::none;
+    };
+    const Candidate& best = stiff.candidates[0];
+    const Candidate* other = nullptr;
+    for (const Candidate& c : stiff.candidates)
+      if (c.cheapest && implicit(c) != implicit(best) && (!other || c.cheapest->cpu_seconds < other->cheapest->cpu_seconds)) other = &c;
+    if (other)
+      out.findings.push_back(fmt::format("{} on {} (stiffness {:.3g}) the measured cheapest method for an error of {:.0e} is the {} `{}`, "
+                                         "{:.3g} s of CPU, against {:.3g} s for the best {} one, `{}`.",
+                                         implicit(best) ? "**A stiff system, measured**:" : "**\"Stiff\" need not mean implicit**:", stiff.scene,
+                                         stiff.stiffness, target, implicit(best) ? "implicit" : "explicit", best.method, best.cheapest->cpu_seconds,
+                                         other->cheapest->cpu_seconds, implicit(best) ? "explicit" : "implicit", other->method));
+  }
   AdviceTables tables = advice_tables(advices);
   out.tables = {{"advice_sweep", std::move(tables.sweep)}, {"advice_summary", std::move(tables.summary)}, {"advice_candidates", std::move(tables.candidates)}};
   return out;

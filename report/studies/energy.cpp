@@ -81,7 +81,17 @@ StudyOutput energy(const StudyContext& ctx) {
   std::vector<Figure> figures;
   md += "\n";
   md += add_figure(figures, "energy", "", fmt::format("Relative energy error of {} over time, per method", user ? user->label : "the pendulum"));
-  return {{{"energy", std::move(table)}, {"energy_summary", std::move(summary)}}, md, figures};
+  // the finding (the pendulum's): symplectic Euler's bounded error against explicit Euler's growth and implicit Euler's decay
+  std::vector<std::string> findings;
+  std::map<std::string, std::vector<double>> by_method;
+  for (const auto& row : summary.rows) by_method[std::get<std::string>(row[0])] = {std::get<double>(row[1]), std::get<double>(row[2]), std::get<double>(row[3])};
+  if (!user && by_method.contains("symplectic-euler") && by_method.contains("euler") && by_method.contains("implicit-euler"))
+    findings.push_back(fmt::format("**Symplectic Euler keeps the energy bounded**: over {} periods of the pendulum at dt = T/100 its relative "
+                                   "energy error is {:.3e} at most in the first tenth of the run and {:.3e} in the last, while explicit Euler's "
+                                   "grows to {:.3e} and implicit Euler's ends at {:+.3e}, the same first-order accuracy either way.",
+                                   periods, by_method["symplectic-euler"][0], by_method["symplectic-euler"][1], by_method["euler"][1],
+                                   by_method["implicit-euler"][2]));
+  return {{{"energy", std::move(table)}, {"energy_summary", std::move(summary)}}, md, figures, findings};
 }
 
 }  // namespace

@@ -253,6 +253,30 @@ StudyOutput work_precision(const StudyContext& ctx) {
                  "(u = 6e-8) is rounded away and the roundings pile up over more steps: float32 explicit cloth wants steps near its "
                  "stability limit.\n\n" +
                  std::string(dense_note) + sections;
+  // the finding: which methods the recommendations name, and how much the runner-up costs at most
+  std::map<std::string, int> named;
+  int met = 0;
+  double worst_runner = 0;
+  for (const auto& row : advice.rows) {
+    if (!reached(row)) continue;
+    ++met;
+    ++named[std::get<std::string>(cell_of(advice, row, "method"))];
+    if (const double r = std::get<double>(cell_of(advice, row, "runner_up_over_best")); std::isfinite(r)) worst_runner = std::max(worst_runner, r);
+  }
+  std::vector<std::pair<int, std::string>> ranked;
+  for (const auto& [method, count] : named) ranked.emplace_back(-count, method);
+  std::sort(ranked.begin(), ranked.end());
+  std::string list;
+  int listed = 0;
+  for (size_t i = 0; i < ranked.size() && i < 3; ++i) {
+    list += fmt::format("{}`{}` in {}", i ? ", " : "", ranked[i].second, -ranked[i].first);
+    listed -= ranked[i].first;
+  }
+  if (ranked.size() > 3) list += fmt::format(", {} other methods in {}", ranked.size() - 3, met - listed);
+  if (met > 0)
+    out.findings.push_back(fmt::format("**The cheapest method for the accuracy a scene needs**, measured on {} scene targets (half a pixel, "
+                                       "and {:.0e} for verification): {}; the next-best other method costs up to {:.1f} times as much.",
+                                       met, verification_target, list, worst_runner));
   out.tables = {{"work_precision", std::move(points)}, {"work_precision_pareto", std::move(fronts)}, {"recommendations", std::move(advice)}};
   return out;
 }
