@@ -91,8 +91,8 @@ def main():
                 problems.append(f"{image}: not a drawn GIF ({os.path.getsize(path)} bytes)")
         elif head != b"\x89PNG\r\n\x1a\n" or os.path.getsize(path) < MIN_PNG_BYTES:
             problems.append(f"{image}: not a drawn PNG ({os.path.getsize(path)} bytes)")
-        if f'src="{image}"' not in page:
-            problems.append(f"{image}: not shown by index.html")
+        if f'src="{image}"' not in page and not (f'href="{image}"' in page and f'id="figure-{image[:-4]}"' in page):
+            problems.append(f"{image}: not shown by index.html (nor an interactive figure linking it)")
     if page.count("<table>") != md.count("\n|---"):
         problems.append(f"index.html has {page.count('<table>')} tables, report.md {md.count(chr(10) + '|---')}")
 

@@ -5,7 +5,8 @@
 
 DIR/figures.csv lists the figures (stem, kind, subject): each is drawn by the function of that kind below, from
 the CSVs in DIR only, into DIR/stem.png, by N processes at once (--jobs; default 1). DIR/methods.csv (the method table) fixes one colour and marker per
-method, the same in every figure. With --html, DIR/report.md becomes DIR/index.html (Python-Markdown, tables).
+method, the same in every figure. With --html, DIR/report.md becomes DIR/index.html (Python-Markdown, tables), its work-precision and convergence
+diagrams to explore (report/interactive.py: plotly.js from Debian's python3-plotly).
 Needs Debian's python3-matplotlib (and python3-markdown for --html); exit status 3 names a missing one.
 """
 import csv
@@ -16,6 +17,8 @@ import os
 import re
 import signal
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # report/interactive.py beside it
 
 try:
     import matplotlib
@@ -432,6 +435,19 @@ def html(directory):
     with open(os.path.join(directory, "report.md")) as f:
         converter = markdown.Markdown(extensions=["tables", "toc"], extension_configs={"toc": {"toc_depth": "2-3"}})
         body = collapse_long_tables(converter.convert(f.read()))
+    # the figures to explore in place of their PNGs (report/interactive.py), each captioned with a link to its PNG
+    import interactive
+    twins = interactive.figures(directory)
+
+    def explore(m):
+        alt, stem = m.group(1), m.group(2)
+        if stem not in twins:
+            return m.group(0)
+        return (f'<figure class="interactive">{twins[stem]}<figcaption>{alt}: hover for a point\'s method, setting, error and cost; '
+                f'click a legend entry to hide or show a method, a group\'s title for the whole group '
+                f'(<a href="{stem}.png">the static figure</a>)</figcaption></figure>')
+    body = re.sub(r'<p><img alt="([^"]*)" src="([\w.\-]+)\.png" /></p>', explore, body)
+    script = ('<script src="plotly.js" charset="utf-8" defer></script>' + interactive.LOADER) if twins else ""
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>stepwise report</title>
 <style>
@@ -452,7 +468,9 @@ td:first-child, th:first-child {{ text-align: left; }}
 .long-table .more, .long-table.collapsed .less {{ display: none; }}
 img {{ max-width: 100%; }}
 code {{ background: #f4f4f4; }}
-</style></head><body>
+figure.interactive {{ margin: 1em 0; }}
+figcaption {{ font-size: 0.85em; color: #555; }}
+</style>{script}</head><body>
 <nav aria-label="contents"><strong><a href="#in-short">stepwise report</a></strong>
 {converter.toc}</nav>
 <main>

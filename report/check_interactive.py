@@ -1,0 +1,169 @@
+#!/usr/bin/python3
+"""The report's index.html in a real browser: headless Chromium driven by Selenium (Debian's python3-selenium and
+chromium-driver).
+
+    check_interactive.py DIR [SHOTS_DIR]
+
+- the page loads (plotly.js with it) within LOAD_BUDGET seconds, and without console errors;
+- every interactive figure draws when scrolled to: its plot holds one trace per method of its CSV;
+- clicking a group's title in a figure's legend hides that group's traces, clicking again shows them;
+- a link of the table of contents scrolls its section to the top of the window;
+- the first finding's first number with a decimal point equals a value of the CSVs of the section it links.
+Screenshots (the top of the page, a figure after the clicks) go to SHOTS_DIR (default DIR). Exit 0 when all
+hold, 1 when not, 77 (CTest's skip) where Chromium, its driver or Selenium is missing, saying which.
+"""
+import csv
+import os
+import re
+import shutil
+import sys
+import time
+
+LOAD_BUDGET = 2.0  # seconds from navigation to every figure drawn, on these 2-core machines (the issue's budget)
+
+
+def skip(why):
+    print(f"check_interactive: skipped: {why}")
+    sys.exit(77)
+
+
+def main():
+    directory = os.path.abspath(sys.argv[1])
+    shots = os.path.abspath(sys.argv[2]) if len(sys.argv) > 2 else directory
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.options import Options
+        from selenium.webdriver.chrome.service import Service
+        from selenium.webdriver.common.action_chains import ActionChains
+        from selenium.webdriver.common.by import By
+    except ImportError:
+        skip("python3-selenium is not installed (apt-get install python3-selenium chromium-driver)")
+    driver_path = shutil.which("chromedriver")
+    if not driver_path or not (shutil.which("chromium") or shutil.which("chromium-browser")):
+        skip("chromium or chromium-driver is not installed (apt-get install chromium chromium-driver)")
+    options = Options()
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1400,1000", "--disable-dev-shm-usage"):
+        options.add_argument(flag)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    problems = []
+    browser = webdriver.Chrome(service=Service(driver_path), options=options)
+    try:
+        browser.get("file://" + os.path.join(directory, "index.html"))
+        # interactive: plotly.js parsed and the page's load event over (a figure is drawn as it comes near the window)
+        loaded = browser.execute_script("const n = performance.getEntriesByType('navigation')[0]; return n.loadEventEnd / 1000")
+        print(f"check_interactive: the page loaded, plotly.js with it, {loaded:.2f} s after navigation")
+        if loaded > LOAD_BUDGET:
+            problems.append(f"the page took {loaded:.2f} s to load, over the {LOAD_BUDGET} s budget")
+        os.makedirs(shots, exist_ok=True)
+        browser.save_screenshot(os.path.join(shots, "browser_top.png"))
+
+        # each figure, scrolled to: drawn, with a trace for every method of its CSV
+        figures = browser.find_elements(By.CSS_SELECTOR, "div.lazy-plot")
+        if not figures:
+            problems.append("index.html has no interactive figures")
+        for div in figures:
+            stem = div.get_attribute("id").removeprefix("figure-")
+            browser.execute_script("arguments[0].scrollIntoView()", div)
+            deadline = time.monotonic() + 10
+            while not browser.execute_script("return !!(arguments[0]._fullData && arguments[0].querySelector('.main-svg'))", div):
+                if time.monotonic() > deadline:
+                    problems.append(f"{stem}: not drawn 10 s after it was scrolled to")
+                    break
+                time.sleep(0.05)
+            else:
+                table, scene = (("work_precision", stem[len("work_precision_"):]) if stem.startswith("work_precision_")
+                                else ("convergence", stem[len("convergence_"):]))
+                with open(os.path.join(directory, table + ".csv"), newline="") as f:
+                    methods = {r["method"] for r in csv.DictReader(f) if r["scene"] == scene and r["status"] == "ok" and float(r["error"]) > 0}
+                names = set(browser.execute_script("return arguments[0]._fullData.map(t => t.name)", div))
+                if methods - names:
+                    problems.append(f"{stem}: no trace for {sorted(methods - names)[:5]}")
+        print(f"check_interactive: {len(figures)} figures drawn when scrolled to")
+        for entry in browser.get_log("browser"):
+            if entry["level"] == "SEVERE":
+                problems.append(f"console: {entry['message'][:200]}")
+
+        # in the first figure: a group's button shows or hides the whole group, the next click the other; a method's legend entry hides it,
+        # then shows it again
+        if figures:
+            first = figures[0]
+            browser.execute_script("arguments[0].scrollIntoView()", first)
+            time.sleep(0.3)
+
+            def visible(group):
+                return browser.execute_script("return arguments[0]._fullData.filter(t => t.legendgroup === arguments[1]).map(t => t.visible)",
+                                              first, group)
+            button = first.find_elements(By.CSS_SELECTOR, ".updatemenu-button")[0]
+            group = browser.execute_script("return arguments[0].layout.updatemenus[0].buttons[0].label.replace(/ \\(\\d+\\)$/, '')", first)
+            states = [visible(group)]
+            for _ in range(2):
+                ActionChains(browser).move_to_element(button).click().perform()
+                time.sleep(0.5)
+                states.append(visible(group))
+            whole = lambda state, v: all(x == v for x in state)  # noqa: E731
+            if not ((whole(states[1], True) and whole(states[2], "legendonly")) or (whole(states[1], "legendonly") and whole(states[2], True))):
+                problems.append(f"the '{group}' button: visible {states[0]} -> {states[1]} -> {states[2]}")
+            else:
+                print(f"check_interactive: the '{group}' button showed or hid its {len(states[1])} methods at once, both ways")
+            browser.execute_script("arguments[0].scrollIntoView()", first)
+            browser.save_screenshot(os.path.join(shots, "browser_figure.png"))
+            names = browser.execute_script("return arguments[0]._fullData.map(t => [t.name, t.visible])", first)
+            entries = first.find_elements(By.CSS_SELECTOR, ".legend .traces")
+            entry = next((e for e in entries if any(e.text.strip() == n and v is True for n, v in names if n != "Pareto front")), None)
+            if entry is None:
+                problems.append("the first figure's legend shows no visible method")
+            else:
+                name = entry.text.strip()
+                shown = []
+                for _ in range(2):
+                    ActionChains(browser).move_to_element(entry.find_element(By.CSS_SELECTOR, ".legendtoggle")).click().perform()
+                    time.sleep(0.6)  # plotly waits out a double click's interval before it toggles
+                    shown.append(browser.execute_script("return arguments[0]._fullData.find(t => t.name === arguments[1]).visible", first, name))
+                if shown != ["legendonly", True]:
+                    problems.append(f"the legend's entry '{name}' clicked twice: visible {shown}")
+                else:
+                    print(f"check_interactive: the legend's entry '{name}' hid its method and showed it again")
+
+        # a table-of-contents link brings its section to the top
+        link = browser.find_elements(By.CSS_SELECTOR, "nav a[href^='#']")[3]
+        target = link.get_attribute("href").split("#", 1)[1]
+        link.click()
+        time.sleep(0.3)
+        top = browser.execute_script("return document.getElementById(arguments[0]).getBoundingClientRect().top", target)
+        if abs(top) > 5:
+            problems.append(f"the contents' link to #{target} left its heading {top:.0f} px from the top")
+
+        # the first finding's number, in the browser, against its section's CSVs
+        finding = browser.find_element(By.CSS_SELECTOR, "#in-short ~ ul li, h2#in-short + ul li")
+        number = re.search(r"\d+\.\d+(?:e[-+]?\d+)?", finding.text)
+        anchor = finding.find_element(By.CSS_SELECTOR, "a[href^='#']").get_attribute("href").split("#", 1)[1]
+        md = open(os.path.join(directory, "report.md")).read()
+        section = md.split(f'<a id="{anchor}"></a>', 1)[1].split('<a id="', 1)[0]
+        values = []
+        for name in re.findall(r"\(([\w\-]+\.csv)\)", section):
+            with open(os.path.join(directory, name), newline="") as f:
+                for row in csv.reader(f):
+                    for cell in row:
+                        try:
+                            values.append(float(cell))
+                        except ValueError:
+                            pass
+        if not number:
+            problems.append(f"the first finding shows no number: {finding.text[:100]}")
+        else:
+            token = number.group(0)
+            decimals = len(token.split("e")[0].split(".")[1])
+            half = 0.5 * 10 ** (-decimals + (int(token.split("e")[1]) if "e" in token else 0))
+            if not any(abs(v - float(token)) <= half * (1 + 1e-9) for v in values):
+                problems.append(f"the first finding's {token} is in none of #{anchor}'s CSVs")
+            else:
+                print(f"check_interactive: the first finding's {token} is a value of #{anchor}'s CSVs")
+    finally:
+        browser.quit()
+    for p in problems:
+        print("FAIL:", p)
+    sys.exit(1 if problems else 0)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,187 @@
+"""The report's figures to explore in index.html: plotly.js figures of the same CSVs the PNGs are drawn from.
+
+Each method is a trace in its group's colour (the method table's `group`: whose code steps, ARKODE by kind;
+Okabe and Ito's colour-blind-safe palette) with a marker of its own; the legend gathers the groups, a method's
+entry hides or shows that method, and a button per group above the plot shows or hides the whole group (the
+legend's group titles are not clickable in the plotly.js Debian ships, 2.6.3). Hover shows method, setting,
+error and CPU time (or steps and calls). Log axes. By default a diagram shows its Pareto front and each group's
+best method; the others are one click away in the legend. plotly.js comes from Debian's python3-plotly, copied
+once into the report's folder (no network when the page is viewed); the figures are built with plotly's
+Python API (plotly.graph_objects), not by hand.
+
+Used by plot.py's html(); figures(directory) returns {png stem: HTML of its interactive twin}."""
+import csv
+import math
+import os
+import shutil
+
+PLOTLY_JS = "/usr/share/python3-plotly/plotly.js"
+# Okabe & Ito (2008): eight colours told apart under the common colour-vision deficiencies
+PALETTE = ["#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000"]
+MARKERS = ["circle", "square", "diamond", "triangle-up", "triangle-down", "cross", "x", "star", "hexagon", "pentagon",
+           "triangle-left", "triangle-right", "hourglass", "bowtie", "circle-open", "square-open", "diamond-open", "star-open"]
+
+
+def available():
+    try:
+        import plotly  # noqa: F401
+    except ImportError:
+        return False
+    return os.path.exists(PLOTLY_JS)
+
+
+def rows(directory, stem):
+    path = os.path.join(directory, stem + ".csv")
+    if not os.path.exists(path):
+        return []
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def number(text):
+    try:
+        v = float(text)
+    except (TypeError, ValueError):
+        return math.nan
+    return v
+
+
+class Groups:
+    """each method's group, colour and marker, fixed by the method table's order"""
+
+    def __init__(self, directory):
+        table = rows(directory, "methods")
+        self.group = {r["name"]: r.get("group") or r["source"] for r in table}
+        order = []
+        for r in table:
+            if self.group[r["name"]] not in order:
+                order.append(self.group[r["name"]])
+        self.order = order
+        self.colour = {g: PALETTE[i % len(PALETTE)] for i, g in enumerate(order)}
+        self.marker = {}
+        for g in order:
+            for k, name in enumerate(n for n in self.group if self.group[n] == g):
+                self.marker[name] = MARKERS[k % len(MARKERS)]
+
+    def of(self, method):
+        return self.group.get(method, "other")
+
+
+def pareto(points):
+    """the points no other is both cheaper and more accurate than: (cost, error, ...) sorted by cost"""
+    front, best = [], math.inf
+    for p in sorted(points, key=lambda p: (p[0], p[1])):
+        if p[1] < best:
+            front.append(p)
+            best = p[1]
+    return front
+
+
+def diagram(groups, curves, front, x_title, y_title, title, hover_x, hover_y):
+    """curves: {method: [(x, y, setting, extra)]}, front: [(x, y, method, setting)] or None; a method shown at first
+    where it is on the front or is its group's best (the least y reached)"""
+    import plotly.graph_objects as go
+    on_front = {p[2] for p in front} if front else set()
+    best_of_group = {}
+    for method, pts in curves.items():
+        least = min((p[1] for p in pts), default=math.inf)
+        g = groups.of(method)
+        if g not in best_of_group or least < best_of_group[g][1]:
+            best_of_group[g] = (method, least)
+    shown = on_front | {m for m, _ in best_of_group.values()}
+    fig = go.Figure()
+    if front:
+        fig.add_trace(go.Scatter(x=[p[0] for p in front], y=[p[1] for p in front], mode="lines", name="Pareto front",
+                                 line=dict(color="#888888", width=6), opacity=0.35, legendgroup="front", legendgrouptitle_text="front",
+                                 hoverinfo="skip"))
+    for g in groups.order + ["other"]:
+        for method in [m for m in curves if groups.of(m) == g]:
+            pts = sorted(curves[method])
+            fig.add_trace(go.Scatter(
+                x=[p[0] for p in pts], y=[p[1] for p in pts], mode="lines+markers", name=method,
+                legendgroup=g, legendgrouptitle_text=g, visible=True if method in shown else "legendonly",
+                line=dict(color=groups.colour.get(g, "#999999"), width=1.5),
+                marker=dict(symbol=groups.marker.get(method, "circle"), size=8, color=groups.colour.get(g, "#999999")),
+                customdata=[[p[2], p[3]] for p in pts],
+                hovertemplate=f"<b>{method}</b><br>%{{customdata[0]}}<br>{hover_y} %{{y:.3e}}<br>{hover_x} %{{x:.3e}}%{{customdata[1]}}<extra>{g}</extra>"))
+    # a button per group: its first click shows the whole group, the next hides it (plotly's toggle buttons: args, then
+    # args2); the legend's entries show or hide one method each
+    indices = {}
+    for i, trace in enumerate(fig.data):
+        if trace.legendgroup != "front":
+            indices.setdefault(trace.legendgroup, []).append(i)
+    buttons = [dict(label=f"{g} ({len(ix)})", method="restyle", args=[{"visible": True}, ix], args2=[{"visible": "legendonly"}, ix])
+               for g, ix in indices.items()]
+    fig.update_layout(updatemenus=[dict(type="buttons", direction="right", buttons=buttons, showactive=False, x=0, xanchor="left", y=1.0,
+                                        yanchor="bottom", pad=dict(t=2, b=2), font=dict(size=10))])
+    fig.update_xaxes(type="log", title=x_title, exponentformat="power")
+    fig.update_yaxes(type="log", title=y_title, exponentformat="power")
+    fig.update_layout(title=dict(text=title, y=0.99), height=620, template="plotly_white", legend=dict(groupclick="toggleitem", font=dict(size=11)),
+                      margin=dict(l=70, r=20, t=80, b=60))
+    return fig
+
+
+def work_precision(directory, groups):
+    out = {}
+    data = rows(directory, "work_precision")
+    for scene in dict.fromkeys(r["scene"] for r in data):
+        curves = {}
+        for r in data:
+            if r["scene"] != scene or r["status"] != "ok":
+                continue
+            error, cpu = number(r["error"]), number(r["cpu_seconds"])
+            if not (error > 0 and cpu > 0 and math.isfinite(error)):
+                continue
+            setting = f"dt {number(r['dt']):.3g}" if r["mode"] == "fixed" else f"rtol {number(r['rtol']):.1e}"
+            curves.setdefault(r["method"], []).append((cpu, error, setting, f"<br>calls of f {int(number(r['rhs_evals']))}"))
+        front = pareto([(x, y, m, s) for m, pts in curves.items() for x, y, s, _ in pts])
+        out[f"work_precision_{scene}"] = diagram(groups, curves, front, "CPU time (s)", "error at t_end", f"Work against precision, {scene}",
+                                                 "CPU (s)", "error")
+    return out
+
+
+def convergence(directory, groups):
+    out = {}
+    data = rows(directory, "convergence")
+    for scene in dict.fromkeys(r["scene"] for r in data):
+        curves = {}
+        for r in data:
+            if r["scene"] != scene or r["status"] != "ok":
+                continue
+            error, dt = number(r["error"]), number(r["dt"])
+            if not (error > 0 and dt > 0 and math.isfinite(error)):
+                continue
+            curves.setdefault(r["method"], []).append((dt, error, f"dt {dt:.3g}", f"<br>steps {int(number(r['steps']))}"))
+        out[f"convergence_{scene}"] = diagram(groups, curves, None, "dt (s)", "error at t_end", f"Convergence, {scene}", "dt (s)", "error")
+    return out
+
+
+# draws each figure when it comes near the window (the page is usable at once; a dozen figures of forty traces
+# drawn at load would hold it for seconds): plotly.js's newPlot on the figure's JSON
+LOADER = """<script>
+document.addEventListener('DOMContentLoaded', () => {
+  const draw = div => {
+    const spec = JSON.parse(document.getElementById('data-' + div.id).textContent);
+    Plotly.newPlot(div, spec.data, spec.layout, {displaylogo: false, responsive: true});
+  };
+  const near = new IntersectionObserver(entries => entries.forEach(e => {
+    if (e.isIntersecting) { near.unobserve(e.target); draw(e.target); }
+  }), {rootMargin: '600px'});
+  document.querySelectorAll('div.lazy-plot').forEach(div => near.observe(div));
+});
+</script>"""
+
+
+def figures(directory):
+    """{png stem: HTML of the interactive figure (its div and its JSON)}; plotly.js copied into the directory once.
+    Empty where python3-plotly is not installed (the page then shows the PNGs alone)"""
+    if not available():
+        return {}
+    shutil.copyfile(PLOTLY_JS, os.path.join(directory, "plotly.js"))
+    groups = Groups(directory)
+    made = {**work_precision(directory, groups), **convergence(directory, groups)}
+    def embedded(stem, fig):
+        spec = fig.to_json().replace("</", "<\\/")  # no text in the JSON can close its script element
+        return (f'<div id="figure-{stem}" class="lazy-plot" style="height: 620px"></div>'
+                f'<script type="application/json" id="data-figure-{stem}">{spec}</script>')
+    return {stem: embedded(stem, fig) for stem, fig in made.items()}
