@@ -135,7 +135,16 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
       throw std::runtime_error(fmt::format("stepwise render {} failed ({}): the pictures were not drawn", scene, e.what()));
     }
     std::ifstream in(out / "render.json");
-    return Drawn{scene, nlohmann::json::parse(in)};
+    Drawn d{scene, nlohmann::json::parse(in)};
+    // the report keeps the frame it shows and the animations; the other frames (54 of a full report's 73 MB) are
+    // left to `stepwise render`, which writes them all. Without ffmpeg's animation the frames are the run, and stay
+    if (fs::exists(out / "animation.mp4")) {
+      const std::string shown = d.summary["frames"].back()["file"].get<std::string>();
+      for (const auto& entry : fs::directory_iterator(out))
+        if (const std::string name = entry.path().filename().string(); name.starts_with("frame_") && name.ends_with(".png") && name != shown)
+          fs::remove(entry.path());
+    }
+    return d;
   }, costs);
   if (ctx.progress) ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 
@@ -160,7 +169,8 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
   }
   write_file_atomic(dir / "pictures.csv", to_csv(table));
   std::string md = "## Pictures\n\n";
-  md += fmt::format("Every scene run through its own method and drawn headlessly as `stepwise render` draws it ({} frames at {}, OpenGL on {}). "
+  md += fmt::format("Every scene run through its own method and drawn headlessly as `stepwise render` draws it ({} frames at {}, OpenGL on {}; "
+                    "the report keeps the last frame and the animations, `stepwise render` every frame). "
                     "Data: [pictures.csv](pictures.csv).{}\n\n",
                     frames, size, std::get<std::string>(table.rows.front().back()),
                     undrawn.empty() ? std::string()

@@ -2,6 +2,7 @@
 
 #include "run/ranks.hpp"
 #include "solvers/distributed_wave.hpp"
+#include "solvers/method_table.hpp"
 
 #include <fmt/format.h>
 
@@ -10,7 +11,8 @@ namespace stepwise {
 std::string not_distributed(const PreparedRun& p) {
   if (!p.model->as<WaveBlocksView>() || !p.model->as<WaveGridView>())
     return fmt::format("model '{}' is not split among ranks: only the water's grid is", p.model->name());
-  if (p.method != "wave-fd") return fmt::format("method '{}' is not split among ranks: only wave-fd is", p.method);
+  if (const Method* m = find_method(p.method); !m || m->on_ranks != OnRanks::split_grid)
+    return fmt::format("method '{}' is not split among ranks: only wave-fd is", p.method);
   return {};
 }
 

@@ -46,7 +46,7 @@ int rhs(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
 
 }  // namespace
 
-DistributedLinesRun lines_distributed(std::string_view method, const WaveGridView& view, const Eigen::VectorXd& y0, double t_end, double rtol,
+DistributedLinesRun lines_distributed(const Method& method, const WaveGridView& view, const Eigen::VectorXd& y0, double t_end, double rtol,
                                       double atol) {
   const int n = view.points;
   DistributedWave grid(n, n, WaveCoefficients{});
@@ -55,13 +55,14 @@ DistributedLinesRun lines_distributed(std::string_view method, const WaveGridVie
   const long local = 2L * B.rows * B.cols, global = 2L * n * n;
   DistributedLinesRun run;
   const auto failed = [&](std::string_view call, long code) {
-    run.failure = fmt::format("{}: {} failed with code {}", method, call, code);
+    run.failure = fmt::format("{}: {} failed with code {}", method.name, call, code);
     return run;
   };
-  const auto tables = sundials::arkode_tables(method);
-  const bool cvode = method == "cvode-adams" || method == "cvode-bdf";
+  const bool cvode = method.on_ranks == OnRanks::cvode_adams || method.on_ranks == OnRanks::cvode_bdf;
+  // an ARKODE method's tables, from its family's own list (solvers/methods/arkode.cpp)
+  const auto tables = sundials::arkode_tables(method.on_ranks == OnRanks::arkode ? method.name : std::string_view());
   if (!cvode && !tables) {
-    run.failure = fmt::format("{}: not run on the distributed grid (cvode-adams, cvode-bdf and the arkode-* methods are)", method);
+    run.failure = fmt::format("{}: not run on the distributed grid (cvode-adams, cvode-bdf and the arkode-* methods are)", method.name);
     return run;
   }
   SUNContext raw_context = nullptr;
@@ -85,7 +86,7 @@ DistributedLinesRun lines_distributed(std::string_view method, const WaveGridVie
   if (cvode) {
     // as cvode-adams and cvode-bdf set it up (solvers/methods/cvode.cpp): Adams with fixed-point iteration,
     // BDF with Newton
-    const bool bdf = method == "cvode-bdf";
+    const bool bdf = method.on_ranks == OnRanks::cvode_bdf;
     std::unique_ptr<void, CvodeFree> mem(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, context.get()));
     if (!mem) return failed("CVodeCreate", 0);
     if (const int code = CVodeInit(mem.get(), rhs<true, true>, 0.0, y.get())) return failed("CVodeInit", code);

@@ -12,6 +12,7 @@
 #pragma once
 
 #include "capabilities/wave_grid.hpp"
+#include "method.hpp"
 
 #include <Eigen/Core>
 
@@ -27,9 +28,9 @@ struct DistributedLinesRun {
   std::string failure;    // the failing SUNDIALS call and its code, or a method not run this way; empty when it reached t_end
 };
 
-// `method` (cvode-adams, cvode-bdf or an arkode-* method) from y0 = (z, v) of the whole grid (every rank
-// passes it; each takes its block) to t_end
-DistributedLinesRun lines_distributed(std::string_view method, const WaveGridView& grid, const Eigen::VectorXd& y0, double t_end, double rtol,
+// `method` (one whose on_ranks says CVODE or ARKODE: cvode-adams, cvode-bdf, the arkode-* methods) from y0 = (z, v)
+// of the whole grid (every rank passes it; each takes its block) to t_end
+DistributedLinesRun lines_distributed(const Method& method, const WaveGridView& grid, const Eigen::VectorXd& y0, double t_end, double rtol,
                                       double atol);
 
 }  // namespace stepwise

@@ -46,6 +46,11 @@ struct Stability {
   std::function<double(const WaveGridView& grid)> wave_dt;
 };
 
+// how a method runs on MPI ranks, where it can (its own family file says): the grid split among the ranks by the
+// hand-written scheme (run/distributed_run.hpp: wave-fd), or the height field's method of lines on SUNDIALS'
+// parallel vector (solvers/distributed_lines.hpp) under CVODE, Adams or BDF, or under ARKODE with the method's tables
+enum class OnRanks { no, split_grid, cvode_adams, cvode_bdf, arkode };
+
 struct Method;
 // the integrator for one run of `method` with `control` (the control already checked against the method)
 using MakeIntegrator = std::function<std::unique_ptr<Integrator>(const Method& method, const StepControl& control)>;
@@ -59,6 +64,7 @@ struct Method {
   Stepping stepping = Stepping::fixed;
   Requirement needs;  // the capability it needs of a system (solvers/capabilities/), if any
   DenseMatrices dense = DenseMatrices::none;
+  OnRanks on_ranks = OnRanks::no;
   MakeIntegrator make;
   Stability stability;
   // "" or why this system cannot be run on the method's device (a GPU method's grid past the largest texture),

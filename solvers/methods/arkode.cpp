@@ -247,6 +247,7 @@ void register_arkode_methods(MethodTable& table) {
         .stepping = Stepping::fixed_or_adaptive,
         .needs = t.kind == Kind::imex ? needs_imex_split : Requirement{},
         .dense = t.kind == Kind::dirk ? DenseMatrices::unless_sparse_jacobian : DenseMatrices::none,
+        .on_ranks = OnRanks::arkode,
         .make = [&t](const Method& method, const StepControl& control) -> std::unique_ptr<Integrator> {
           return std::make_unique<ArkodeIntegrator>(method, t, control);
         },

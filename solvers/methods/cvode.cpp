@@ -178,6 +178,7 @@ void register_cvode_methods(MethodTable& table) {
              .description = "adaptive, variable order Adams-Moulton, fixed-point iteration",
              .order = {1, 12, "1-12"},
              .stepping = Stepping::adaptive,
+             .on_ranks = OnRanks::cvode_adams,
              .make = cvode(false)});
   table.add({.name = "cvode-bdf",
              .family = "cvode",
@@ -186,6 +187,7 @@ void register_cvode_methods(MethodTable& table) {
              .order = {1, 5, "1-5"},
              .stepping = Stepping::adaptive,
              .dense = DenseMatrices::unless_sparse_jacobian,
+             .on_ranks = OnRanks::cvode_bdf,
              .make = cvode(true)});
 }
 

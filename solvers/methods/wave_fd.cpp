@@ -30,6 +30,7 @@ void register_wave_fd_methods(MethodTable& table) {
       .order = {2, 2, "2"},
       .stepping = Stepping::fixed,
       .needs = needs_wave_grid,
+      .on_ranks = OnRanks::split_grid,
       .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<WaveFd>(system); }),
       .stability = {.wave_dt = wave_stable_dt},
   });

@@ -192,7 +192,7 @@ TEST(DistributedWave, SundialsOnTheParallelVectorAgreesWithOneProcessToTheTolera
   const WaveGridView& grid = *model->as<WaveGridView>();
   const double rtol = 1e-8, atol = 1e-11, t = 0.5;
   for (const std::string method : {"cvode-adams", "arkode-erk-dormand-prince54", "cvode-bdf", "arkode-dirk-kvaerno43", "arkode-imex-ark436"}) {
-    const DistributedLinesRun distributed = lines_distributed(method, grid, model->initial_state(), t, rtol, atol);
+    const DistributedLinesRun distributed = lines_distributed(*find_method(method), grid, model->initial_state(), t, rtol, atol);
     ASSERT_TRUE(distributed.failure.empty()) << distributed.failure;
     if (ranks::rank() != 0) continue;
     const Measured serial = run_and_measure(*model, method, StepControl::adaptive(rtol, atol), t, t);
@@ -204,7 +204,7 @@ TEST(DistributedWave, SundialsOnTheParallelVectorAgreesWithOneProcessToTheTolera
               << " steps, one process " << serial.result.stats.steps << "; they differ by " << gap << " (max |y| " << size << ")\n";
     EXPECT_LE(gap, tolerance::adaptive_agreement_factor * rtol * size) << method;
   }
-  EXPECT_FALSE(lines_distributed("rk4", grid, model->initial_state(), t, rtol, atol).failure.empty());  // not run this way: said
+  EXPECT_FALSE(lines_distributed(*find_method("rk4"), grid, model->initial_state(), t, rtol, atol).failure.empty());  // not run this way: said
 }
 
 }  // namespace
