@@ -19,6 +19,9 @@ import shutil
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import check_report  # noqa: E402  (the CSV values and the half-unit rule, as the report's own check reads them)
+
 LOAD_BUDGET = 2.0  # seconds from navigation to every figure drawn, on these 2-core machines (the issue's budget)
 
 
@@ -139,22 +142,12 @@ def main():
         anchor = finding.find_element(By.CSS_SELECTOR, "a[href^='#']").get_attribute("href").split("#", 1)[1]
         md = open(os.path.join(directory, "report.md")).read()
         section = md.split(f'<a id="{anchor}"></a>', 1)[1].split('<a id="', 1)[0]
-        values = []
-        for name in re.findall(r"\(([\w\-]+\.csv)\)", section):
-            with open(os.path.join(directory, name), newline="") as f:
-                for row in csv.reader(f):
-                    for cell in row:
-                        try:
-                            values.append(float(cell))
-                        except ValueError:
-                            pass
+        values = check_report.csv_values(directory, re.findall(r"\(([\w\-]+\.csv)\)", section))
         if not number:
             problems.append(f"the first finding shows no number: {finding.text[:100]}")
         else:
             token = number.group(0)
-            decimals = len(token.split("e")[0].split(".")[1])
-            half = 0.5 * 10 ** (-decimals + (int(token.split("e")[1]) if "e" in token else 0))
-            if not any(abs(v - float(token)) <= half * (1 + 1e-9) for v in values):
+            if not check_report.matches(float(token), check_report.shown_precision(token), values):
                 problems.append(f"the first finding's {token} is in none of #{anchor}'s CSVs")
             else:
                 print(f"check_interactive: the first finding's {token} is a value of #{anchor}'s CSVs")

@@ -121,39 +121,33 @@ def diagram(groups, curves, front, x_title, y_title, title, hover_x, hover_y):
     return fig
 
 
-def work_precision(directory, groups):
+def per_scene(directory, groups, table, x_column, point, front, x_title, title):
+    """one diagram per scene of `table`'s ok rows: x = the row's `x_column`, y = its error; point(row) gives the
+    hover's setting and extra line; `front`: with the Pareto front"""
     out = {}
-    data = rows(directory, "work_precision")
+    data = rows(directory, table)
     for scene in dict.fromkeys(r["scene"] for r in data):
         curves = {}
         for r in data:
-            if r["scene"] != scene or r["status"] != "ok":
-                continue
-            error, cpu = number(r["error"]), number(r["cpu_seconds"])
-            if not (error > 0 and cpu > 0 and math.isfinite(error)):
-                continue
-            setting = f"dt {number(r['dt']):.3g}" if r["mode"] == "fixed" else f"rtol {number(r['rtol']):.1e}"
-            curves.setdefault(r["method"], []).append((cpu, error, setting, f"<br>calls of f {int(number(r['rhs_evals']))}"))
-        front = pareto([(x, y, m, s) for m, pts in curves.items() for x, y, s, _ in pts])
-        out[f"work_precision_{scene}"] = diagram(groups, curves, front, "CPU time (s)", "error at t_end", f"Work against precision, {scene}",
-                                                 "CPU (s)", "error")
+            x, error = number(r[x_column]), number(r["error"])
+            if r["scene"] == scene and r["status"] == "ok" and error > 0 and x > 0 and math.isfinite(error):
+                curves.setdefault(r["method"], []).append((x, error, *point(r)))
+        line = pareto([(x, y, m, s) for m, pts in curves.items() for x, y, s, _ in pts]) if front else None
+        out[f"{table}_{scene}"] = diagram(groups, curves, line, x_title, "error at t_end", f"{title}, {scene}", x_title, "error")
     return out
+
+
+def work_precision(directory, groups):
+    def point(r):
+        setting = f"dt {number(r['dt']):.3g}" if r["mode"] == "fixed" else f"rtol {number(r['rtol']):.1e}"
+        return setting, f"<br>calls of f {int(number(r['rhs_evals']))}"
+    return per_scene(directory, groups, "work_precision", "cpu_seconds", point, True, "CPU time (s)", "Work against precision")
 
 
 def convergence(directory, groups):
-    out = {}
-    data = rows(directory, "convergence")
-    for scene in dict.fromkeys(r["scene"] for r in data):
-        curves = {}
-        for r in data:
-            if r["scene"] != scene or r["status"] != "ok":
-                continue
-            error, dt = number(r["error"]), number(r["dt"])
-            if not (error > 0 and dt > 0 and math.isfinite(error)):
-                continue
-            curves.setdefault(r["method"], []).append((dt, error, f"dt {dt:.3g}", f"<br>steps {int(number(r['steps']))}"))
-        out[f"convergence_{scene}"] = diagram(groups, curves, None, "dt (s)", "error at t_end", f"Convergence, {scene}", "dt (s)", "error")
-    return out
+    def point(r):
+        return f"dt {number(r['dt']):.3g}", f"<br>steps {int(number(r['steps']))}"
+    return per_scene(directory, groups, "convergence", "dt", point, False, "dt (s)", "Convergence")
 
 
 # draws each figure when it comes near the window (the page is usable at once; a dozen figures of forty traces
