@@ -239,6 +239,9 @@ class WorkPrecisionReporter : public benchmark::ConsoleReporter {
       for (const char* name : {"per-solve/stepwise rk4, solve()", "per-solve/stepwise rk4, integrate()"})
         if (cpu_.contains(name)) std::printf("  %s %.2f us: %+.2f us\n", name + 10, cpu_.at(name), cpu_.at(name) - peer);
     }
+    std::printf("each solve timed whole: stepwise's integrator constructed by name (make_integrator) for every solve and run by solve(); "
+                "the peers' steppers, GSL's driver and CVODE's memory made for every solve too. A candidate's cost at an error: log-log "
+                "interpolation on its own curve\n");
     for (const char* problem : {pendulum.label, flow.label, projectile.label}) {
       std::printf("%s\n", problem);
       for (int e = 4; e <= 10; ++e) {
