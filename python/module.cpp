@@ -8,8 +8,6 @@
 // as it unwinds) with a note saying at which t; Ctrl-C raises KeyboardInterrupt at the next call of f or output.
 // The GIL is released while a compiled system (equations, a scene's model) runs, and taken back to look for a
 // signal every few thousand calls of f and at every output.
-#include "report/report.hpp"
-#include "report/studies.hpp"
 #include "stepwise/stepwise.hpp"
 
 #include <fmt/format.h>
@@ -235,7 +233,7 @@ py::dict stats_dict(const Stats& s) {
 // would add ~1 us a solve): `fun` a Python callable or an Equations; t_eval, where given, sorted in the direction
 // of integration and within t_span (checked here, SciPy's messages)
 py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<double, py::array::c_style | py::array::forcecast>& y0_array, const std::string& method_name, double rtol, double atol,
-               std::optional<double> dt, double max_step, std::optional<std::vector<double>> t_eval, const py::object& jac, double max_steps) {
+               std::optional<double> dt, double max_step, std::optional<std::vector<double>> t_eval, const py::object& jac, std::optional<double> max_steps) {
   const Method* method = find_method(method_name);
   if (!method) throw BadMethod(fmt::format("unknown method \"{}\" (stepwise.methods() lists them)", method_name));
   if (!std::isfinite(t0) || !std::isfinite(t1)) throw py::value_error(fmt::format("t_span must be finite, not ({}, {})", t0, t1));
@@ -265,11 +263,13 @@ py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<do
     control = StepControl::adaptive(rtol, atol);
     control.max_step = max_step;
   }
-  if (!(max_steps >= 1)) throw py::value_error(fmt::format("max_steps must be at least 1, not {}", max_steps));
-  control.max_steps = static_cast<long>(std::min(max_steps, 1e15));
+  if (max_steps) {  // else StepControl's own cap
+    if (!(*max_steps >= 1)) throw py::value_error(fmt::format("max_steps must be at least 1, not {}", *max_steps));
+    control.max_steps = static_cast<long>(std::min(*max_steps, 1e15));
+  }
   check_step_control(*method, control);
-  if (dt && std::abs(t1 - t0) / *dt > max_steps)
-    throw py::value_error(fmt::format("dt = {} takes {:.3g} steps over t_span, more than max_steps = {:.3g}", *dt, std::abs(t1 - t0) / *dt, max_steps));
+  if (dt && std::abs(t1 - t0) / *dt > static_cast<double>(control.max_steps))
+    throw py::value_error(fmt::format("dt = {} takes {:.3g} steps over t_span, more than max_steps = {}", *dt, std::abs(t1 - t0) / *dt, control.max_steps));
   if (const double bytes = dense_matrix_bytes(*method, *system); over_memory_budget(bytes))
     throw BadMethod(fmt::format("{} keeps dense {}x{} matrices ({:.3g} GB): {}", method->name, n, n, bytes / 1e9, memory_budget_text()));
 
@@ -395,8 +395,7 @@ py::dict table_dict(const Table& table) {
 }
 
 py::dict advise_scene(const std::string& scene, double error, double budget, const std::map<std::string, double>& sets, int threads) {
-  if (!(error > 0) || !std::isfinite(error)) throw py::value_error(fmt::format("error must be a positive number, not {}", error));
-  if (!(budget > 0) || !std::isfinite(budget)) throw py::value_error(fmt::format("budget must be a positive number of seconds, not {}", budget));
+  check_advice_request(error, budget);
   const RunOptions o = run_options(scene, sets);
   Advice a;
   std::string markdown;
@@ -417,19 +416,13 @@ py::dict advise_scene(const std::string& scene, double error, double budget, con
 
 // the studies that take a scene of the user's (`stepwise study NAME --scene FILE`)
 py::dict study_scene(const std::string& name, const std::string& scene, const std::map<std::string, double>& sets, bool quick, int threads) {
-  const auto& all = studies();
-  const auto study = std::find_if(all.begin(), all.end(), [&](const Study& s) { return s.name == name; });
-  constexpr std::string_view takes_scene[] = {"work-precision", "convergence", "stability-regions", "energy"};
-  if (study == all.end() || std::find(std::begin(takes_scene), std::end(takes_scene), name) == std::end(takes_scene))
-    throw py::value_error(fmt::format("study: \"{}\" is not a study that takes a scene (those that do: {})", name, fmt::join(takes_scene, ", ")));
+  const Study* study = find_study(name);
+  if (!study) throw py::value_error(fmt::format("study: unknown study '{}' (one of {})", name, study_names()));
   const RunOptions o = run_options(scene, sets);
   StudyOutput out;
   {
     py::gil_scoped_release released;
-    const std::vector<StudyScene> scenes{user_study_scene(o)};
-    if (name == "energy")
-      if (const auto model = scene_model(scenes.front()); !model->energy(model->initial_state()))
-        throw InputError(fmt::format("{} has no energy formula (energy = \"...\" above its first table) for the energy study", o.scene_file));
+    const std::vector<StudyScene> scenes{study_scene_of(name, o)};
     StudyContext ctx{quick, threads_or_default(threads), nullptr};
     ctx.distribute = false;
     ctx.scenes = &scenes;

@@ -407,11 +407,15 @@ std::string advice_json_text(const Advice& a, const std::string& scene_file) {
   return j.dump(2) + "\n";
 }
 
+void check_advice_request(double error, double budget_seconds) {
+  if (!(std::isfinite(error) && error > 0)) throw InputError(fmt::format("--error: must be a positive finite number, got {}", error));
+  if (!(std::isfinite(budget_seconds) && budget_seconds >= 1 && budget_seconds <= 86400))
+    throw InputError(fmt::format("--budget: must be between 1 and 86400 seconds, got {}", budget_seconds));
+}
+
 int advise_command(const AdviseOptions& o) {
   // the inputs, before anything runs: the error, the budget, the scene as `stepwise run` checks it, the output
-  if (!(std::isfinite(o.error) && o.error > 0)) throw InputError(fmt::format("--error: must be a positive finite number, got {}", o.error));
-  if (!(std::isfinite(o.budget) && o.budget >= 1 && o.budget <= 86400))
-    throw InputError(fmt::format("--budget: must be between 1 and 86400 seconds, got {}", o.budget));
+  check_advice_request(o.error, o.budget);
   PreparedRun prepared;
   const StudyScene scene = user_study_scene(o.run, &prepared);
   ensure_writable_directory(o.out);

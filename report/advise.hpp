@@ -60,6 +60,9 @@ struct Advice {
 // accuracy asks: rk4 is stable for h |lambda| < 2.8, so it needs at least stiffness / 2.8 steps whatever E
 inline constexpr double stiffness_threshold = 1000;
 
+// InputError, the command's one-line message, unless E is a positive finite number and the budget 1 to 86400 s
+void check_advice_request(double error, double budget_seconds);
+
 // the advice for a scene; `threads` runs the sweep's methods side by side
 Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads);
 

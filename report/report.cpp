@@ -40,11 +40,6 @@ namespace {
 
 constexpr const char* report_marker = ".stepwise-report.json";
 
-const Study* find_study(const std::string& name) {
-  for (const auto& s : studies())
-    if (s.name == name) return &s;
-  return nullptr;
-}
 
 // run one study, write its CSVs into dir (rank 0: the others compute their share and write nothing), add its
 // figures to the list and its findings (each linking to the section, anchored by the study's name) to
@@ -167,6 +162,21 @@ void swap_report(const fs::path& staging, const fs::path& target) {
 
 }  // namespace
 
+const Study* find_study(const std::string& name) {
+  for (const auto& s : studies())
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+StudyScene study_scene_of(const std::string& name, const RunOptions& scene) {
+  if (scene_studies.find(name) == std::string_view::npos || name == pictures_study)
+    throw InputError(fmt::format("--scene: study {} runs on its own scenes (those that take --scene: {})", name, scene_studies));
+  StudyScene s = user_study_scene(scene);
+  if (const auto model = scene_model(s); name == "energy" && !model->energy(model->initial_state()))
+    throw InputError(fmt::format("--scene: {} has no energy formula (energy = \"...\" above its first table) for the energy study", scene.scene_file));
+  return s;
+}
+
 int threads_or_default(int requested) { return requested > 0 ? requested : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 int study_command(const std::string& name, bool quick, int threads, const std::string& out, const std::optional<RunOptions>& scene) {
@@ -180,14 +190,8 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
   // the user's scene, checked as `stepwise run` checks it, before anything runs
   std::vector<StudyScene> user_scenes;
   if (scene) {
-    if (scene_studies.find(name) == std::string_view::npos || pictures) {
-      if (writer) print_error("study", fmt::format("--scene: study {} runs on its own scenes (those that take --scene: {})", name, scene_studies));
-      return 2;
-    }
     try {
-      user_scenes.push_back(user_study_scene(*scene));
-      if (const auto model = scene_model(user_scenes.back()); name == "energy" && !model->energy(model->initial_state()))
-        throw InputError(fmt::format("--scene: {} has no energy formula (energy = \"...\" above its first table) for the energy study", scene->scene_file));
+      user_scenes.push_back(study_scene_of(name, *scene));
     } catch (const InputError& e) {
       if (writer) print_error("study", e.what());
       return 2;

@@ -33,6 +33,16 @@ int threads_or_default(int requested);
 // the studies that take --scene
 inline constexpr std::string_view scene_studies = "work-precision, convergence, stability-regions, energy";
 
+// the study of that name, or null
+struct Study;
+const Study* find_study(const std::string& name);
+
+// the user's scene for study `name` (`stepwise study NAME --scene FILE`, Python's stepwise.study): checked as
+// `stepwise run` checks it; InputError, the command's message, for a study that runs on its own scenes or an
+// energy study on a scene with no energy formula
+struct StudyScene;
+StudyScene study_scene_of(const std::string& name, const RunOptions& scene);
+
 // every study, then out/report.md, the figures and out/index.html; written to a temporary directory and moved
 // into place at the end, so a failed or interrupted run leaves the previous report as it was
 int report_command(bool quick, int threads, const std::string& out, const std::string& scenes_dir);

@@ -14,13 +14,17 @@
 //   scene files and running them measured               run/scene.hpp: load_scene; run/prepare.hpp:
 //                                                        prepare_run; run/measure.hpp: run_and_measure;
 //                                                        run/run_outputs.hpp: a run's rows and summary.json
-//   the studies on one scene, and the advice            report/user_scene.hpp: user_study_scene;
+//   the studies on one scene, and the advice            report/studies.hpp: studies(), Study::run;
+//                                                        report/report.hpp: find_study, study_scene_of;
+//                                                        report/user_scene.hpp: user_study_scene;
 //                                                        report/advise.hpp: advise
 #pragma once
 
 #include "models/equations.hpp"
 #include "models/model.hpp"
 #include "report/advise.hpp"
+#include "report/report.hpp"
+#include "report/studies.hpp"
 #include "report/user_scene.hpp"
 #include "run/measure.hpp"
 #include "run/prepare.hpp"

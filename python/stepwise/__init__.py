@@ -141,7 +141,8 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
     dt = options.pop("dt", None)
     dt = None if dt is None else _number("dt", dt)
     max_step = _number("max_step", options.pop("max_step", np.inf))
-    max_steps = _number("max_steps", options.pop("max_steps", 5e6))
+    max_steps = options.pop("max_steps", None)  # None: StepControl's own cap
+    max_steps = None if max_steps is None else _number("max_steps", max_steps)
     if options:
         ignored = sorted(k for k in options if k in _SCIPY_NO_EFFECT)
         unknown = sorted(k for k in options if k not in _SCIPY_NO_EFFECT)

@@ -77,7 +77,7 @@ def test_study_convergence_on_a_scene():
         if method in ("rk4", "euler", "odeint-rk4"):
             assert abs(observed - float(documented)) <= tolerance("order_band"), (method, observed)
     assert "rk4" in orders["method"]
-    with pytest.raises(ValueError, match="takes a scene"):
+    with pytest.raises(ValueError, match="runs on its own scenes"):
         stepwise.study("cloth", scene("damped-oscillator"))
 
 

@@ -84,7 +84,10 @@ StudyOutput energy(const StudyContext& ctx) {
   // the finding (the pendulum's): symplectic Euler's bounded error against explicit Euler's growth and implicit Euler's decay
   std::vector<std::string> findings;
   std::map<std::string, std::vector<double>> by_method;
-  for (const auto& row : summary.rows) by_method[std::get<std::string>(row[0])] = {std::get<double>(row[1]), std::get<double>(row[2]), std::get<double>(row[3])};
+  for (const auto& row : summary.rows) {
+    const auto value = [&](const char* column) { return std::get<double>(cell_of(summary, row, column)); };
+    by_method[std::get<std::string>(cell_of(summary, row, "method"))] = {value("max_first_tenth"), value("max_last_tenth"), value("at_end")};
+  }
   if (!user && by_method.contains("symplectic-euler") && by_method.contains("euler") && by_method.contains("implicit-euler"))
     findings.push_back(fmt::format("**Symplectic Euler keeps the energy bounded**: over {} periods of the pendulum at dt = T/100 its relative "
                                    "energy error is {:.3e} at most in the first tenth of the run and {:.3e} in the last, while explicit Euler's "

@@ -98,9 +98,10 @@ StudyOutput stability_regions(const StudyContext& ctx) {
   // the finding: rk4's measured limits against its predicted ones
   double lo = INFINITY, hi = -INFINITY;
   for (const auto& row : table.rows)
-    if (std::get<std::string>(row[1]) == "rk4" && std::isfinite(std::get<double>(row[4]))) {
-      lo = std::min(lo, std::get<double>(row[4]));
-      hi = std::max(hi, std::get<double>(row[4]));
+    if (const double r = std::get<double>(cell_of(table, row, "measured_over_spectrum"));
+        std::get<std::string>(cell_of(table, row, "method")) == "rk4" && std::isfinite(r)) {
+      lo = std::min(lo, r);
+      hi = std::max(hi, r);
     }
   if (std::isfinite(lo))
     out.findings.push_back(fmt::format("**A step fails when h lambda leaves the method's stability region**: rk4's largest stable step, found by "

@@ -56,8 +56,9 @@ StudyOutput wave_adequacy(const StudyContext& context) {
   // the finding: the departure per unit of A / H, over the drops tried
   double lo = INFINITY, hi = -INFINITY;
   for (const auto& row : table.rows) {
-    lo = std::min(lo, std::get<double>(row[3]));
-    hi = std::max(hi, std::get<double>(row[3]));
+    const double per_amplitude = std::get<double>(cell_of(table, row, "departure_per_amplitude"));
+    lo = std::min(lo, per_amplitude);
+    hi = std::max(hi, per_amplitude);
   }
   std::vector<std::string> findings{fmt::format(
       "**Model no more than the scene needs**: the height field's linear wave equation departs from shallow water by {:.3f} to {:.3f} times "
