@@ -23,6 +23,7 @@
 #include <nvector/nvector_serial.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdlib>
 #include <cmath>
@@ -262,10 +263,12 @@ class WorkPrecisionReporter : public benchmark::ConsoleReporter {
   // interpolated in log-log between the first successive pair whose errors bracket the target; where no pair
   // does (a curve that jumps past it), its cheapest point reaching it. Infinite where none does
   double cost_at(const std::string& problem, const std::string& name, double target) const {
-    std::vector<std::pair<double, double>> curve;  // (error, us)
+    std::vector<const Point*> mine;
     for (const auto& p : points)
-      if (p.problem == problem && p.name == name && std::isfinite(p.error) && p.error > 0 && cpu_.contains(p.benchmark))
-        curve.emplace_back(p.error, cpu_.at(p.benchmark));
+      if (p.problem == problem && p.name == name && std::isfinite(p.error) && p.error > 0 && cpu_.contains(p.benchmark)) mine.push_back(&p);
+    std::sort(mine.begin(), mine.end(), [](const Point* a, const Point* b) { return a->tol > b->tol; });
+    std::vector<std::pair<double, double>> curve;  // (error, us), loosest tolerance first
+    for (const Point* p : mine) curve.emplace_back(p->error, cpu_.at(p->benchmark));
     for (size_t k = 0; k + 1 < curve.size(); ++k) {
       const auto [e1, c1] = curve[k];
       const auto [e2, c2] = curve[k + 1];

@@ -444,7 +444,7 @@ def html(directory):
         if stem not in twins:
             return m.group(0)
         return (f'<figure class="interactive">{twins[stem]}<figcaption>{alt}: hover for a point\'s method, setting, error and cost; '
-                f'click a legend entry to hide or show a method, a group\'s title for the whole group '
+                f'click a legend entry to hide or show a method, a group\'s button above the plot for the whole group '
                 f'(<a href="{stem}.png">the static figure</a>)</figcaption></figure>')
     body = re.sub(r'<p><img alt="([^"]*)" src="([\w.\-]+)\.png" /></p>', explore, body)
     script = ('<script src="plotly.js" charset="utf-8" defer></script>' + interactive.LOADER) if twins else ""
