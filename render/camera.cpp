@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 namespace stepwise::render {
 
@@ -33,19 +34,50 @@ Eigen::Vector2d Camera::pixel(const Eigen::Vector3d& p, int width, int height) c
   return {(ndc.x() + 1) / 2 * width, (1 - ndc.y()) / 2 * height};
 }
 
+namespace {
+
+// the bodies' vertices (world), the sheets' vertices and the rods' points
+void for_solid_points(const Shapes& shapes, const std::function<void(const Eigen::Vector3d&)>& visit) {
+  for (const auto& body : shapes.bodies)
+    for (Eigen::Index v = 0; v < body.mesh->vertices.rows(); ++v) visit(body.rotation * body.mesh->vertices.row(v).transpose() + body.position);
+  for (const auto& sheet : shapes.surfaces)
+    for (Eigen::Index v = 0; v < sheet.vertices.rows(); ++v) visit(sheet.vertices.row(v).transpose());
+  for (const auto& line : shapes.lines)
+    for (const auto& p : line) visit(p);
+}
+
+}  // namespace
+
+void for_each_point(const Shapes& shapes, const std::function<void(const Eigen::Vector3d&)>& visit) {
+  for (const auto& ball : shapes.balls) visit(ball.center);
+  for_solid_points(shapes, visit);
+  if (const auto& w = shapes.water)
+    for (int i = 0; i < w->points; ++i)
+      for (int j = 0; j < w->points; ++j) visit({j * w->spacing, i * w->spacing, w->z[i * w->points + j]});
+}
+
+double pixel_distance(const Shapes& a, const Shapes& b, const Camera& camera, int width, int height) {
+  std::vector<Eigen::Vector2d> at;
+  for_each_point(a, [&](const Eigen::Vector3d& p) { at.push_back(camera.pixel(p, width, height)); });
+  size_t k = 0;
+  double largest = 0;
+  bool finite = true;
+  for_each_point(b, [&](const Eigen::Vector3d& p) {
+    const double d = k < at.size() ? (camera.pixel(p, width, height) - at[k]).norm() : NAN;
+    finite = finite && std::isfinite(d);
+    largest = std::max(largest, d);
+    ++k;
+  });
+  return finite && k == at.size() ? largest : NAN;
+}
+
 Aabb bounds(const Shapes& shapes, double depth) {
   Aabb box;
   for (const auto& ball : shapes.balls) {
     box.extend(ball.center.array() - ball.radius);
     box.extend(ball.center.array() + ball.radius);
   }
-  for (const auto& body : shapes.bodies)
-    for (Eigen::Index v = 0; v < body.mesh->vertices.rows(); ++v)
-      box.extend(body.rotation * body.mesh->vertices.row(v).transpose() + body.position);
-  for (const auto& sheet : shapes.surfaces)
-    for (Eigen::Index v = 0; v < sheet.vertices.rows(); ++v) box.extend(sheet.vertices.row(v).transpose());
-  for (const auto& line : shapes.lines)
-    for (const auto& p : line) box.extend(p);
+  for_solid_points(shapes, [&](const Eigen::Vector3d& p) { box.extend(p); });
   if (shapes.container) {
     box.extend(shapes.container->lo);
     box.extend(shapes.container->hi);

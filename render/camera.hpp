@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 
+#include <functional>
 #include <optional>
 
 namespace stepwise::render {
@@ -41,6 +42,15 @@ struct Pool {
 
 // the box around everything drawn: balls, bodies, sheets, rods, the container, the water and its pool
 Aabb bounds(const Shapes& shapes, double pool_depth);
+
+// every point drawn at a place the state sets, in an order fixed by the shapes' structure: the balls' centres,
+// the bodies' mesh vertices (world), the sheets' vertices, the rods' points, the water's grid nodes
+void for_each_point(const Shapes& shapes, const std::function<void(const Eigen::Vector3d&)>& visit);
+
+// the largest distance in pixels, in a width x height image through `camera`, between the points of `a` and
+// the same points of `b` (for_each_point): how far one picture of a scene is from another of the same scene;
+// NaN if they do not have the same points or a point is not finite
+double pixel_distance(const Shapes& a, const Shapes& b, const Camera& camera, int width, int height);
 
 // the pool's depth: the look's, else a quarter of the water's side
 double pool_depth(const Shapes& shapes, const Look& look);

@@ -127,6 +127,21 @@ def main():
                 else:
                     print(f"check_interactive: the legend's entry '{name}' hid its method and showed it again")
 
+        # the side-by-side videos play in the page: Chromium decodes each one's first frame at its size
+        for video in browser.find_elements(By.TAG_NAME, "video"):
+            source = video.get_attribute("src")
+            browser.execute_script("arguments[0].scrollIntoView(); arguments[0].preload = 'auto'; arguments[0].load()", video)
+            deadline = time.monotonic() + 10
+            while browser.execute_script("return arguments[0].readyState < 2 && !arguments[0].error", video) and time.monotonic() < deadline:
+                time.sleep(0.05)
+            state = browser.execute_script("return [arguments[0].readyState, arguments[0].videoWidth, arguments[0].videoHeight, "
+                                           "arguments[0].error && arguments[0].error.code]", video)
+            if state[0] < 2 or state[1:] != [1280, 720, None]:
+                problems.append(f"{source}: not playable in the page (readyState, width, height, error: {state})")
+        if videos := browser.find_elements(By.TAG_NAME, "video"):
+            browser.save_screenshot(os.path.join(shots, "browser_video.png"))
+            print(f"check_interactive: {len(videos)} side-by-side videos decoded in the page at 1280 x 720")
+
         # a table-of-contents link brings its section to the top
         link = browser.find_elements(By.CSS_SELECTOR, "nav a[href^='#']")[3]
         target = link.get_attribute("href").split("#", 1)[1]

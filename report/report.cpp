@@ -4,6 +4,7 @@
 #include "report/cost_model.hpp"
 #include "run/atomic_write.hpp"
 #include "pictures.hpp"
+#include "side_by_side.hpp"
 #include "run/process.hpp"
 #include "run/message.hpp"
 #include "run/interrupt.hpp"
@@ -27,14 +28,28 @@
 namespace stepwise {
 namespace fs = std::filesystem;
 
-// the studies' names, and the report's pictures (every scene drawn), which `stepwise study` runs alone too
+// the studies' names, and the report's drawn sections, which `stepwise study` runs alone too: the pictures (every
+// scene drawn) and the side-by-side videos, each rank 0's alone
 constexpr const char* pictures_study = "pictures";
+constexpr const char* side_by_side_study = "side-by-side";
 
 std::string study_names() {
   std::string names;
   for (const auto& s : studies()) names += (names.empty() ? "" : " | ") + std::string(s.name);
-  return names + " | " + pictures_study;
+  return names + " | " + pictures_study + " | " + side_by_side_study;
 }
+
+namespace {
+
+// a drawn section by name, or null
+using Section = std::string (*)(const fs::path&, const fs::path&, const StudyContext&);
+Section drawn_section(const std::string& name) {
+  if (name == pictures_study) return pictures_section;
+  if (name == side_by_side_study) return side_by_side_section;
+  return nullptr;
+}
+
+}  // namespace
 
 namespace {
 
@@ -169,7 +184,7 @@ const Study* find_study(const std::string& name) {
 }
 
 StudyScene study_scene_of(const std::string& name, const RunOptions& scene) {
-  if (scene_studies.find(name) == std::string_view::npos || name == pictures_study)
+  if (scene_studies.find(name) == std::string_view::npos || drawn_section(name))
     throw InputError(fmt::format("--scene: study {} runs on its own scenes (those that take --scene: {})", name, scene_studies));
   StudyScene s = user_study_scene(scene);
   if (const auto model = scene_model(s); name == "energy" && !model->energy(model->initial_state()))
@@ -182,7 +197,8 @@ int threads_or_default(int requested) { return requested > 0 ? requested : stati
 int study_command(const std::string& name, bool quick, int threads, const std::string& out, const std::optional<RunOptions>& scene) {
   const bool writer = ranks::rank() == 0;
   const Study* study = find_study(name);
-  const bool pictures = name == pictures_study;
+  const Section drawn = drawn_section(name);
+  const bool pictures = drawn != nullptr;
   if (!study && !pictures) {
     if (writer) print_error("study", fmt::format("unknown study '{}' (one of {})", name, study_names()));
     return 2;
@@ -222,7 +238,7 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
       ctx.distribute = false;
       ctx.load = nullptr;
     }
-    const std::string md = pictures ? pictures_section(out, scenes_directory(), ctx) : run_study(*study, ctx, out, figures, nullptr);
+    const std::string md = pictures ? drawn(out, scenes_directory(), ctx) : run_study(*study, ctx, out, figures, nullptr);
     together = false;
     if (!writer) return 0;
     write_file_atomic(fs::path(out) / (name + ".md"), md);
@@ -289,6 +305,7 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
     here.distribute = false;
     here.load = nullptr;  // the ranks' shares are the sweeps'; the pictures are rank 0's alone
     md += pictures_section(staging, scenes_dir, here);
+    md += side_by_side_section(staging, scenes_dir, here);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     md += ranks::size() == 1 ? fmt::format("---\nStudies run in {:.1f} s of wall time on {} threads.\n", seconds, ctx.threads)
                              : fmt::format("---\nStudies run in {:.1f} s of wall time on {} MPI ranks of {} threads (the pictures on rank 0).\n",

@@ -318,7 +318,7 @@ RenderedRun render_scene(const RenderOptions& options) {
     queue.finish();
     const double span = samples.t[frame_samples.back()];
     const int fps = span > 0 ? std::clamp(static_cast<int>(std::lround((shapes.size() - 1) / span)), 1, 60) : 1;
-    if (shapes.size() > 1 && movies) encode_movies(out, fps);
+    if (shapes.size() > 1 && movies && options.animations) encode_movies(out, fps);
     std::lock_guard lock(summary_mutex);
     summary["draw_seconds"] = draw_seconds;
     summary["fps"] = fps;

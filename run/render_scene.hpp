@@ -15,6 +15,7 @@ struct RenderOptions {
   std::string size = "1280x720";   // WxH in pixels
   std::string backend = "osmesa";  // osmesa | egl
   std::string out;
+  bool animations = true;          // the MP4 and GIF too, where ffmpeg is installed (else said on stderr)
 };
 
 // how the drawn run ended: ok, or diverged or failed at t_last with the message (the frames up to then drawn)

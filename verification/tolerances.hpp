@@ -508,4 +508,13 @@ inline constexpr double equations_run_roundoff = 1e-10;
 // step, the global error's size; 10 rtol |y| bounds it, where a wrong coefficient leaves an O(h |y'|) ~ 1e-2 error
 inline constexpr double dense_output_rtols = 10;
 
+// two panels of a side-by-side video showing the same picture, decoded: H.264 at CRF 20 leaves ~40 dB PSNR (an
+// RMS error of ~2.5 of 255 levels), but its ringing at a hard edge (a rod, a silhouette) reaches ~50 levels at
+// isolated pixels (measured up to 56 where the pictures were the same, in 2e-5 of a panel's pixels). Two
+// decoded panels are the same picture where at most 1e-4 of their pixels are over 48 levels apart; a shape
+// moved by a pixel or more moves its edge, hundreds of pixels over that (measured 4e-3 of the panel for the
+// pendulum 4 px off, 0.49 for the water diverged)
+inline constexpr double video_noise_levels = 48;
+inline constexpr double video_noise_share = 1e-4;
+
 }  // namespace stepwise::tolerance

@@ -220,6 +220,25 @@ TEST(Frames, BallCentroidIsWhereTheSimulationPutIt) {
   }
 }
 
+// the side-by-side videos' offset: a ball moved by d in the world is as many pixels off as the camera puts its
+// two centres apart; a sheet against itself is 0 off; shapes without the same points have no offset
+TEST(Frames, PixelDistanceIsTheLargestProjectedOffset) {
+  const auto model = make_model("bouncing-ball", {});
+  const int w = 320, h = 240;
+  Eigen::VectorXd y = model->initial_state();
+  const Shapes at = *model->shapes(y);
+  y[0] -= 0.3;
+  const Shapes moved = *model->shapes(y);
+  const render::View view = render::make_view(std::vector<Shapes>{at, moved}, {}, w, h);
+  const double expected = (view.camera.pixel(moved.balls[0].center, w, h) - view.camera.pixel(at.balls[0].center, w, h)).norm();
+  ASSERT_GT(expected, 10) << "the move shows";
+  EXPECT_NEAR(render::pixel_distance(at, moved, view.camera, w, h), expected, 1e-9 * expected);
+  const auto cloth = make_model("cloth", {{"rows", 6}, {"columns", 6}});
+  const Shapes sheet = *cloth->shapes(cloth->initial_state());
+  EXPECT_EQ(render::pixel_distance(sheet, sheet, view.camera, w, h), 0);
+  EXPECT_TRUE(std::isnan(render::pixel_distance(sheet, at, view.camera, w, h)));
+}
+
 TEST(Frames, FlatSheetCoversItsProjectedArea) {
   const Eigen::Index rows = 12, columns = 16;
   const auto model = make_model("cloth", {{"rows", rows}, {"columns", columns}});

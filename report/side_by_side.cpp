@@ -1,0 +1,196 @@
+#include "side_by_side.hpp"
+
+#include "studies.hpp"
+
+#include "run/atomic_write.hpp"
+#include "run/csv.hpp"
+#include "run/measure.hpp"
+#include "run/message.hpp"
+#include "run/process.hpp"
+#include "run/side_by_side.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <optional>
+
+namespace stepwise {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// a method of a clip and the step its calibration starts from
+struct Contender {
+  const char* method;
+  double dt;
+};
+
+// a clip: a scene, how long it runs, the CPU budget its methods share, and the reference
+struct Clip {
+  const char* scene;
+  std::vector<std::string> sets;
+  double t_end, quick_t_end;  // s
+  // the budget: CPU seconds per simulated second where given, else what `anchor` costs at its step
+  std::optional<double> per_second;
+  Contender anchor;
+  const char* budget_says;  // the budget in words
+  std::vector<Contender> methods;
+  Contender reference;      // converged: rk4 far below the steps the others take
+  const char* says;         // what the clip shows
+  double draw_ms;           // a panel's drawing at 640 x 360, measured: the expected cost
+};
+
+const std::vector<Clip>& clips() {
+  static const std::vector<Clip> all{
+      // the flag's methods at real time on one core (report/studies/cloth_realtime.cpp measures them there);
+      // rk4 in place of tsitouras54, which is stability-bound here (1 s of CPU a simulated second at any loose
+      // tolerance) and takes no fixed step for the frames to fall on
+      {"flag", {}, 2.0, 0.5, 1.0, {"", 0}, "real time: 1 s of CPU per simulated second",
+       {{"implicit-euler", 1.0 / 60}, {"fast-mass-spring", 1.0 / 240}, {"rk4", 1e-3}}, {"rk4", 2.5e-4},
+       "The seeds' 32 x 32 flag: the implicit methods take large steps and damp the billowing out; rk4 affords steps "
+       "far below its stability limit.",
+       5},
+      // released at 170 degrees, near the top: a small energy error changes the swing's period, or sends it over
+      {"pendulum", {"theta0=2.9670597283903604"}, 10.0, 5.0, std::nullopt, {"rk4", 1.0 / 30}, "rk4's CPU time at one step a frame",
+       {{"euler", 1e-2}, {"symplectic-euler", 1e-2}, {"rk4", 1.0 / 30}}, {"rk4", 1e-4},
+       "The pendulum released at 170 degrees: explicit Euler gains energy, symplectic Euler keeps it but drifts in phase.", 2},
+      // the seeds' scheme near its stability limit sets the budget: the method of lines, a few times dearer a step,
+      // must take steps past its own limits there (implicit Euler, whose Newton matrix on this model is dense,
+      // 8 192^2, cannot take a step within it)
+      {"water-drop", {}, 3.0, 1.0, std::nullopt, {"wave-fd", 1.0 / 90}, "wave-fd's CPU time at 1/90 s, 0.79 of its stability limit (0.01415 s)",
+       {{"wave-fd", 5e-3}, {"symplectic-euler", 5e-3}, {"rk4", 5e-3}}, {"rk4", 1e-3},
+       "The drop's ring on the 64 x 64 height field, with the caustic on the pool's floor, at the cost of the seeds' scheme.", 25},
+  };
+  return all;
+}
+
+// the step that puts `dt` on the frames: a whole number of steps a frame, at least one, none longer than dt
+double on_frames(double dt, double interval) { return interval / std::max(1.0, std::ceil(interval / dt * (1 - 1e-12))); }
+
+// the steps a frame that keep `method`'s CPU time within `budget` over t_end, at least one: its CPU time a
+// simulated second, c(n) = a + b n at n steps a frame (a: the outputs, b: the steps), measured over a quarter of
+// the run at two step counts and solved for the budget
+int steps_within(const RunOptions& scene, const char* method, double dt, int fps, double t_end, double budget) {
+  const double interval = 1.0 / fps;
+  // a quarter of the run, a whole number of frames (at least four)
+  const double span = std::min(t_end, interval * std::max(4.0, std::floor(t_end / 4 / interval)));
+  const int n1 = static_cast<int>(std::lround(interval / on_frames(dt, interval))), n2 = 2 * n1;
+  const auto cost = [&](int n) { return panel_cpu_seconds(scene, {method, interval / n, ""}, fps, span) / span; };
+  const double c1 = cost(n1), c2 = cost(n2);
+  const double b = std::max(c2 - c1, 1e-3 * c2) / (n2 - n1), a = std::max(0.0, c1 - b * n1);
+  return static_cast<int>(std::clamp(std::floor((budget / t_end - a) / b), 1.0, 1e6));
+}
+
+std::string step_text(double dt) {
+  const double per_second = 1 / dt;
+  return std::abs(per_second - std::round(per_second)) < 1e-6 * per_second ? fmt::format("dt 1/{:.0f} s", per_second) : fmt::format("dt {:.3g} s", dt);
+}
+
+struct Shot {
+  Filmed filmed;
+  double budget = 0;  // CPU seconds for the run
+  static auto fields(auto& s) { return std::tie(s.filmed, s.budget); }
+};
+
+}  // namespace
+
+std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir, const StudyContext& ctx) {
+  std::string md = "## Side by side\n\n";
+  if (!on_path("ffmpeg")) {
+    print_error("report", "ffmpeg is not installed: the side-by-side videos were skipped (apt-get install ffmpeg)");
+    return md + "Not filmed: ffmpeg is not installed here (it encodes the videos and draws their labels).\n\n";
+  }
+  const int fps = ctx.quick ? 15 : 30;
+  const auto& all = clips();
+  std::vector<std::string> labels;
+  std::vector<double> costs;
+  for (const Clip& clip : all) {
+    labels.push_back(clip.scene);
+    const double t_end = ctx.quick ? clip.quick_t_end : clip.t_end;
+    // the runs at their budget, the reference's about as much again, and the frames drawn
+    costs.push_back(1e9 * t_end * (clip.per_second.value_or(0.01) * 5) + 4 * fps * t_end * clip.draw_ms * 1e6);
+  }
+  if (ctx.progress) ctx.progress->begin_study("side-by-side");
+  const auto start = std::chrono::steady_clock::now();
+  fs::create_directories(dir / "side_by_side");
+  const auto shots = ctx.sweep<Shot>(labels, [&](size_t i) {
+    const Clip& clip = all[i];
+    SideBySideOptions o;
+    o.run.scene_file = (scenes_dir / (std::string(clip.scene) + ".toml")).string();
+    o.run.sets = clip.sets;
+    o.run.t_end = ctx.quick ? clip.quick_t_end : clip.t_end;
+    o.fps = fps;
+    o.video = (dir / "side_by_side" / (std::string(clip.scene) + ".mp4")).string();
+    const double interval = 1.0 / fps, t_end = *o.run.t_end;
+    // each method's step at the budget (steps_within)
+    Shot shot;
+    const double span = std::min(t_end, interval * std::max(4.0, std::floor(t_end / 4 / interval)));
+    shot.budget = clip.per_second ? *clip.per_second * t_end
+                                  : panel_cpu_seconds(o.run, {clip.anchor.method, on_frames(clip.anchor.dt, interval), ""}, fps, span) * t_end / span;
+    for (const Contender& c : clip.methods) {
+      const double dt = interval / steps_within(o.run, c.method, c.dt, fps, t_end, shot.budget);
+      o.panels.push_back({c.method, dt, step_text(dt)});
+    }
+    const double reference_dt = on_frames(clip.reference.dt, interval);
+    o.panels.push_back({clip.reference.method, reference_dt, step_text(reference_dt)});
+    try {
+      shot.filmed = film_side_by_side(o);
+    } catch (const InputError& e) {  // a shipped scene the clip's plan does not fit: ours to fix
+      throw std::runtime_error(fmt::format("side by side {}: {}", clip.scene, e.what()));
+    }
+    return shot;
+  }, costs);
+  if (ctx.progress) ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+
+  Table panels{{"scene", "panel", "method", "setting", "dt", "steps", "cpu_seconds", "budget_cpu_seconds", "cpu_over_budget", "pixel_error", "status",
+                "t_last", "label", "video", "frames", "width", "height", "fps"},
+               {}};
+  Table frames{{"scene", "frame", "t", "panel", "method", "shown_t", "pixel_error"}, {}};
+  std::string body;
+  for (size_t i = 0; i < all.size(); ++i) {
+    const Clip& clip = all[i];
+    const Shot& shot = shots[i];
+    const Filmed& f = shot.filmed;
+    const std::string video = fmt::format("side_by_side/{}.mp4", clip.scene);
+    const size_t first = panels.rows.size();
+    for (size_t k = 0; k < f.panels.size(); ++k) {
+      const FilmedPanel& p = f.panels[k];
+      const bool reference = k + 1 == f.panels.size();
+      panels.rows.push_back({std::string(clip.scene), static_cast<long>(k), p.method, p.setting, p.dt, p.steps, p.cpu_seconds,
+                             reference ? NAN : shot.budget, reference ? NAN : p.cpu_seconds / shot.budget, p.pixel_error,
+                             std::string(to_string(p.status)), p.t_last, p.label, video, static_cast<long>(f.t.size()), static_cast<long>(f.width),
+                             static_cast<long>(f.height), static_cast<long>(fps)});
+    }
+    for (size_t n = 0; n < f.t.size(); ++n)
+      for (size_t k = 0; k < f.panels.size(); ++k)
+        frames.rows.push_back({std::string(clip.scene), static_cast<long>(n), f.t[n], static_cast<long>(k), f.panels[k].method, f.shown_t[n][k],
+                               f.shown_error[n][k]});
+    body += fmt::format("### {}\n\n{} The budget: {}, {} here; each method's step is the longest whole fraction of a frame that its "
+                        "measured CPU time a step keeps within it (at least one step a frame). The last panel is the reference.\n\n",
+                        clip.scene, clip.says, clip.budget_says, cpu_text(shot.budget));
+    body += fmt::format("<video controls loop muted playsinline preload=\"metadata\" width=\"{}\" style=\"max-width: 100%; height: auto\" src=\"{}\"></video>\n\n"
+                        "[{}]({}) ({} x {}, {} frames at {} a second: it plays in real time)\n\n",
+                        f.width, video, video, video, f.width, f.height, f.t.size(), fps);
+    body += markdown_table(panels, {{"method", "method"},
+                                    {"setting", "step"},
+                                    {"cpu_seconds", "CPU s", shown_as("{:.3g}")},
+                                    {"cpu_over_budget", "of the budget", shown_as("{:.2f}")},
+                                    {"pixel_error", "largest offset (px)", shown_as("{:.3g}")},
+                                    {"status", "status"}},
+                           [&](size_t row) { return row >= first; });
+    body += "\n";
+  }
+  write_file_atomic(dir / "side_by_side.csv", to_csv(panels));
+  write_file_atomic(dir / "side_by_side_frames.csv", to_csv(frames));
+  md += fmt::format("Three scenes, each run by three methods at one CPU budget and filmed beside a converged reference, seen by one camera "
+                    "at the same simulated times: each panel is labelled with its method and step, its CPU time, and its largest offset "
+                    "from the reference over the run, in pixels of its {} x {} panel (the farthest any drawn point lies from the same point "
+                    "of the reference's picture). Data: [side_by_side.csv](side_by_side.csv), "
+                    "[side_by_side_frames.csv](side_by_side_frames.csv).\n\n",
+                    640, 360);
+  return md + body;
+}
+
+}  // namespace stepwise
