@@ -36,6 +36,7 @@ struct Clip {
   std::optional<double> per_second;
   Contender anchor;
   const char* budget_says;  // the budget in words
+  double timed_share;       // of the run, that the methods are timed over (timed_span)
   std::vector<Contender> methods;
   Contender reference;      // converged: rk4 far below the steps the others take
   const char* says;         // what the clip shows
@@ -47,19 +48,19 @@ const std::vector<Clip>& clips() {
       // the flag's methods at real time on one core (report/studies/cloth_realtime.cpp measures them there);
       // rk4 in place of tsitouras54, which is stability-bound here (1 s of CPU a simulated second at any loose
       // tolerance) and takes no fixed step for the frames to fall on
-      {"flag", {}, 2.0, 0.5, 1.0, {"", 0}, "real time: 1 s of CPU per simulated second",
+      {"flag", {}, 2.0, 0.5, 1.0, {"", 0}, "real time: 1 s of CPU per simulated second", 0.25,
        {{"implicit-euler", 1.0 / 60}, {"fast-mass-spring", 1.0 / 240}, {"rk4", 1e-3}}, {"rk4", 2.5e-4},
        "The seeds' 32 x 32 flag: the implicit methods take large steps and damp the billowing out; rk4 affords steps "
        "far below its stability limit.",
        5},
       // released at 170 degrees, near the top: a small energy error changes the swing's period, or sends it over
-      {"pendulum", {"theta0=2.9670597283903604"}, 10.0, 5.0, std::nullopt, {"rk4", 1.0 / 30}, "rk4's CPU time at one step a frame",
+      {"pendulum", {"theta0=2.9670597283903604"}, 10.0, 5.0, std::nullopt, {"rk4", 1.0 / 30}, "rk4's CPU time at one step a frame", 1,
        {{"euler", 1e-2}, {"symplectic-euler", 1e-2}, {"rk4", 1.0 / 30}}, {"rk4", 1e-4},
        "The pendulum released at 170 degrees: explicit Euler gains energy, symplectic Euler keeps it but drifts in phase.", 2},
       // the seeds' scheme near its stability limit sets the budget: the method of lines, a few times dearer a step,
       // must take steps past its own limits there (implicit Euler, whose Newton matrix on this model is dense,
       // 8 192^2, cannot take a step within it)
-      {"water-drop", {}, 3.0, 1.0, std::nullopt, {"wave-fd", 1.0 / 90}, "wave-fd's CPU time at 1/90 s, 0.79 of its stability limit (0.01415 s)",
+      {"water-drop", {}, 3.0, 1.0, std::nullopt, {"wave-fd", 1.0 / 90}, "wave-fd's CPU time at 1/90 s, 0.79 of its stability limit (0.01415 s)", 1,
        {{"wave-fd", 5e-3}, {"symplectic-euler", 5e-3}, {"rk4", 5e-3}}, {"rk4", 1e-3},
        "The drop's ring on the 64 x 64 height field, with the caustic on the pool's floor, at the cost of the seeds' scheme.", 25},
   };
@@ -69,18 +70,23 @@ const std::vector<Clip>& clips() {
 // the step that puts `dt` on the frames: a whole number of steps a frame, at least one, none longer than dt
 double on_frames(double dt, double interval) { return interval / std::max(1.0, std::ceil(interval / dt * (1 - 1e-12))); }
 
-// the steps a frame that keep `method`'s CPU time within `budget` over t_end, at least one: its CPU time a
-// simulated second, c(n) = a + b n at n steps a frame (a: the outputs, b: the steps), measured over a quarter of
-// the run at two step counts and solved for the budget
-int steps_within(const RunOptions& scene, const char* method, double dt, int fps, double t_end, double budget) {
+// the span the clip's methods are timed over: the whole run where it is cheap (a run's fixed costs, ~1 ms on the
+// water, then count once as they will), else a quarter of it (the flag's runs take seconds, nearly all steps),
+// a whole number of frames, at least four
+double timed_span(const Clip& clip, double t_end, double interval) {
+  return std::min(t_end, interval * std::max(4.0, std::floor(t_end * clip.timed_share / interval)));
+}
+
+// the steps a frame that keep `method`'s CPU time within `budget` over t_end, at least one: its CPU time over
+// the span, c(n) = a + b n at n steps a frame (a: the run's fixed costs and outputs, b: the steps), measured at
+// two step counts, scaled to the run and solved for the budget
+int steps_within(const RunOptions& scene, const char* method, double dt, int fps, double t_end, double span, double budget) {
   const double interval = 1.0 / fps;
-  // a quarter of the run, a whole number of frames (at least four)
-  const double span = std::min(t_end, interval * std::max(4.0, std::floor(t_end / 4 / interval)));
   const int n1 = static_cast<int>(std::lround(interval / on_frames(dt, interval))), n2 = 2 * n1;
-  const auto cost = [&](int n) { return panel_cpu_seconds(scene, {method, interval / n, ""}, fps, span) / span; };
+  const auto cost = [&](int n) { return panel_cpu_seconds(scene, {method, interval / n, ""}, fps, span) * t_end / span; };
   const double c1 = cost(n1), c2 = cost(n2);
   const double b = std::max(c2 - c1, 1e-3 * c2) / (n2 - n1), a = std::max(0.0, c1 - b * n1);
-  return static_cast<int>(std::clamp(std::floor((budget / t_end - a) / b), 1.0, 1e6));
+  return static_cast<int>(std::clamp(std::floor((budget - a) / b), 1.0, 1e6));
 }
 
 std::string step_text(double dt) {
@@ -126,11 +132,13 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
     const double interval = 1.0 / fps, t_end = *o.run.t_end;
     // each method's step at the budget (steps_within)
     Shot shot;
-    const double span = std::min(t_end, interval * std::max(4.0, std::floor(t_end / 4 / interval)));
+    const double span = timed_span(clip, t_end, interval);
     shot.budget = clip.per_second ? *clip.per_second * t_end
                                   : panel_cpu_seconds(o.run, {clip.anchor.method, on_frames(clip.anchor.dt, interval), ""}, fps, span) * t_end / span;
     for (const Contender& c : clip.methods) {
-      const double dt = interval / steps_within(o.run, c.method, c.dt, fps, t_end, shot.budget);
+      // the method that sets the budget takes its own step
+      const double dt = c.method == std::string_view(clip.anchor.method) ? on_frames(clip.anchor.dt, interval)
+                                                                        : interval / steps_within(o.run, c.method, c.dt, fps, t_end, span, shot.budget);
       o.panels.push_back({c.method, dt, step_text(dt)});
     }
     const double reference_dt = on_frames(clip.reference.dt, interval);
@@ -167,9 +175,16 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
       for (size_t k = 0; k < f.panels.size(); ++k)
         frames.rows.push_back({std::string(clip.scene), static_cast<long>(n), f.t[n], static_cast<long>(k), f.panels[k].method, f.shown_t[n][k],
                                f.shown_error[n][k]});
+    double low = INFINITY, high = 0;
+    for (size_t k = first; k + 1 < panels.rows.size(); ++k) {
+      low = std::min(low, std::get<double>(cell_of(panels, panels.rows[k], "cpu_over_budget")));
+      high = std::max(high, std::get<double>(cell_of(panels, panels.rows[k], "cpu_over_budget")));
+    }
     body += fmt::format("### {}\n\n{} The budget: {}, {} here; each method's step is the longest whole fraction of a frame that its "
-                        "measured CPU time a step keeps within it (at least one step a frame). The last panel is the reference.\n\n",
-                        clip.scene, clip.says, clip.budget_says, cpu_text(shot.budget));
+                        "CPU time, measured at two steps beforehand, keeps within it (at least one step a frame). Filmed, they took "
+                        "{:.2f} to {:.2f} of the budget (whole steps a frame, and CPU times that vary from run to run). The last panel "
+                        "is the reference.\n\n",
+                        clip.scene, clip.says, clip.budget_says, cpu_text(shot.budget), low, high);
     body += fmt::format("<video controls loop muted playsinline preload=\"metadata\" width=\"{}\" style=\"max-width: 100%; height: auto\" src=\"{}\"></video>\n\n"
                         "[{}]({}) ({} x {}, {} frames at {} a second: it plays in real time)\n\n",
                         f.width, video, video, video, f.width, f.height, f.t.size(), fps);
