@@ -21,6 +21,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import check_report  # noqa: E402  (the CSV values and the half-unit rule, as the report's own check reads them)
+import figure_spec  # noqa: E402  (the declared figures and their lines, as plot.py and interactive.py read them)
 
 LOAD_BUDGET = 2.0  # seconds from navigation to every figure drawn, on these 2-core machines (the budget)
 
@@ -62,6 +63,9 @@ def main():
 
         # each figure, scrolled to: drawn, with a trace for every method of its CSV
         figures = browser.find_elements(By.CSS_SELECTOR, "div.lazy-plot")
+        declared = figure_spec.specs(directory)
+        if not declared:
+            problems.append("figures.json declares no figure")
         if not figures:
             problems.append("index.html has no interactive figures")
         for div in figures:
@@ -74,10 +78,13 @@ def main():
                     break
                 time.sleep(0.05)
             else:
-                table, scene = (("work_precision", stem[len("work_precision_"):]) if stem.startswith("work_precision_")
-                                else ("convergence", stem[len("convergence_"):]))
-                with open(os.path.join(directory, table + ".csv"), newline="") as f:
-                    methods = {r["method"] for r in csv.DictReader(f) if r["scene"] == scene and r["status"] == "ok" and float(r["error"]) > 0}
+                if stem in declared:  # a declared figure: a trace for each of its lines, as figure_spec reads them
+                    methods = {line.name for _, lines in figure_spec.panels(directory, declared[stem]) for line in lines}
+                else:
+                    table, scene = (("work_precision", stem[len("work_precision_"):]) if stem.startswith("work_precision_")
+                                    else ("convergence", stem[len("convergence_"):]))
+                    with open(os.path.join(directory, table + ".csv"), newline="") as f:
+                        methods = {r["method"] for r in csv.DictReader(f) if r["scene"] == scene and r["status"] == "ok" and float(r["error"]) > 0}
                 names = set(browser.execute_script("return arguments[0]._fullData.map(t => t.name)", div))
                 if methods - names:
                     problems.append(f"{stem}: no trace for {sorted(methods - names)[:5]}")

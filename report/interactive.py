@@ -9,11 +9,16 @@ best method; the others are one click away in the legend. plotly.js comes from D
 once into the report's folder (no network when the page is viewed); the figures are built with plotly's
 Python API (plotly.graph_objects), not by hand.
 
-Used by plot.py's html(); figures(directory) returns {png stem: HTML of its interactive twin}."""
+The declared figures (figures.json: report/studies.hpp's FigureSpec) are drawn here from the same spec and data
+(report/figure_spec.py) as plot.py draws their PNGs.
+
+Used by plot.py's html(); figures(directory) returns {png stem: (HTML of its interactive twin, how to use it)}."""
 import csv
 import math
 import os
 import shutil
+
+import figure_spec
 
 PLOTLY_JS = "/usr/share/python3-plotly/plotly.js"
 # Okabe & Ito (2008): eight colours told apart under the common colour-vision deficiencies
@@ -150,6 +155,37 @@ def convergence(directory, groups):
     return per_scene(directory, groups, "convergence", "dt", point, False, "dt (s)", "Convergence")
 
 
+def declared(directory, groups, spec):
+    """a declared figure (figures.json's spec) as figure_spec reads it, the twin of plot.py's declared(): a method's
+    line in its group's colour and its own marker, measurements as markers alone, the reference lines dotted;
+    a panel per facet side by side"""
+    import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
+    panels = figure_spec.panels(directory, spec)
+    fig = make_subplots(rows=1, cols=len(panels), subplot_titles=[f"{spec['facet']} {f}" if f else "" for f, _ in panels])
+    for col, (facet, lines) in enumerate(panels, start=1):
+        for i, line in enumerate(lines):
+            g = groups.of(line.series) if spec["series"] == "method" else line.series or line.name
+            colour = groups.colour.get(g, PALETTE[i % len(PALETTE)]) if spec["series"] == "method" else PALETTE[i % len(PALETTE)]
+            fig.add_trace(go.Scatter(
+                x=line.x, y=line.y, mode="markers" if line.points_only else "lines+markers", name=line.name, legendgroup=line.name,
+                showlegend=col == 1, line=dict(color=colour, width=1.5),
+                marker=dict(symbol=groups.marker.get(line.series, MARKERS[i % len(MARKERS)]), size=8, color=colour),
+                hovertemplate=f"<b>{line.name}</b><br>{spec['y_label']} %{{y:.3g}}<br>{spec['x_label']} %{{x:.3g}}<extra></extra>"),
+                row=1, col=col)
+        for k, ref in enumerate(spec["lines"]):
+            dash = ("dot", "dash")[k % 2]
+            if ref["axis"] == "x":
+                fig.add_vline(x=ref["value"], line=dict(color="#444444", dash=dash, width=1), annotation_text=ref["label"], row=1, col=col)
+            else:
+                fig.add_hline(y=ref["value"], line=dict(color="#444444", dash=dash, width=1), annotation_text=ref["label"], row=1, col=col)
+    fig.update_xaxes(type="log" if spec["log_x"] else "linear", title=spec["x_label"], exponentformat="power")
+    fig.update_yaxes(type="log" if spec["log_y"] else "linear", title=spec["y_label"], exponentformat="power")
+    fig.update_layout(title=dict(text=spec["title"], y=0.99), height=520, template="plotly_white", legend=dict(font=dict(size=11)),
+                      margin=dict(l=70, r=20, t=80, b=60))
+    return fig
+
+
 # draws each figure when it comes near the window (the page is usable at once; a dozen figures of forty traces
 # drawn at load would hold it for seconds): plotly.js's newPlot on the figure's JSON
 LOADER = """<script>
@@ -167,15 +203,20 @@ document.addEventListener('DOMContentLoaded', () => {
 
 
 def figures(directory):
-    """{png stem: HTML of the interactive figure (its div and its JSON)}; plotly.js copied into the directory once.
+    """{png stem: (HTML of the interactive figure (its div and its JSON), how to use it)}; plotly.js copied into the directory once.
     Empty where python3-plotly is not installed (the page then shows the PNGs alone)"""
     if not available():
         return {}
     shutil.copyfile(PLOTLY_JS, os.path.join(directory, "plotly.js"))
     groups = Groups(directory)
-    made = {**work_precision(directory, groups), **convergence(directory, groups)}
+    diagrams = {**work_precision(directory, groups), **convergence(directory, groups)}
+    declared_figures = {stem: declared(directory, groups, spec) for stem, spec in figure_spec.specs(directory).items()}
     def embedded(stem, fig):
         spec = fig.to_json().replace("</", "<\\/")  # no text in the JSON can close its script element
-        return (f'<div id="figure-{stem}" class="lazy-plot" style="height: 620px"></div>'
+        return (f'<div id="figure-{stem}" class="lazy-plot" style="height: {fig.layout.height}px"></div>'
                 f'<script type="application/json" id="data-figure-{stem}">{spec}</script>')
-    return {stem: embedded(stem, fig) for stem, fig in made.items()}
+    hint = ("hover for a point's method, setting, error and cost; click a legend entry to hide or show a method, a group's button above "
+            "the plot for the whole group")
+    return {**{stem: (embedded(stem, fig), hint) for stem, fig in diagrams.items()},
+            **{stem: (embedded(stem, fig), "hover for a point's values; click a legend entry to hide or show its line")
+               for stem, fig in declared_figures.items()}}

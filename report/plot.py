@@ -18,7 +18,8 @@ import re
 import signal
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # report/interactive.py beside it
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # report/interactive.py and figure_spec.py beside it
+import figure_spec  # noqa: E402
 
 try:
     import matplotlib
@@ -191,18 +192,6 @@ def adequacy(directory, _, styles):
            "Where the small-angle pendulum is enough", grid="both")
 
 
-def wave_adequacy(directory, _, styles):
-    rows = read(directory, "wave_adequacy")
-    fig, ax = plt.subplots(figsize=(7, 5))
-    ratio = [r["amplitude_over_depth"] for r in rows]
-    ax.loglog(ratio, [r["relative_departure"] for r in rows], marker="o", label="|eta - z| / |z|")
-    ax.loglog(ratio, [r["relative_max_departure"] for r in rows], marker="s", label="max |eta - z| / max |z|")
-    for level in (0.01, 0.1):
-        ax.axhline(level, color="grey", linewidth=0.6, linestyle=":")
-    single(fig, ax, directory, "wave_adequacy", "drop depth over water depth A / H", "departure of the wave equation",
-           "Where the linear wave equation is enough (shallow water as the truth)", grid="both")
-
-
 def bouncing_ball_curve(directory, _, styles):
     rows = read(directory, "bouncing_ball_curve")
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
@@ -256,6 +245,7 @@ def cloth_stability(directory, _, styles):
            "8 x 8 sheet: explicit methods' limits from the stiffest mode", grid="major")
 
 
+
 def cloth_implicit_damping(directory, _, styles):
     rows = read(directory, "cloth_implicit_damping")
     fig, ax = plt.subplots(figsize=(7, 4.5))
@@ -287,20 +277,6 @@ def fluid_viscosity(directory, _, styles):
         legend(ax, ncol=1)
     axes[0][0].set_ylabel("excess viscosity (nu_eff - nu) / nu")
     finish(fig, directory, "fluid_viscosity")
-
-
-def cloth_realtime(directory, _, styles):
-    rows = read(directory, "cloth_realtime")
-    fig, ax = plt.subplots(figsize=(8, 5))
-    for method, points in by_method(rows).items():
-        good = sorted((r for r in points if r["status"] == "ok" and r["position_error"] > 0), key=lambda r: r["cpu_per_simulated_second"])
-        if good:
-            ax.loglog([r["cpu_per_simulated_second"] for r in good], [r["position_error"] for r in good], linewidth=1, markersize=4,
-                      label=method, **styles(method))
-    ax.axvline(1.0, color="black", linestyle=":", label="real time (one core)")
-    ax.axhline(rows[0]["half_pixel_m"], color="grey", linestyle="--", label="half a pixel (720-pixel frame)")
-    single(fig, ax, directory, "cloth_realtime", "CPU seconds per simulated second", "largest node position error (m)",
-           "The 32 x 32 flag over 2 s: accuracy against cost", grid="both")
 
 
 REGIONS = {
@@ -443,9 +419,8 @@ def html(directory):
         alt, stem = m.group(1), m.group(2)
         if stem not in twins:
             return m.group(0)
-        return (f'<figure class="interactive">{twins[stem]}<figcaption>{alt}: hover for a point\'s method, setting, error and cost; '
-                f'click a legend entry to hide or show a method, a group\'s button above the plot for the whole group '
-                f'(<a href="{stem}.png">the static figure</a>)</figcaption></figure>')
+        html_of, hint = twins[stem]
+        return f'<figure class="interactive">{html_of}<figcaption>{alt}: {hint} (<a href="{stem}.png">the static figure</a>)</figcaption></figure>'
     body = re.sub(r'<p><img alt="([^"]*)" src="([\w.\-]+)\.png" /></p>', explore, body)
     script = ('<script src="plotly.js" charset="utf-8" defer></script>' + interactive.LOADER) if twins else ""
     page = f"""<!DOCTYPE html>
@@ -484,15 +459,38 @@ figcaption {{ font-size: 0.85em; color: #555; }}
     os.replace(path + ".tmp", path)
 
 
-DRAWERS = {f.__name__: f for f in (convergence, work_precision, advice, energy, adequacy, wave_adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
-                                    cloth_implicit_damping, cloth_realtime, fluid_viscosity, stability_regions, rigid_body_invariants, event_times, contacts)}
+def declared(directory, stem, styles):
+    """a declared figure (figures.json's spec): its panels and lines as figure_spec reads them, a method's line in
+    its own colour and marker, measurements as markers alone, the reference lines dotted"""
+    spec = figure_spec.specs(directory)[stem]
+    panels = figure_spec.panels(directory, spec)
+    fig, axes = plt.subplots(1, len(panels), figsize=(8 if len(panels) == 1 else 6 * len(panels), 5), squeeze=False)
+    for ax, (facet, lines) in zip(axes[0], panels):
+        for i, line in enumerate(lines):
+            style = styles(line.series) if spec["series"] == "method" else dict(color=f"C{i}", marker="os^vD"[i % 5])
+            ax.plot(line.x, line.y, label=line.name, markersize=4, linewidth=1, **style, **({"linestyle": "none"} if line.points_only else {}))
+        for i, ref in enumerate(spec["lines"]):
+            (ax.axvline if ref["axis"] == "x" else ax.axhline)(ref["value"], color=("black", "grey")[i % 2], linestyle=(":", "--")[i % 2],
+                                                                 linewidth=0.8, label=ref["label"])
+        ax.set_xscale("log" if spec["log_x"] else "linear")
+        ax.set_yscale("log" if spec["log_y"] else "linear")
+        ax.set_xlabel(spec["x_label"])
+        ax.set_ylabel(spec["y_label"])
+        ax.set_title(f"{spec['title']}{', ' + spec['facet'] + ' ' + facet if facet else ''}", fontsize=9)
+        ax.grid(True, which="both" if spec["log_x"] or spec["log_y"] else "major", alpha=0.3)
+        legend(ax, ncol=1 if len(ax.get_legend_handles_labels()[0]) < 8 else 2)
+    finish(fig, directory, stem)
 
 
-def draw(directory, kind, subject, dpi):
-    """One figure (in a worker process: the resolution passed, not inherited)."""
+DRAWERS = {f.__name__: f for f in (convergence, work_precision, advice, energy, adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
+                                    cloth_implicit_damping, fluid_viscosity, stability_regions, rigid_body_invariants, event_times, contacts, declared)}
+
+
+def draw(directory, kind, subject, dpi, stem):
+    """One figure (in a worker process: the resolution passed, not inherited); a declared one by its stem."""
     global DPI
     DPI = dpi
-    DRAWERS[kind](directory, subject, Styles(directory))
+    DRAWERS[kind](directory, stem if kind == "declared" else subject, Styles(directory))
 
 
 def die_with_parent(parent):
@@ -512,8 +510,8 @@ def main():
     if "--dpi" in sys.argv:
         DPI = int(sys.argv[sys.argv.index("--dpi") + 1])
     jobs = int(sys.argv[sys.argv.index("--jobs") + 1]) if "--jobs" in sys.argv else 1
-    figures = [(directory, f["kind"], f["subject"], DPI) for f in read(directory, "figures")]
-    for _, kind, _, _ in figures:
+    figures = [(directory, f["kind"], f["subject"], DPI, f["stem"]) for f in read(directory, "figures")]
+    for _, kind, _, _, _ in figures:
         if kind not in DRAWERS:
             sys.exit(f"plot.py: figures.csv: no drawing for kind '{kind}'")
     if jobs > 1 and len(figures) > 1:

@@ -15,6 +15,19 @@ std::string add_figure(std::vector<Figure>& figures, const std::string& kind, co
   return fmt::format("![{}]({}.png)\n\n", caption, figures.back().stem());
 }
 
+std::string add_figure(std::vector<Figure>& figures, const std::string& stem, FigureSpec spec, const std::string& caption) {
+  figures.push_back({stem, "", std::move(spec)});
+  return fmt::format("![{}]({}.png)\n\n", caption, stem);
+}
+
+nlohmann::json FigureSpec::json() const {
+  nlohmann::json j{{"table", table}, {"x", x}, {"x_label", x_label}, {"y_label", y_label}, {"title", title}, {"series", series},
+                   {"facet", facet}, {"log_x", log_x}, {"log_y", log_y}, {"y", nlohmann::json::array()}, {"lines", nlohmann::json::array()}};
+  for (const auto& c : y) j["y"].push_back({{"column", c.column}, {"label", c.label}, {"points_only", c.points_only}});
+  for (const auto& l : lines) j["lines"].push_back({{"axis", std::string(1, l.axis)}, {"value", l.value}, {"label", l.label}});
+  return j;
+}
+
 std::function<std::string(const Cell&)> shown_as(std::string spec) {
   return [spec = std::move(spec)](const Cell& cell) -> std::string {
     if (const double* v = std::get_if<double>(&cell)) return !std::isfinite(*v) || spec == "sci" ? sci(*v) : fmt::format(fmt::runtime(spec), *v);

@@ -6,16 +6,46 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
+
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 namespace stepwise {
 
-// a figure drawn by report/plot.py from the study's CSVs into stem().png: `kind` names plot.py's function,
-// `subject` (a scene, or empty) what it draws it for
+// a figure declared rather than drawn by a function of its own: which columns of which of the study's tables it
+// plots against which, a line per value of `series` (a method: coloured by its group, marked by itself), a panel
+// per value of `facet`, on log or linear axes, with reference lines. report/plot.py draws every declared figure
+// with one function, as the PNG and as index.html's interactive figure (report/interactive.py), alike
+struct FigureSpec {
+  struct Curve {
+    std::string column;         // y
+    std::string label;          // added to the series' name in the legend ("predicted"), or the line's name
+    bool points_only = false;   // markers without a line (measurements beside a predicted line)
+  };
+  struct Line {
+    char axis;                  // 'x': a vertical line at x = value; 'y': a horizontal one
+    double value;
+    std::string label;
+  };
+  std::string table;            // the CSV stem
+  std::string x;
+  std::vector<Curve> y;
+  std::string y_label, x_label, title;
+  std::string series;           // the column naming each line ("method"); empty: a line per curve
+  std::string facet;            // the column naming each panel; empty: one panel
+  bool log_x = false, log_y = false;
+  std::vector<Line> lines;
+  nlohmann::json json() const;
+};
+
+// a figure drawn by report/plot.py from the study's CSVs into stem().png: `kind` names plot.py's function (or
+// "declared", drawn from `spec`), `subject` (a scene, or empty) what it draws it for
 struct Figure {
   std::string kind;
   std::string subject;
+  std::optional<FigureSpec> spec;
   std::string stem() const { return subject.empty() ? kind : kind + "_" + subject; }
 };
 
@@ -57,6 +87,8 @@ Study advice_study();
 
 // adds the figure to the list; returns its Markdown (an image line and a blank line) for the section
 std::string add_figure(std::vector<Figure>& figures, const std::string& kind, const std::string& subject, const std::string& caption);
+// a declared figure, drawn into `stem`.png
+std::string add_figure(std::vector<Figure>& figures, const std::string& stem, FigureSpec spec, const std::string& caption);
 
 // a number in scientific notation with 3 digits, or a dash for nan and inf
 std::string sci(double v);

@@ -52,7 +52,13 @@ StudyOutput wave_adequacy(const StudyContext& context) {
                                {"departure_per_amplitude", "departure / (A / H)", shown_as("{:.3f}")}});
   std::vector<Figure> figures;
   md += "\n";
-  md += add_figure(figures, "wave_adequacy", "", "The linear wave equation's departure from shallow water against the drop's depth over the water's");
+  FigureSpec spec{"wave_adequacy", "amplitude_over_depth", {{"relative_departure", "|eta - z| / |z|", false},
+                                                          {"relative_max_departure", "max |eta - z| / max |z|", false}},
+                  "departure of the wave equation", "drop depth over water depth A / H",
+                  "Where the linear wave equation is enough (shallow water as the truth)", "", "", true, true,
+                  {{'y', 0.01, "1%"}, {'y', 0.1, "10%"}}};
+  md += add_figure(figures, "wave_adequacy", std::move(spec),
+                   "The linear wave equation's departure from shallow water against the drop's depth over the water's");
   // the finding: the departure per unit of A / H, over the drops tried
   double lo = INFINITY, hi = -INFINITY;
   for (const auto& row : table.rows) {
