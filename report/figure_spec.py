@@ -1,8 +1,8 @@
 """A declared figure's data (report/studies.hpp's FigureSpec, written into figures.json by stem): its panels and
 lines, read from its table once for both of its drawers, plot.py's PNG and interactive.py's plotly figure.
 
-A row counts where its `status` (if the table has one) is ok and its x and y are finite (and positive on a log
-axis); a line's points are sorted by x."""
+A row counts where its `status` (if the table has one) is ok, the spec's `complete` columns are finite numbers,
+and its x and y are finite (and positive on a log axis); a line's points are sorted by x."""
 import csv
 import json
 import math
@@ -35,7 +35,7 @@ def number(text):
 def panels(directory, spec):
     """[(facet value or "", [Line])] in the table's order"""
     with open(os.path.join(directory, spec["table"] + ".csv"), newline="") as f:
-        rows = [r for r in csv.DictReader(f) if r.get("status", "ok") == "ok"]
+        rows = [r for r in csv.DictReader(f) if r.get("status", "ok") == "ok" and all(math.isfinite(number(r[c])) for c in spec["complete"])]
     def usable(v, log):
         return math.isfinite(v) and (v > 0 or not log)
     out = []
@@ -48,7 +48,8 @@ def panels(directory, spec):
                 points = [(x, y) for x, y in points if usable(x, spec["log_x"]) and usable(y, spec["log_y"])]
                 if not points:
                     continue
-                name = " ".join(part for part in (series, curve["label"]) if part) or curve["column"]
+                shown = spec["series_label"].replace("{}", series) if series and spec["series_label"] else series
+                name = " ".join(part for part in (shown, curve["label"]) if part) or curve["column"]
                 lines.append(Line(name, series, curve["points_only"], [p[0] for p in points], [p[1] for p in points]))
         out.append((facet, lines))
     return out

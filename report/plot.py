@@ -182,16 +182,6 @@ def energy(directory, _, styles):
            "Relative energy error over the run, per method (the text above gives the scene and the step)", grid="major")
 
 
-def adequacy(directory, _, styles):
-    rows = read(directory, "adequacy")
-    fig, ax = plt.subplots(figsize=(7, 5))
-    for tolerance in sorted({r["phase_tolerance_rad"] for r in rows}):
-        mine = [r for r in rows if r["phase_tolerance_rad"] == tolerance]
-        ax.loglog([r["periods"] for r in mine], [r["max_amplitude_deg"] for r in mine], marker="o", label=f"phase error {tolerance:g} rad")
-    single(fig, ax, directory, "adequacy", "periods shown", "largest amplitude (degrees)",
-           "Where the small-angle pendulum is enough", grid="both")
-
-
 def bouncing_ball_curve(directory, _, styles):
     rows = read(directory, "bouncing_ball_curve")
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
@@ -232,29 +222,6 @@ def wave_stability(directory, _, styles):
         legend(ax, ncol=1)
     finish(fig, directory, "wave_stability")
 
-
-def cloth_stability(directory, _, styles):
-    rows = [r for r in read(directory, "cloth_stability") if not math.isnan(r["predicted_dt"])]
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    for method, points in by_method(rows).items():
-        style = styles(method)
-        c = [r["stiffness"] for r in points]
-        ax.loglog(c, [r["predicted_dt"] for r in points], color=style["color"], label=f"{method}: predicted")
-        ax.loglog(c, [r["measured_dt"] for r in points], linestyle="none", label=f"{method}: measured", **style)
-    single(fig, ax, directory, "cloth_stability", "structural stiffness c (N/m)", "largest stable dt (s)",
-           "8 x 8 sheet: explicit methods' limits from the stiffest mode", grid="major")
-
-
-
-def cloth_implicit_damping(directory, _, styles):
-    rows = read(directory, "cloth_implicit_damping")
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    wh = np.logspace(math.log10(min(r["omega_h"] for r in rows)), math.log10(max(r["omega_h"] for r in rows)), 200)
-    ax.semilogx(wh, 1 / np.sqrt(1 + wh ** 2), color="black", label="1 / sqrt(1 + w^2 h^2)")
-    ax.semilogx([r["omega_h"] for r in rows], [r["measured_ratio"] for r in rows], linestyle="none", label="implicit-euler, measured",
-                **styles("implicit-euler"))
-    single(fig, ax, directory, "cloth_implicit_damping", "w h", "amplitude kept per step",
-           "Implicit Euler's numerical damping of one spring", grid="both")
 
 
 def fluid_viscosity(directory, _, styles):
@@ -482,8 +449,7 @@ def declared(directory, stem, styles):
     finish(fig, directory, stem)
 
 
-DRAWERS = {f.__name__: f for f in (convergence, work_precision, advice, energy, adequacy, bouncing_ball_curve, wave_stability, cloth_stability,
-                                    cloth_implicit_damping, fluid_viscosity, stability_regions, rigid_body_invariants, event_times, contacts, declared)}
+DRAWERS = {f.__name__: f for f in (convergence, work_precision, advice, energy, bouncing_ball_curve, wave_stability, fluid_viscosity, stability_regions, rigid_body_invariants, event_times, contacts, declared)}
 
 
 def draw(directory, kind, subject, dpi, stem):

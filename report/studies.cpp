@@ -22,7 +22,8 @@ std::string add_figure(std::vector<Figure>& figures, const std::string& stem, Fi
 
 nlohmann::json FigureSpec::json() const {
   nlohmann::json j{{"table", table}, {"x", x}, {"x_label", x_label}, {"y_label", y_label}, {"title", title}, {"series", series},
-                   {"facet", facet}, {"log_x", log_x}, {"log_y", log_y}, {"y", nlohmann::json::array()}, {"lines", nlohmann::json::array()}};
+                   {"facet", facet}, {"log_x", log_x}, {"log_y", log_y}, {"y", nlohmann::json::array()}, {"lines", nlohmann::json::array()},
+                   {"series_label", series_label}, {"complete", complete}};
   for (const auto& c : y) j["y"].push_back({{"column", c.column}, {"label", c.label}, {"points_only", c.points_only}});
   for (const auto& l : lines) j["lines"].push_back({{"axis", std::string(1, l.axis)}, {"value", l.value}, {"label", l.label}});
   return j;

@@ -37,6 +37,8 @@ struct FigureSpec {
   std::string facet;            // the column naming each panel; empty: one panel
   bool log_x = false, log_y = false;
   std::vector<Line> lines;
+  std::string series_label;           // a series' name in the legend, "{}" standing for its value; empty: the value
+  std::vector<std::string> complete;  // rows kept only where each of these columns is a finite number
   nlohmann::json json() const;
 };
 

@@ -41,7 +41,9 @@ StudyOutput adequacy(const StudyContext&) {
                                {"max_amplitude_deg", "max amplitude (deg)", shown_as("{:.2f}")}});
   std::vector<Figure> figures;
   md += "\n";
-  md += add_figure(figures, "adequacy", "", "Largest amplitude the small-angle pendulum serves, against the periods shown");
+  FigureSpec spec{"adequacy", "periods", {{"max_amplitude_deg", "", false}}, "largest amplitude (degrees)", "periods shown",
+                  "Where the small-angle pendulum is enough", "phase_tolerance_rad", "", true, true, {}, "phase error {} rad"};
+  md += add_figure(figures, "adequacy", std::move(spec), "Largest amplitude the small-angle pendulum serves, against the periods shown");
   return {{{"adequacy", std::move(table)}}, md, figures};
 }
 
