@@ -171,7 +171,7 @@ Filmed film_side_by_side(const SideBySideOptions& o) {
   }
 
   // the frames drawn panel by panel into one picture, handed to ffmpeg raw as they are made
-  const fs::path video(o.video), temporary = video.parent_path() / ("." + video.filename().string() + ".tmp");
+  const fs::path video(o.video), temporary = video.parent_path() / fmt::format(".{}.tmp", video.filename().string());
   std::unique_ptr<gl::Context> context;
   try {
     context = gl::make_context(gl::Backend::osmesa);
