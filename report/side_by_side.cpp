@@ -10,6 +10,7 @@
 #include "run/side_by_side.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <chrono>
 #include <cmath>
@@ -109,7 +110,21 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
     return md + "Not filmed: ffmpeg is not installed here (it encodes the videos and draws their labels).\n\n";
   }
   const int fps = ctx.quick ? 15 : 30;
-  const auto& all = clips();
+  // the clips whose scene the scenes directory has (STEPWISE_SCENES may name another): the others said once, skipped
+  std::vector<Clip> all;
+  std::vector<std::string> missing;
+  for (const Clip& clip : clips()) {
+    if (fs::exists(scenes_dir / (std::string(clip.scene) + ".toml")))
+      all.push_back(clip);
+    else
+      missing.push_back(clip.scene);
+  }
+  std::string skipped;
+  if (!missing.empty()) {
+    skipped = fmt::format("Not filmed, their scene files not being in {}: {}.", scenes_dir.string(), fmt::join(missing, ", "));
+    print_error("report", fmt::format("side by side: {}", skipped));
+    if (all.empty()) return md + skipped + "\n\n";
+  }
   std::vector<std::string> labels;
   std::vector<double> costs;
   for (const Clip& clip : all) {
@@ -199,12 +214,12 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
   }
   write_file_atomic(dir / "side_by_side.csv", to_csv(panels));
   write_file_atomic(dir / "side_by_side_frames.csv", to_csv(frames));
-  md += fmt::format("Three scenes, each run by three methods at one CPU budget and filmed beside a converged reference, seen by one camera "
+  md += fmt::format("The flag, the 170-degree pendulum and the water drop, each run by three methods at one CPU budget and filmed beside a converged reference, seen by one camera "
                     "at the same simulated times: each panel is labelled with its method and step, its CPU time, and its largest offset "
                     "from the reference over the run, in pixels of its {} x {} panel (the farthest any drawn point lies from the same point "
                     "of the reference's picture). Data: [side_by_side.csv](side_by_side.csv), "
-                    "[side_by_side_frames.csv](side_by_side_frames.csv).\n\n",
-                    640, 360);
+                    "[side_by_side_frames.csv](side_by_side_frames.csv).{}\n\n",
+                    640, 360, skipped.empty() ? "" : " " + skipped);
   return md + body;
 }
 
