@@ -17,6 +17,9 @@ import sys
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import check_report  # noqa: E402  (the digits-shown rule the report's own check holds numbers to)
+
 
 def tolerance(text, name):
     m = re.search(rf"{name}\s*=\s*([0-9.eE+-]+)", text)
@@ -88,9 +91,10 @@ def main():
             label = row["label"]
             if not label.startswith(f"{row['method']}  {row['setting']}"):
                 problems.append(f"{scene} panel {k}: label '{label}' does not open with its method and step")
+            # the label's numbers are the row's to the digits shown (check_report's rule for every number the report shows)
             m = re.search(r"CPU ([0-9.]+) (s|ms|us)", label)
-            cpu = float(m.group(1)) * {"s": 1, "ms": 1e-3, "us": 1e-6}[m.group(2)] if m else math.nan
-            if not (abs(cpu - float(row["cpu_seconds"])) <= 0.051 * float(row["cpu_seconds"]) + 0.5e-6):
+            unit = {"s": 1, "ms": 1e-3, "us": 1e-6}[m.group(2)] if m else math.nan
+            if not (m and check_report.matches(float(m.group(1)), check_report.shown_precision(m.group(1)), [float(row["cpu_seconds"]) / unit])):
                 problems.append(f"{scene} panel {k}: label '{label}' against cpu_seconds {row['cpu_seconds']}")
             error = float(row["pixel_error"])
             reference = k + 1 == len(rows)
@@ -99,8 +103,9 @@ def main():
                     problems.append(f"{scene} panel {k}: label '{label}' does not say {row['status']} at t_last {row['t_last']}")
             elif not reference:
                 m = re.search(r"off by ([0-9.]+) px", label)
-                shown = float(m.group(1)) if m else (0.0 if "under 0.1 px" in label else math.nan)
-                if not (abs(shown - error) <= 0.051 * error + 0.05 or (shown == 0.0 and error < 0.1)):
+                said = (check_report.matches(float(m.group(1)), check_report.shown_precision(m.group(1)), [error]) if m
+                        else "under 0.1 px" in label and error < 0.1)
+                if not said:
                     problems.append(f"{scene} panel {k}: label '{label}' against pixel_error {error}")
         shots.append((scene, rows, video, width, height))
 

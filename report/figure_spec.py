@@ -7,7 +7,7 @@ import csv
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 
 @dataclass
@@ -15,8 +15,8 @@ class Line:
     name: str          # the legend's
     series: str        # the series column's value ("" without one): a method, coloured by its group
     points_only: bool
-    x: list = field(default_factory=list)
-    y: list = field(default_factory=list)
+    x: list
+    y: list
 
 
 def specs(directory):

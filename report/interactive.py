@@ -43,12 +43,7 @@ def rows(directory, stem):
         return list(csv.DictReader(f))
 
 
-def number(text):
-    try:
-        v = float(text)
-    except (TypeError, ValueError):
-        return math.nan
-    return v
+number = figure_spec.number  # a CSV cell as a float, nan where it is none
 
 
 class Groups:
@@ -165,8 +160,7 @@ def declared(directory, groups, spec):
     fig = make_subplots(rows=1, cols=len(panels), subplot_titles=[f"{spec['facet']} {f}" if f else "" for f, _ in panels])
     for col, (facet, lines) in enumerate(panels, start=1):
         for i, line in enumerate(lines):
-            g = groups.of(line.series) if spec["series"] == "method" else line.series or line.name
-            colour = groups.colour.get(g, PALETTE[i % len(PALETTE)]) if spec["series"] == "method" else PALETTE[i % len(PALETTE)]
+            colour = groups.colour.get(groups.of(line.series), PALETTE[i % len(PALETTE)]) if spec["series"] == "method" else PALETTE[i % len(PALETTE)]
             fig.add_trace(go.Scatter(
                 x=line.x, y=line.y, mode="markers" if line.points_only else "lines+markers", name=line.name, legendgroup=line.name,
                 showlegend=col == 1, line=dict(color=colour, width=1.5),
