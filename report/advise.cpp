@@ -413,6 +413,16 @@ void check_advice_request(double error, double budget_seconds) {
     throw InputError(fmt::format("--budget: must be between 1 and 86400 seconds, got {}", budget_seconds));
 }
 
+Figure advice_figure(const Advice& advice) {
+  FigureSpec::Layer sweep{.table = "advice_sweep", .x = "cpu_seconds", .y = "error", .where = {{"scene", {advice.scene}}}};
+  FigureSpec::Panel panel{.title = fmt::format("{}: the advice's sweep (dashed: adaptive; x: failed or diverged)", advice.scene),
+                          .x_label = "CPU time (s)", .y_label = "max-norm error at t_end", .log_x = true, .log_y = true, .layers = by_mode(sweep),
+                          .lines = {{'y', advice.target, "the error asked"}}};
+  panel.layers.push_back({.table = "advice_summary", .x = "cpu_seconds", .y = "error", .series = "method", .label = "advised: {}", .mark = "star",
+                          .where = {{"scene", {advice.scene}}}, .hover = {{"setting", "setting"}}});
+  return {"advice", advice.scene, {.title = "The advice's sweep, " + advice.scene, .panels = {std::move(panel)}, .front = true}};
+}
+
 int advise_command(const AdviseOptions& o) {
   // the inputs, before anything runs: the error, the budget, the scene as `stepwise run` checks it, the output
   check_advice_request(o.error, o.budget);
@@ -433,7 +443,7 @@ int advise_command(const AdviseOptions& o) {
   write_file_atomic(out / "advice.json", advice_json_text(a, o.run.scene_file));
   const std::string md = advice_markdown(a, command, "#");
   write_file_atomic(out / "advice.md", md);
-  draw_figures({{"advice", a.scene}}, out, 1, false);
+  draw_figures({advice_figure(a)}, out, 1, false);
   fmt::print("{}", md.substr(0, md.find("The system is")));
   return best ? 0 : 1;
 }

@@ -5,6 +5,7 @@
 // why each other method lost. DESIGN.md: the advisor is a budgeted study on one scene.
 #pragma once
 
+#include "report/studies.hpp"
 #include "report/studies/study_scenes.hpp"
 #include "run/csv.hpp"
 #include "run/prepare.hpp"
@@ -79,6 +80,9 @@ struct AdviceTables {
   Table sweep, summary, candidates;  // candidates: each method's verdict (advice_candidates.csv)
 };
 AdviceTables advice_tables(const std::vector<Advice>& advices);
+// the advice's figure (advice_SCENE.png): the sweep's error against CPU time per method, the error asked, the
+// advised point
+Figure advice_figure(const Advice& advice);
 
 // one method's sweep at every third of a decade of rtol (or of a halving of dt) from the coarsest until it meets
 // the target, without the advice's budget (at most `seconds` of CPU): what the advice's pick is checked against

@@ -5,14 +5,14 @@ chromium-driver).
     check_interactive.py DIR [SHOTS_DIR]
 
 - the page loads (plotly.js with it) within LOAD_BUDGET seconds, and without console errors;
-- every interactive figure draws when scrolled to: its plot holds one trace per method of its CSV;
-- clicking a group's title in a figure's legend hides that group's traces, clicking again shows them;
+- every figure draws when scrolled to: its plot holds a trace for each line its spec gives (report/figure_spec.py);
+- a group's button above a figure shows or hides every trace of the group, the next click the other;
+- a method's legend entry hides its traces, the next click shows them;
 - a link of the table of contents scrolls its section to the top of the window;
 - the first finding's first number with a decimal point equals a value of the CSVs of the section it links.
 Screenshots (the top of the page, a figure after the clicks) go to SHOTS_DIR (default DIR). Exit 0 when all
 hold, 1 when not, 77 (CTest's skip) where Chromium, its driver or Selenium is missing, saying which.
 """
-import csv
 import os
 import re
 import shutil
@@ -78,13 +78,11 @@ def main():
                     break
                 time.sleep(0.05)
             else:
-                if stem in declared:  # a declared figure: a trace for each of its lines, as figure_spec reads them
-                    methods = {line.name for _, lines in figure_spec.panels(directory, declared[stem]) for line in lines}
-                else:
-                    table, scene = (("work_precision", stem[len("work_precision_"):]) if stem.startswith("work_precision_")
-                                    else ("convergence", stem[len("convergence_"):]))
-                    with open(os.path.join(directory, table + ".csv"), newline="") as f:
-                        methods = {r["method"] for r in csv.DictReader(f) if r["scene"] == scene and r["status"] == "ok" and float(r["error"]) > 0}
+                if stem not in declared:
+                    problems.append(f"{stem}: an interactive figure figures.json does not declare")
+                    continue
+                # a trace for each of its lines, as figure_spec reads them
+                methods = {line.name for p in figure_spec.panels(directory, declared[stem]) for line in p.lines}
                 names = set(browser.execute_script("return arguments[0]._fullData.map(t => t.name)", div))
                 if methods - names:
                     problems.append(f"{stem}: no trace for {sorted(methods - names)[:5]}")
@@ -100,21 +98,23 @@ def main():
             browser.execute_script("arguments[0].scrollIntoView()", first)
             time.sleep(0.3)
 
-            def visible(group):
-                return browser.execute_script("return arguments[0]._fullData.filter(t => t.legendgroup === arguments[1]).map(t => t.visible)",
-                                              first, group)
+            def visible(indices):
+                return browser.execute_script("return arguments[1].map(i => arguments[0]._fullData[i].visible)", first, indices)
             button = first.find_elements(By.CSS_SELECTOR, ".updatemenu-button")[0]
-            group = browser.execute_script("return arguments[0].layout.updatemenus[0].buttons[0].label.replace(/ \\(\\d+\\)$/, '')", first)
-            states = [visible(group)]
+            group, indices = browser.execute_script("const b = arguments[0].layout.updatemenus[0].buttons[0]; "
+                                                    "return [b.label.replace(/ \\(\\d+\\)$/, ''), b.args[1]]", first)
+            if not indices:
+                problems.append(f"the '{group}' button names no traces")
+            states = [visible(indices)]
             for _ in range(2):
                 ActionChains(browser).move_to_element(button).click().perform()
                 time.sleep(0.5)
-                states.append(visible(group))
+                states.append(visible(indices))
             whole = lambda state, v: all(x == v for x in state)  # noqa: E731
             if not ((whole(states[1], True) and whole(states[2], "legendonly")) or (whole(states[1], "legendonly") and whole(states[2], True))):
                 problems.append(f"the '{group}' button: visible {states[0]} -> {states[1]} -> {states[2]}")
             else:
-                print(f"check_interactive: the '{group}' button showed or hid its {len(states[1])} methods at once, both ways")
+                print(f"check_interactive: the '{group}' button showed or hid its {len(states[1])} traces at once, both ways")
             browser.execute_script("arguments[0].scrollIntoView()", first)
             browser.save_screenshot(os.path.join(shots, "browser_figure.png"))
             names = browser.execute_script("return arguments[0]._fullData.map(t => [t.name, t.visible])", first)

@@ -11,7 +11,9 @@
 - the report opens with its findings ("In short"), each linking to the section that holds its evidence, and
   every number written with a decimal point or an exponent in a finding is a value of that section's CSVs as
   shown (whole numbers are counts);
-- index.html's table of contents links every section.
+- index.html's table of contents links every section;
+- every figure (figures.csv) is declared in figures.json, names tables and columns the report has, and draws
+  something in each of its panels (report/figure_spec.py's problems()).
 Prints each problem on a line and exits 1 if there is any.
 """
 import bisect
@@ -20,6 +22,8 @@ import math
 import os
 import re
 import sys
+
+import figure_spec  # report/figure_spec.py, beside this script
 
 MIN_PNG_BYTES = 5000  # a drawn figure with axes, labels and lines; an empty canvas at 100 dpi is ~3 kB
 MIN_GIF_BYTES = 1000  # an animation of a small particle on a plain ground is ~3 kB; one empty frame ~0.1 kB
@@ -93,6 +97,11 @@ def main():
             problems.append(f"{image}: not a drawn PNG ({os.path.getsize(path)} bytes)")
         if f'src="{image}"' not in page and not (f'href="{image}"' in page and f'id="figure-{image[:-4]}"' in page):
             problems.append(f"{image}: not shown by index.html (nor an interactive figure linking it)")
+    # every figure declared (figures.json), its tables and columns there, each of its panels drawing something
+    specs = figure_spec.specs(directory)
+    with open(os.path.join(directory, "figures.csv"), newline="") as f:
+        for row in csv.DictReader(f):
+            problems += [f"{row['stem']}: no spec in figures.json"] if row["stem"] not in specs else figure_spec.problems(directory, row["stem"], specs[row["stem"]])
     if page.count("<table>") != md.count("\n|---"):
         problems.append(f"index.html has {page.count('<table>')} tables, report.md {md.count(chr(10) + '|---')}")
 

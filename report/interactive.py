@@ -1,20 +1,18 @@
-"""The report's figures to explore in index.html: plotly.js figures of the same CSVs the PNGs are drawn from.
+"""The report's figures to explore in index.html: each drawn with plotly.js from its spec (figures.json:
+report/studies.hpp's FigureSpec) and the same CSVs, read by report/figure_spec.py as plot.py reads them for the PNGs.
 
-Each method is a trace in its group's colour (the method table's `group`: whose code steps, ARKODE by kind;
-Okabe and Ito's colour-blind-safe palette) with a marker of its own; the legend gathers the groups, a method's
-entry hides or shows that method, and a button per group above the plot shows or hides the whole group (the
-legend's group titles are not clickable in the plotly.js Debian ships, 2.6.3). Hover shows method, setting,
-error and CPU time (or steps and calls). Log axes. By default a diagram shows its Pareto front and each group's
-best method; the others are one click away in the legend. plotly.js comes from Debian's python3-plotly, copied
-once into the report's folder (no network when the page is viewed); the figures are built with plotly's
-Python API (plotly.graph_objects), not by hand.
-
-The declared figures (figures.json: report/studies.hpp's FigureSpec) are drawn here from the same spec and data
-(report/figure_spec.py) as plot.py draws their PNGs.
+A method is a trace in its group's colour (the method table's `group`: whose code steps, ARKODE by kind; Okabe and
+Ito's colour-blind-safe palette) with a marker of its own; the legend lists the methods group by group, the first
+of each under its group's title (the titles are not clickable in the plotly.js Debian ships, 2.6.3), a method's
+entry hides or shows it in every panel, and a button per group above the plot shows or hides the whole group.
+Hover shows the line, its x and y and the values its spec names (setting, calls, CPU time). Log axes where the
+spec says. A diagram of many methods shows at first its Pareto front (where the spec asks for it) and each
+group's best method; the others are one click away. plotly.js comes from Debian's python3-plotly, copied once into
+the report's folder (no network when the page is viewed); the figures are built with plotly's Python API
+(plotly.graph_objects), not by hand.
 
 Used by plot.py's html(); figures(directory) returns {png stem: (HTML of its interactive twin, how to use it)}."""
 import csv
-import math
 import os
 import shutil
 
@@ -67,117 +65,101 @@ class Groups:
         return self.group.get(method, "other")
 
 
-def pareto(points):
-    """the points no other is both cheaper and more accurate than: (cost, error, ...) sorted by cost"""
-    front, best = [], math.inf
-    for p in sorted(points, key=lambda p: (p[0], p[1])):
-        if p[1] < best:
-            front.append(p)
-            best = p[1]
-    return front
-
-
-def diagram(groups, curves, front, x_title, y_title, title, hover_x, hover_y):
-    """curves: {method: [(x, y, setting, extra)]}, front: [(x, y, method, setting)] or None; a method shown at first
-    where it is on the front or is its group's best (the least y reached)"""
-    import plotly.graph_objects as go
-    on_front = {p[2] for p in front} if front else set()
-    best_of_group = {}
-    for method, pts in curves.items():
-        least = min((p[1] for p in pts), default=math.inf)
-        g = groups.of(method)
-        if g not in best_of_group or least < best_of_group[g][1]:
-            best_of_group[g] = (method, least)
-    shown = on_front | {m for m, _ in best_of_group.values()}
-    fig = go.Figure()
-    if front:
-        fig.add_trace(go.Scatter(x=[p[0] for p in front], y=[p[1] for p in front], mode="lines", name="Pareto front",
-                                 line=dict(color="#888888", width=6), opacity=0.35, legendgroup="front", legendgrouptitle_text="front",
-                                 hoverinfo="skip"))
-    for g in groups.order + ["other"]:
-        for method in [m for m in curves if groups.of(m) == g]:
-            pts = sorted(curves[method])
-            fig.add_trace(go.Scatter(
-                x=[p[0] for p in pts], y=[p[1] for p in pts], mode="lines+markers", name=method,
-                legendgroup=g, legendgrouptitle_text=g, visible=True if method in shown else "legendonly",
-                line=dict(color=groups.colour.get(g, "#999999"), width=1.5),
-                marker=dict(symbol=groups.marker.get(method, "circle"), size=8, color=groups.colour.get(g, "#999999")),
-                customdata=[[p[2], p[3]] for p in pts],
-                hovertemplate=f"<b>{method}</b><br>%{{customdata[0]}}<br>{hover_y} %{{y:.3e}}<br>{hover_x} %{{x:.3e}}%{{customdata[1]}}<extra>{g}</extra>"))
-    # a button per group: its first click shows the whole group, the next hides it (plotly's toggle buttons: args, then
-    # args2); the legend's entries show or hide one method each
-    indices = {}
-    for i, trace in enumerate(fig.data):
-        if trace.legendgroup != "front":
-            indices.setdefault(trace.legendgroup, []).append(i)
-    buttons = [dict(label=f"{g} ({len(ix)})", method="restyle", args=[{"visible": True}, ix], args2=[{"visible": "legendonly"}, ix])
-               for g, ix in indices.items()]
-    fig.update_layout(updatemenus=[dict(type="buttons", direction="right", buttons=buttons, showactive=False, x=0, xanchor="left", y=1.0,
-                                        yanchor="bottom", pad=dict(t=2, b=2), font=dict(size=10))])
-    fig.update_xaxes(type="log", title=x_title, exponentformat="power")
-    fig.update_yaxes(type="log", title=y_title, exponentformat="power")
-    fig.update_layout(title=dict(text=title, y=0.99), height=620, template="plotly_white", legend=dict(groupclick="toggleitem", font=dict(size=11)),
-                      margin=dict(l=70, r=20, t=80, b=60))
-    return fig
-
-
-def per_scene(directory, groups, table, x_column, point, front, x_title, title):
-    """one diagram per scene of `table`'s ok rows: x = the row's `x_column`, y = its error; point(row) gives the
-    hover's setting and extra line; `front`: with the Pareto front"""
-    out = {}
-    data = rows(directory, table)
-    for scene in dict.fromkeys(r["scene"] for r in data):
-        curves = {}
-        for r in data:
-            x, error = number(r[x_column]), number(r["error"])
-            if r["scene"] == scene and r["status"] == "ok" and error > 0 and x > 0 and math.isfinite(error):
-                curves.setdefault(r["method"], []).append((x, error, *point(r)))
-        line = pareto([(x, y, m, s) for m, pts in curves.items() for x, y, s, _ in pts]) if front else None
-        out[f"{table}_{scene}"] = diagram(groups, curves, line, x_title, "error at t_end", f"{title}, {scene}", x_title, "error")
-    return out
-
-
-def work_precision(directory, groups):
-    def point(r):
-        setting = f"dt {number(r['dt']):.3g}" if r["mode"] == "fixed" else f"rtol {number(r['rtol']):.1e}"
-        return setting, f"<br>calls of f {int(number(r['rhs_evals']))}"
-    return per_scene(directory, groups, "work_precision", "cpu_seconds", point, True, "CPU time (s)", "Work against precision")
-
-
-def convergence(directory, groups):
-    def point(r):
-        return f"dt {number(r['dt']):.3g}", f"<br>steps {int(number(r['steps']))}"
-    return per_scene(directory, groups, "convergence", "dt", point, False, "dt (s)", "Convergence")
-
-
-def declared(directory, groups, spec):
-    """a declared figure (figures.json's spec) as figure_spec reads it, the twin of plot.py's declared(): a method's
-    line in its group's colour and its own marker, measurements as markers alone, the reference lines dotted;
-    a panel per facet side by side"""
+def figure(directory, groups, spec, tables):
+    """a figure (figures.json's spec) as figure_spec reads it, the twin of plot.py's draw_figure: a panel each side
+    by side; a method's traces in its group's colour and its own marker, sharing one legend entry across panels and
+    layers (a click hides or shows the method everywhere), the first of each group titled with the group; another
+    line in a palette colour of its own; a failed run a cross at the panel's top; a contour at level 1. With
+    `front`, or where more than 12 methods are drawn, only the Pareto front's methods (with `front`, the front too)
+    and each group's best (the least y) are shown at first; a button per group shows or hides the whole group"""
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
-    panels = figure_spec.panels(directory, spec)
-    fig = make_subplots(rows=1, cols=len(panels), subplot_titles=[f"{spec['facet']} {f}" if f else "" for f, _ in panels])
-    for col, (facet, lines) in enumerate(panels, start=1):
-        for i, line in enumerate(lines):
-            colour = groups.colour.get(groups.of(line.series), PALETTE[i % len(PALETTE)]) if spec["series"] == "method" else PALETTE[i % len(PALETTE)]
+    panels = figure_spec.panels(directory, spec, tables)
+    fig = make_subplots(rows=1, cols=len(panels), subplot_titles=[p.title for p in panels] if len(panels) > 1 else None)
+    others = {}
+
+    def colour(key, method):
+        return groups.colour.get(groups.of(key), "#999999") if method else PALETTE[others.setdefault(key, len(others)) % len(PALETTE)]
+    methods = {line.name: line.key for p in panels for line in p.lines if line.method}
+    # at first: every line, or (with `front` or many methods) the front's and each group's best
+    shown = set(methods)
+    if spec["front"] or len(methods) > 12:
+        best = {}
+        for p in panels:
+            for line in (line for line in p.lines if line.method and line.mark != "star"):
+                g, least = groups.of(line.key), min(line.y)
+                if g not in best or least < best[g][1]:
+                    best[g] = (line.name, least)
+        shown = {name for name, _ in best.values()}
+    fronts = []
+    for p in panels:
+        points = [(x, y, line.name, hover) for line in p.lines if line.method and line.mark != "star" for x, y, hover in zip(line.x, line.y, line.hover)]
+        fronts.append(figure_spec.pareto(points) if spec["front"] else [])
+        shown |= {q[2] for q in fronts[-1]}
+    legend_seen, titled = set(), set()
+
+    def legend_of(name, key, method):
+        first = name not in legend_seen
+        legend_seen.add(name)
+        group = groups.of(key) if method else ""
+        title = group if method and first and group not in titled else None
+        if title:
+            titled.add(group)
+        return dict(name=name, legendgroup=name, showlegend=first, legendgrouptitle_text=title,
+                    visible=True if not method or name in shown else "legendonly")
+    for col, p in enumerate(panels, start=1):
+        if fronts[col - 1]:
+            front = fronts[col - 1]
+            fig.add_trace(go.Scatter(x=[q[0] for q in front], y=[q[1] for q in front], mode="lines", name="Pareto front", legendgroup="front",
+                                     showlegend=col == 1, line=dict(color="#888888", width=6), opacity=0.35, hoverinfo="skip"), row=1, col=col)
+        for c in p.contours:
+            fig.add_trace(go.Contour(x=c.x, y=c.y, z=c.z, contours=dict(start=1, end=1, size=1, coloring="lines"), showscale=False,
+                                     line=dict(color=colour(c.key, c.key in groups.group), width=2), hoverinfo="skip",
+                                     **{k: v for k, v in legend_of(c.name, c.key, False).items() if k != "showlegend"}),
+                          row=1, col=col)
+            # a contour has no legend entry of its own: a line without points stands for it
+            fig.add_trace(go.Scatter(x=[None], y=[None], mode="lines", line=dict(color=colour(c.key, c.key in groups.group), width=2),
+                                     name=c.name, legendgroup=c.name, showlegend=col == 1), row=1, col=col)
+        for line in p.lines:
+            hue = "#000000" if line.mark == "guide" else colour(line.key, line.method)
+            marker = dict(symbol="star" if line.mark == "star" else groups.marker.get(line.key, MARKERS[others.get(line.key, 0) % len(MARKERS)]),
+                          size=16 if line.mark == "star" else 7, color="gold" if line.mark == "star" else hue)
+            mode = {"line": "lines", "guide": "lines", "points": "markers", "star": "markers"}.get(line.mark, "lines+markers")
+            extra = ["<br>" + "<br>".join(h) if h else "" for h in line.hover] if line.hover else None
             fig.add_trace(go.Scatter(
-                x=line.x, y=line.y, mode="markers" if line.points_only else "lines+markers", name=line.name, legendgroup=line.name,
-                showlegend=col == 1, line=dict(color=colour, width=1.5),
-                marker=dict(symbol=groups.marker.get(line.series, MARKERS[i % len(MARKERS)]), size=8, color=colour),
-                hovertemplate=f"<b>{line.name}</b><br>{spec['y_label']} %{{y:.3g}}<br>{spec['x_label']} %{{x:.3g}}<extra></extra>"),
-                row=1, col=col)
-        for k, ref in enumerate(spec["lines"]):
-            dash = ("dot", "dash")[k % 2]
-            if ref["axis"] == "x":
-                fig.add_vline(x=ref["value"], line=dict(color="#444444", dash=dash, width=1), annotation_text=ref["label"], row=1, col=col)
-            else:
-                fig.add_hline(y=ref["value"], line=dict(color="#444444", dash=dash, width=1), annotation_text=ref["label"], row=1, col=col)
-    fig.update_xaxes(type="log" if spec["log_x"] else "linear", title=spec["x_label"], exponentformat="power")
-    fig.update_yaxes(type="log" if spec["log_y"] else "linear", title=spec["y_label"], exponentformat="power")
-    fig.update_layout(title=dict(text=spec["title"], y=0.99), height=520, template="plotly_white", legend=dict(font=dict(size=11)),
-                      margin=dict(l=70, r=20, t=80, b=60))
-    return fig
+                x=line.x, y=line.y, mode=mode, line=dict(color=hue, width=1.5, dash="dash" if line.dashed else "dot" if line.mark == "guide" else None),
+                marker=marker, customdata=extra,
+                hovertemplate=f"<b>{line.name}</b><br>{p.y_label} %{{y:.3g}}<br>{p.x_label} %{{x:.3g}}{'%{customdata}' if extra else ''}"
+                              f"<extra>{groups.of(line.key) if line.method else ''}</extra>",
+                **legend_of(line.name, line.key, line.method)), row=1, col=col)
+        if p.failed:
+            top = max([y for line in p.lines for y in line.y] + [1.0]) * (10 if p.log_y else 1.1)
+            for f in p.failed:
+                fig.add_trace(go.Scatter(x=f.x, y=[top] * len(f.x), mode="markers", marker=dict(symbol="x", size=8, color=colour(f.key, f.method)),
+                                         hovertemplate=f"<b>{f.name}</b>: failed or diverged<br>{p.x_label} %{{x:.3g}}<extra></extra>",
+                                         **{**legend_of(f.name, f.key, f.method), "showlegend": False}), row=1, col=col)
+        for k, ref in enumerate(p.references):
+            line = dict(color="#444444" if ref["label"] else "#bbbbbb", dash=("dot", "dash")[k % 2] if ref["label"] else "solid", width=1)
+            add = fig.add_vline if ref["axis"] == "x" else fig.add_hline
+            add(**{ref["axis"]: ref["value"]}, line=line, annotation_text=ref["label"] or None, row=1, col=col)
+        fig.update_xaxes(type="log" if p.log_x else "linear", title=p.x_label, exponentformat="power", row=1, col=col)
+        fig.update_yaxes(type="log" if p.log_y else "linear", title=p.y_label, exponentformat="power", row=1, col=col)
+        if p.equal_aspect:
+            fig.update_yaxes(scaleanchor=f"x{col if col > 1 else ''}", scaleratio=1, row=1, col=col)
+    # a button per group of methods: its first click shows the whole group, the next hides it (plotly's toggle
+    # buttons: args, then args2)
+    indices = {}
+    for i, trace in enumerate(fig.data):
+        if trace.name in methods:
+            indices.setdefault(groups.of(methods[trace.name]), []).append(i)
+    if len(indices) > 1:
+        buttons = [dict(label=f"{g} ({len({fig.data[i].name for i in ix})})", method="restyle", args=[{"visible": True}, ix],
+                        args2=[{"visible": "legendonly"}, ix]) for g, ix in indices.items()]
+        fig.update_layout(updatemenus=[dict(type="buttons", direction="right", buttons=buttons, showactive=False, x=0, xanchor="left", y=1.09,
+                                            yanchor="bottom", pad=dict(t=2, b=2), font=dict(size=10))])
+    fig.update_layout(title=dict(text=spec["title"] if len(panels) > 1 else panels[0].title, y=0.99), height=620 if len(methods) > 12 else 520,
+                      template="plotly_white", legend=dict(groupclick="togglegroup", font=dict(size=11)), margin=dict(l=70, r=20, t=120 if len(indices) > 1 else 80, b=60))
+    return fig, bool(methods)
 
 
 # draws each figure when it comes near the window (the page is usable at once; a dozen figures of forty traces
@@ -203,14 +185,13 @@ def figures(directory):
         return {}
     shutil.copyfile(PLOTLY_JS, os.path.join(directory, "plotly.js"))
     groups = Groups(directory)
-    diagrams = {**work_precision(directory, groups), **convergence(directory, groups)}
-    declared_figures = {stem: declared(directory, groups, spec) for stem, spec in figure_spec.specs(directory).items()}
+    tables = figure_spec.Tables(directory)
+    drawn = {stem: figure(directory, groups, spec, tables) for stem, spec in figure_spec.specs(directory).items()}
     def embedded(stem, fig):
         spec = fig.to_json().replace("</", "<\\/")  # no text in the JSON can close its script element
         return (f'<div id="figure-{stem}" class="lazy-plot" style="height: {fig.layout.height}px"></div>'
                 f'<script type="application/json" id="data-figure-{stem}">{spec}</script>')
     hint = ("hover for a point's method, setting, error and cost; click a legend entry to hide or show a method, a group's button above "
             "the plot for the whole group")
-    return {**{stem: (embedded(stem, fig), hint) for stem, fig in diagrams.items()},
-            **{stem: (embedded(stem, fig), "hover for a point's values; click a legend entry to hide or show its line")
-               for stem, fig in declared_figures.items()}}
+    return {stem: (embedded(stem, fig), hint if methods else "hover for a point's values; click a legend entry to hide or show its line")
+            for stem, (fig, methods) in drawn.items()}

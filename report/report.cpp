@@ -102,11 +102,11 @@ int fail(const char* command, const std::exception& e, bool together) {
 // report.md as index.html
 void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, int jobs, bool html) {
   Table list{{"stem", "kind", "subject"}, {}};
-  // the declared figures' specs, by stem, for plot.py's one drawer of them
+  // the figures' specs, by stem, for plot.py's and interactive.py's one drawer each
   nlohmann::json declared = nlohmann::json::object();
   for (const auto& f : figures) {
-    list.rows.push_back({f.stem(), f.spec ? std::string("declared") : f.kind, f.subject});
-    if (f.spec) declared[f.stem()] = f.spec->json();
+    list.rows.push_back({f.stem(), f.kind, f.subject});
+    declared[f.stem()] = f.spec.json();
   }
   write_file_atomic(dir / "figures.csv", to_csv(list));
   write_file_atomic(dir / "figures.json", declared.dump(1) + "\n");

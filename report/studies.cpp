@@ -10,22 +10,39 @@ namespace stepwise {
 
 std::string sci(double v) { return std::isfinite(v) ? fmt::format("{:.2e}", v) : "—"; }
 
-std::string add_figure(std::vector<Figure>& figures, const std::string& kind, const std::string& subject, const std::string& caption) {
-  figures.push_back({kind, subject});
+std::string add_figure(std::vector<Figure>& figures, const std::string& kind, const std::string& subject, FigureSpec spec, const std::string& caption) {
+  figures.push_back({kind, subject, std::move(spec)});
   return fmt::format("![{}]({}.png)\n\n", caption, figures.back().stem());
 }
 
-std::string add_figure(std::vector<Figure>& figures, const std::string& stem, FigureSpec spec, const std::string& caption) {
-  figures.push_back({stem, "", std::move(spec)});
-  return fmt::format("![{}]({}.png)\n\n", caption, stem);
+std::vector<FigureSpec::Layer> by_mode(FigureSpec::Layer layer) {
+  layer.series = "method";
+  layer.failures = true;
+  layer.hover = {{"dt", "dt"}, {"rtol", "rtol"}, {"rhs_evals", "calls of f"}, {"cpu_seconds", "CPU s"}};
+  FigureSpec::Layer adaptive = layer;
+  layer.where.push_back({"mode", {"fixed"}});
+  adaptive.where.push_back({"mode", {"adaptive"}});
+  adaptive.mark = "dashed+points";
+  return {std::move(layer), std::move(adaptive)};
 }
 
 nlohmann::json FigureSpec::json() const {
-  nlohmann::json j{{"table", table}, {"x", x}, {"x_label", x_label}, {"y_label", y_label}, {"title", title}, {"series", series},
-                   {"facet", facet}, {"log_x", log_x}, {"log_y", log_y}, {"y", nlohmann::json::array()}, {"lines", nlohmann::json::array()},
-                   {"series_label", series_label}, {"complete", complete}};
-  for (const auto& c : y) j["y"].push_back({{"column", c.column}, {"label", c.label}, {"points_only", c.points_only}});
-  for (const auto& l : lines) j["lines"].push_back({{"axis", std::string(1, l.axis)}, {"value", l.value}, {"label", l.label}});
+  nlohmann::json j{{"title", title}, {"facet", facet}, {"front", front}, {"panels", nlohmann::json::array()}};
+  for (const auto& p : panels) {
+    nlohmann::json panel{{"title", p.title},   {"x_label", p.x_label},          {"y_label", p.y_label},         {"log_x", p.log_x},
+                         {"log_y", p.log_y},   {"guide_slope", p.guide_slope},  {"guide_label", p.guide_label}, {"equal_aspect", p.equal_aspect}, {"symlog_x", p.symlog_x},
+                         {"layers", nlohmann::json::array()}, {"lines", nlohmann::json::array()}};
+    for (const auto& l : p.layers) {
+      nlohmann::json where = nlohmann::json::object(), hover = nlohmann::json::array();
+      for (const auto& w : l.where) where[w.column] = w.values;
+      for (const auto& [column, heading] : l.hover) hover.push_back({column, heading});
+      panel["layers"].push_back({{"table", l.table}, {"x", l.x}, {"y", l.y}, {"z", l.z}, {"series", l.series}, {"split", l.split}, {"split_dashed", l.split_dashed}, {"label", l.label}, {"mark", l.mark},
+                                 {"y_of", l.y_of}, {"floor", l.floor}, {"where", where}, {"complete", l.complete}, {"failures", l.failures},
+                                 {"hover", hover}, {"names", l.names}});
+    }
+    for (const auto& l : p.lines) panel["lines"].push_back({{"axis", std::string(1, l.axis)}, {"value", l.value}, {"label", l.label}});
+    j["panels"].push_back(std::move(panel));
+  }
   return j;
 }
 

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <optional>
 
 #include <nlohmann/json.hpp>
@@ -14,40 +15,64 @@
 
 namespace stepwise {
 
-// a figure declared rather than drawn by a function of its own: which columns of which of the study's tables it
-// plots against which, a line per value of `series` (a method: coloured by its group, marked by itself), a panel
-// per value of `facet`, on log or linear axes, with reference lines. report/plot.py draws every declared figure
-// with one function, as the PNG and as index.html's interactive figure (report/interactive.py), alike
+// a figure declared, not drawn: which columns of which of the study's tables it plots against which, and how.
+// report/plot.py draws every figure from its spec with one function (the PNG), report/interactive.py with
+// another (index.html's plotly figure), both from the same lines as report/figure_spec.py reads them.
+// A figure is a row of panels (copied once per value of `facet`); a panel's layers each draw one table's rows,
+// a line per value of the layer's `series` column (a method: coloured by its group, marked by itself).
 struct FigureSpec {
-  struct Curve {
-    std::string column;         // y
-    std::string label;          // added to the series' name in the legend ("predicted"), or the line's name
-    bool points_only = false;   // markers without a line (measurements beside a predicted line)
+  struct Where {
+    std::string column;
+    std::vector<std::string> values;  // rows kept whose cell, as the CSV writes it, is one of these
+  };
+  struct Layer {
+    std::string table;              // the CSV stem
+    std::string x, y;               // columns
+    std::string series;             // the column naming each line; empty: one line
+    std::vector<std::string> split; // a line per distinct value of these columns too, in its series' colour and marker
+    bool split_dashed = false;      // a series' second and later lines dashed
+    std::string label = "{}";       // a line's legend name: "{}" its series' value, "{column}" a split column's
+    std::string mark = "line+points";  // "line", "points", "line+points", "dashed", "dashed+points", "star" (a point marked out),
+                                       // "contour" (z's level 1 over the grid of x and y)
+    std::string z;                  // "contour": the column whose level 1 is drawn (named after a method: in its colour)
+    std::string y_of;               // "": y as it is; "abs": |y|; "minus_one": y - 1
+    double floor = 0;               // > 0: a y under it (an exact 0) drawn at it, on a log axis
+    std::vector<Where> where;
+    std::vector<std::string> complete;  // rows kept only where each of these columns is a finite number
+    bool failures = false;          // a row whose status is not ok: a cross at the panel's top, at its x
+    std::vector<std::pair<std::string, std::string>> hover;  // (column, heading) shown on hover where the row has a value
+    std::map<std::string, std::string> names;                // a series' legend name, in place of `label`'s
   };
   struct Line {
-    char axis;                  // 'x': a vertical line at x = value; 'y': a horizontal one
+    char axis;                      // 'x': a vertical line at x = value; 'y': a horizontal one
     double value;
     std::string label;
   };
-  std::string table;            // the CSV stem
-  std::string x;
-  std::vector<Curve> y;
-  std::string y_label, x_label, title;
-  std::string series;           // the column naming each line ("method"); empty: a line per curve
-  std::string facet;            // the column naming each panel; empty: one panel
-  bool log_x = false, log_y = false;
-  std::vector<Line> lines;
-  std::string series_label;           // a series' name in the legend, "{}" standing for its value; empty: the value
-  std::vector<std::string> complete;  // rows kept only where each of these columns is a finite number
+  struct Panel {
+    std::string title;              // "{column}" shows the facet's value
+    std::string x_label, y_label;
+    bool log_x = false, log_y = false;
+    bool symlog_x = false;          // the PNG's x linear near 0 and logarithmic past its least positive x (a 0 shown)
+    std::vector<Layer> layers;
+    std::vector<Line> lines;
+    double guide_slope = 0;         // != 0: a dotted line y ~ x^slope through the panel's highest point at its least x
+    std::string guide_label;
+    bool equal_aspect = false;
+  };
+  std::string title;
+  std::vector<Panel> panels;
+  std::vector<std::string> facet;   // the panels once per distinct value of these columns (the first layer's table's)
+  bool front = false;               // interactive: the Pareto front of each panel's points, and at first only the
+                                    // methods on it and each group's best shown (the rest one click away)
   nlohmann::json json() const;
 };
 
-// a figure drawn by report/plot.py from the study's CSVs into stem().png: `kind` names plot.py's function (or
-// "declared", drawn from `spec`), `subject` (a scene, or empty) what it draws it for
+// a figure drawn by report/plot.py and report/interactive.py from the study's CSVs into stem().png: `kind` the
+// study's name for it, `subject` (a scene, or empty) what it draws it for
 struct Figure {
   std::string kind;
   std::string subject;
-  std::optional<FigureSpec> spec;
+  FigureSpec spec;
   std::string stem() const { return subject.empty() ? kind : kind + "_" + subject; }
 };
 
@@ -87,10 +112,12 @@ Study fluid_study();
 Study scaling_study();
 Study advice_study();
 
+// a sweep's layers (rows of method, mode and status): `layer` once for the fixed-step rows, drawn solid, once for
+// the adaptive ones, dashed; failed rows as crosses; the setting and the calls of f on hover
+std::vector<FigureSpec::Layer> by_mode(FigureSpec::Layer layer);
+
 // adds the figure to the list; returns its Markdown (an image line and a blank line) for the section
-std::string add_figure(std::vector<Figure>& figures, const std::string& kind, const std::string& subject, const std::string& caption);
-// a declared figure, drawn into `stem`.png
-std::string add_figure(std::vector<Figure>& figures, const std::string& stem, FigureSpec spec, const std::string& caption);
+std::string add_figure(std::vector<Figure>& figures, const std::string& kind, const std::string& subject, FigureSpec spec, const std::string& caption);
 
 // a number in scientific notation with 3 digits, or a dash for nan and inf
 std::string sci(double v);

@@ -41,9 +41,11 @@ StudyOutput adequacy(const StudyContext&) {
                                {"max_amplitude_deg", "max amplitude (deg)", shown_as("{:.2f}")}});
   std::vector<Figure> figures;
   md += "\n";
-  FigureSpec spec{"adequacy", "periods", {{"max_amplitude_deg", "", false}}, "largest amplitude (degrees)", "periods shown",
-                  "Where the small-angle pendulum is enough", "phase_tolerance_rad", "", true, true, {}, "phase error {} rad"};
-  md += add_figure(figures, "adequacy", std::move(spec), "Largest amplitude the small-angle pendulum serves, against the periods shown");
+  FigureSpec spec{.title = "Where the small-angle pendulum is enough",
+                  .panels = {{.x_label = "periods shown", .y_label = "largest amplitude (degrees)", .log_x = true, .log_y = true,
+                              .layers = {{.table = "adequacy", .x = "periods", .y = "max_amplitude_deg", .series = "phase_tolerance_rad",
+                                          .label = "phase error {} rad"}}}}};
+  md += add_figure(figures, "adequacy", "", std::move(spec), "Largest amplitude the small-angle pendulum serves, against the periods shown");
   return {{{"adequacy", std::move(table)}}, md, figures};
 }
 

@@ -27,7 +27,7 @@ StudyOutput advice_section(const StudyContext& ctx) {
     advices.push_back(advise(s, target, budget, ctx.threads));
     out.markdown += advice_markdown(advices.back(), fmt::format("stepwise advise scenes/{}.toml --error {:g} --budget {:g}", scene, target, budget), "###");
     out.markdown += "\n";
-    out.figures.push_back({"advice", advices.back().scene});
+    out.figures.push_back(advice_figure(advices.back()));
   }
   // what the stiff scene's advice says of the label "stiff", from its own numbers
   const Advice& stiff = advices.back();

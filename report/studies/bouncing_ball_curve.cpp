@@ -59,7 +59,16 @@ StudyOutput bouncing_ball_curve(const StudyContext&) {
                        [&](size_t row) { return row < 5 || row + 1 == table.rows.size(); });
   std::vector<Figure> figures;
   md += "\n";
-  md += add_figure(figures, "bouncing_ball_curve", "", "The seeds' animation curve against the physical ball, bounce by bounce");
+  const auto ball_and_curve = [](std::string physical, std::string curve) {
+    return std::vector<FigureSpec::Layer>{{.table = "bouncing_ball_curve", .x = "bounce", .y = std::move(physical), .label = "physical ball"},
+                                          {.table = "bouncing_ball_curve", .x = "bounce", .y = std::move(curve), .label = "seeds' curve"}};
+  };
+  FigureSpec spec{.title = "The seeds' bouncing ball against the physical one",
+                  .panels = {{.title = "Flights: the curve's never shorten", .x_label = "bounce", .y_label = "flight time (s)",
+                              .layers = ball_and_curve("physical_flight_s", "curve_flight_s")},
+                             {.title = "Apexes: matched bounce for bounce", .x_label = "bounce", .y_label = "apex height (m)", .log_y = true,
+                              .layers = ball_and_curve("physical_apex_m", "curve_apex_m")}}};
+  md += add_figure(figures, "bouncing_ball_curve", "", std::move(spec), "The seeds' animation curve against the physical ball, bounce by bounce");
   return {{{"bouncing_ball_curve", std::move(table)}}, md, figures};
 }
 

@@ -90,10 +90,14 @@ StudyOutput cloth(const StudyContext& ctx) {
   std::vector<Figure> figures;
   md += "\n";
   // the explicit methods' limits (implicit Euler's rows have no prediction: it is stable at every step)
-  FigureSpec stability_spec{"cloth_stability", "stiffness", {{"predicted_dt", "predicted", false}, {"measured_dt", "measured", true}},
-                            "largest stable dt (s)", "structural stiffness c (N/m)", "8 x 8 sheet: explicit methods' limits from the stiffest mode",
-                            "method", "", true, true, {}, "", {"predicted_dt"}};
-  md += add_figure(figures, "cloth_stability", std::move(stability_spec),
+  const auto limit = [](std::string column, std::string label, std::string mark) {
+    return FigureSpec::Layer{.table = "cloth_stability", .x = "stiffness", .y = std::move(column), .series = "method", .label = std::move(label),
+                             .mark = std::move(mark), .complete = {"predicted_dt"}};
+  };
+  FigureSpec stability_spec{.title = "8 x 8 sheet: explicit methods' limits from the stiffest mode",
+                            .panels = {{.x_label = "structural stiffness c (N/m)", .y_label = "largest stable dt (s)", .log_x = true, .log_y = true,
+                                        .layers = {limit("predicted_dt", "{} predicted", "line"), limit("measured_dt", "{} measured", "points")}}}};
+  md += add_figure(figures, "cloth_stability", "", std::move(stability_spec),
                    "Largest stable step against the sheet's stiffness: measured points, predicted lines");
   md += fmt::format(
       "\nSymplectic Euler's measured limit is its predicted one to {:.2f}% at every stiffness: it falls as 1/sqrt(c), three "
@@ -124,10 +128,14 @@ StudyOutput cloth(const StudyContext& ctx) {
                                  {"predicted_ratio", "1 / sqrt(1 + w^2 h^2)", shown_as("{:.12f}")},
                                  {"periods_to_halve", "periods to halve", shown_as("{:.3g}")}});
   md += "\n";
-  FigureSpec damping_spec{"cloth_implicit_damping", "omega_h", {{"predicted_ratio", "1 / sqrt(1 + w^2 h^2)", false},
-                                                              {"measured_ratio", "implicit-euler, measured", true}},
-                          "amplitude kept per step", "w h", "Implicit Euler's numerical damping of one spring", "", "", true, false, {}};
-  md += add_figure(figures, "cloth_implicit_damping", std::move(damping_spec), "Implicit Euler's amplitude kept per step against w h");
+  const auto kept = [](std::string column, std::string label, std::string mark) {
+    return FigureSpec::Layer{.table = "cloth_implicit_damping", .x = "omega_h", .y = std::move(column), .label = std::move(label), .mark = std::move(mark)};
+  };
+  FigureSpec damping_spec{.title = "Implicit Euler's numerical damping of one spring",
+                          .panels = {{.x_label = "w h", .y_label = "amplitude kept per step", .log_x = true,
+                                      .layers = {kept("predicted_ratio", "1 / sqrt(1 + w^2 h^2)", "line"),
+                                                 kept("measured_ratio", "implicit-euler, measured", "points")}}}};
+  md += add_figure(figures, "cloth_implicit_damping", "", std::move(damping_spec), "Implicit Euler's amplitude kept per step against w h");
   md += fmt::format(
       "\nThe measured ratio is 1 / sqrt(1 + w^2 h^2) to {:.1e}. A mode at w h = 0.01 (628 steps a period) loses half its amplitude "
       "in {:.3g} periods, at w h = 0.1 (63 steps a period) in {:.3g}; a cloth's stiff in-plane modes (w h >> 1) are gone within a step or two: "

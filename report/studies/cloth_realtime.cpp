@@ -154,10 +154,12 @@ StudyOutput cloth_realtime(const StudyContext& ctx) {
       "{:.3g} s (its own error, from the run at twice that step: {}). The vertical line is the real-time budget (1/60 s of CPU "
       "per 1/60 s of simulated time); the horizontal one half a pixel of a {:.0f}-pixel-high frame {:g} m tall ({:.2g} m).\n\n",
       t_end, t_end, reference_dt / 2, sci(reference_error), frame_pixels, frame_extent, half_pixel);
-  FigureSpec spec{"cloth_realtime", "cpu_per_simulated_second", {{"position_error", "", false}}, "largest node position error (m)",
-                  "CPU seconds per simulated second", fmt::format("The 32 x 32 flag over {:g} s: accuracy against cost", t_end), "method", "", true, true,
-                  {{'x', 1.0, "real time (one core)"}, {'y', half_pixel, "half a pixel (720-pixel frame)"}}};
-  out.markdown += add_figure(out.figures, "cloth_realtime", std::move(spec), "The flag: position error against CPU time per simulated second");
+  FigureSpec spec{.title = fmt::format("The 32 x 32 flag over {:g} s: accuracy against cost", t_end),
+                  .panels = {{.x_label = "CPU seconds per simulated second", .y_label = "largest node position error (m)", .log_x = true, .log_y = true,
+                              .layers = {{.table = "cloth_realtime", .x = "cpu_per_simulated_second", .y = "position_error", .series = "method",
+                                          .hover = {{"setting", "setting"}}}},
+                              .lines = {{'x', 1.0, "real time (one core)"}, {'y', half_pixel, "half a pixel (720-pixel frame)"}}}}};
+  out.markdown += add_figure(out.figures, "cloth_realtime", "", std::move(spec), "The flag: position error against CPU time per simulated second");
   out.markdown += realtime.empty()
                       ? "**No method runs the flag in real time within half a pixel on one core here**; the table says by how much each misses.\n\n"
                       : fmt::format("**In real time within half a pixel on one core: {}.**\n\n", fmt::join(realtime, ", "));

@@ -115,7 +115,20 @@ StudyOutput contacts(const StudyContext& ctx) {
       "a run repeated is bit-identical. The bounce changes with the step too (a step resolves one approach at a time).\n\n",
       sci(worst_creep), sci(worst_slide), impacts.first, impacts.second, fewest_kept, most_kept);
   std::vector<Figure> figures;
-  md += add_figure(figures, "contacts", "", "Contacts against the step: the resting box's sink and the slopes' errors, and the collapse's energy and impacts");
+  const auto against_dt = [](std::string column, std::string label, double floor) {
+    return FigureSpec::Layer{.table = "contacts", .x = "dt", .y = std::move(column), .label = std::move(label), .floor = floor};
+  };
+  FigureSpec spec{.title = "Contacts against the step",
+                  .panels = {{.title = "Resting and sliding contact (an exact 0 drawn at 1e-20)", .x_label = "step dt (s)", .y_label = "error",
+                              .log_x = true, .log_y = true,
+                              .layers = {against_dt("tumble_sink", "tumbling box: final depth below its resting height (m)", 0),
+                                         against_dt("slope_creep", "box at rest on a slope: creep (m)", 1e-20),
+                                         against_dt("slide_error", "box sliding: speed against Coulomb's, relative", 1e-20)}},
+                             {.title = "The wall's collapse: chaotic, so it changes with the step", .x_label = "step dt (s)",
+                              .y_label = "fraction of the energy kept", .log_x = true, .layers = {against_dt("collapse_energy_kept", "energy kept", 0)}},
+                             {.title = "The wall's collapse: impacts", .x_label = "step dt (s)", .y_label = "impacts", .log_x = true,
+                              .layers = {against_dt("collapse_impacts", "impacts", 0)}}}};
+  md += add_figure(figures, "contacts", "", std::move(spec), "Contacts against the step: the resting box's sink and the slopes' errors, and the collapse's energy and impacts");
   return {{{"contacts", std::move(table)}}, md, figures};
 }
 

@@ -84,7 +84,19 @@ StudyOutput convergence(const StudyContext& ctx) {
   for (size_t s = 0; s < shown.size(); ++s) {
     const std::string& label = shown[s]->label;
     if (s > 0) out.markdown += "\n";
-    out.markdown += fmt::format("### {}\n\n{}", label, add_figure(out.figures, "convergence", label, "Error at t_end against dt, " + label));
+    // each method's legend entry: its observed slope against its documented order
+    std::map<std::string, std::string> names;
+    for (const auto& row : orders.rows)
+      if (std::get<std::string>(cell_of(orders, row, "scene")) == label) {
+        const std::string method = std::get<std::string>(cell_of(orders, row, "method"));
+        names[method] = fmt::format("{}: {:.2f} (order {})", method, std::get<double>(cell_of(orders, row, "observed_order")),
+                                    std::get<std::string>(cell_of(orders, row, "documented_order")));
+      }
+    FigureSpec spec{.title = fmt::format("{}: convergence (legend: observed slope, documented order; x: diverged or failed)", label),
+                    .panels = {{.x_label = "step dt (s)", .y_label = "max-norm error at t_end", .log_x = true, .log_y = true,
+                                .layers = {{.table = "convergence", .x = "dt", .y = "error", .series = "method", .where = {{"scene", {label}}},
+                                            .failures = true, .hover = {{"steps", "steps"}, {"rhs_evals", "calls of f"}}, .names = std::move(names)}}}}};
+    out.markdown += fmt::format("### {}\n\n{}", label, add_figure(out.figures, "convergence", label, std::move(spec), "Error at t_end against dt, " + label));
     out.markdown += markdown_table(orders,
                                    {{"method", "method"},
                                     {"documented_order", "order (method table)"},

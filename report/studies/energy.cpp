@@ -80,7 +80,11 @@ StudyOutput energy(const StudyContext& ctx) {
                                  {"at_end", "at the end", shown_as("{:+.3e}")}});
   std::vector<Figure> figures;
   md += "\n";
-  md += add_figure(figures, "energy", "", fmt::format("Relative energy error of {} over time, per method", user ? user->label : "the pendulum"));
+  FigureSpec spec{.title = "Relative energy error over the run, per method (the text above gives the scene and the step)",
+                  .panels = {{.x_label = "t (s)", .y_label = "|E - E0| / |E0|", .log_y = true,
+                              .layers = {{.table = "energy", .x = "t", .y = "relative_energy_error", .series = "method", .mark = "line",
+                                          .y_of = "abs", .floor = 1e-17}}}}};
+  md += add_figure(figures, "energy", "", std::move(spec), fmt::format("Relative energy error of {} over time, per method", user ? user->label : "the pendulum"));
   // the finding (the pendulum's): symplectic Euler's bounded error against explicit Euler's growth and implicit Euler's decay
   std::vector<std::string> findings;
   std::map<std::string, std::vector<double>> by_method;

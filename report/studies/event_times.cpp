@@ -86,7 +86,16 @@ StudyOutput event_times(const StudyContext& ctx) {
                                {"max_height_error_m", "max height error (m)", shown_as("sci")}});
   std::vector<Figure> figures;
   md += "\n";
-  md += add_figure(figures, "event_times", "", "Largest impact-time error of the bouncing ball against the step or tolerance, per method and root location");
+  const auto impact_error = [](std::string x, std::string x_label, std::string title) {
+    return FigureSpec::Panel{.title = std::move(title), .x_label = std::move(x_label), .y_label = "largest impact-time error (s)", .log_x = true, .log_y = true,
+                             .layers = {{.table = "event_times", .x = x, .y = "max_time_error_s", .series = "method", .split = {"location"},
+                                         .split_dashed = true, .label = "{} ({location})", .floor = 1e-17, .complete = {x},
+                                         .hover = {{"impacts", "impacts"}, {"rhs_evals", "calls of f"}}}}};
+  };
+  FigureSpec spec{.title = "The bouncing ball's impact times",
+                  .panels = {impact_error("dt", "step dt (s)", "Fixed steps: the impact on the step's segment (solid) or re-stepped to the root (dashed)"),
+                             impact_error("rtol", "relative tolerance", "Adaptive: CVODE's root finding, GSL re-stepped")}};
+  md += add_figure(figures, "event_times", "", std::move(spec), "Largest impact-time error of the bouncing ball against the step or tolerance, per method and root location");
   return {{{"event_times", std::move(table)}}, md, figures};
 }
 

@@ -81,7 +81,14 @@ StudyOutput numerical_viscosity(const StudyContext& ctx, std::string& md, std::v
                                {"nu_effective_over_nu", "nu_eff / nu", shown_as("{:.3g}")},
                                {"excess_order", "order", shown_as("{:.2f}")}});
   md += "\n";
-  md += add_figure(figures, "fluid_viscosity", "", "Stable Fluids' effective viscosity over the true one, by grid and CFL number");
+  FigureSpec spec{.title = "Stable Fluids' numerical viscosity",
+                  .panels = {{.title = "{method}", .x_label = "grid points per side n", .y_label = "excess viscosity (nu_eff - nu) / nu", .log_x = true,
+                              .log_y = true,
+                              .layers = {{.table = "fluid_viscosity", .x = "size", .y = "nu_effective_over_nu", .series = "cfl", .label = "CFL {}",
+                                          .y_of = "minus_one"}},
+                              .guide_slope = -1, .guide_label = "first order (1/n)"}},
+                  .facet = {"method"}};
+  md += add_figure(figures, "fluid_viscosity", "", std::move(spec), "Stable Fluids' effective viscosity over the true one, by grid and CFL number");
   md += fmt::format(
       "\nBilinear semi-Lagrangian advection smooths the field by d^2 s (1 - s) / 2 a step (s the fraction of a cell the step "
       "moves it), an added viscosity of order d A at a fixed CFL number: first order in the grid. Measured, the order rises "

@@ -52,12 +52,14 @@ StudyOutput wave_adequacy(const StudyContext& context) {
                                {"departure_per_amplitude", "departure / (A / H)", shown_as("{:.3f}")}});
   std::vector<Figure> figures;
   md += "\n";
-  FigureSpec spec{"wave_adequacy", "amplitude_over_depth", {{"relative_departure", "|eta - z| / |z|", false},
-                                                          {"relative_max_departure", "max |eta - z| / max |z|", false}},
-                  "departure of the wave equation", "drop depth over water depth A / H",
-                  "Where the linear wave equation is enough (shallow water as the truth)", "", "", true, true,
-                  {{'y', 0.01, "1%"}, {'y', 0.1, "10%"}}};
-  md += add_figure(figures, "wave_adequacy", std::move(spec),
+  const auto departure = [](std::string column, std::string label) {
+    return FigureSpec::Layer{.table = "wave_adequacy", .x = "amplitude_over_depth", .y = std::move(column), .label = std::move(label)};
+  };
+  FigureSpec spec{.title = "Where the linear wave equation is enough (shallow water as the truth)",
+                  .panels = {{.x_label = "drop depth over water depth A / H", .y_label = "departure of the wave equation", .log_x = true, .log_y = true,
+                              .layers = {departure("relative_departure", "|eta - z| / |z|"), departure("relative_max_departure", "max |eta - z| / max |z|")},
+                              .lines = {{'y', 0.01, "1%"}, {'y', 0.1, "10%"}}}}};
+  md += add_figure(figures, "wave_adequacy", "", std::move(spec),
                    "The linear wave equation's departure from shallow water against the drop's depth over the water's");
   // the finding: the departure per unit of A / H, over the drops tried
   double lo = INFINITY, hi = -INFINITY;

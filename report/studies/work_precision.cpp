@@ -206,8 +206,17 @@ StudyOutput work_precision(const StudyContext& ctx) {
                              static_cast<long>(best->coarsest), *best->error, best->cpu_seconds, best->rhs_evals, runner_name, runner_cpu, runner_cpu / best->cpu_seconds});
     }
 
+    const auto against = [&](std::string cost, std::string label, std::string title) {
+      return FigureSpec::Panel{.title = fmt::format("{}: {}", scene.label, title), .x_label = std::move(label), .y_label = "max-norm error at t_end",
+                               .log_x = true, .log_y = true,
+                               .layers = by_mode({.table = "work_precision", .x = std::move(cost), .y = "error", .where = {{"scene", {scene.label}}}})};
+    };
+    FigureSpec spec{.title = "Work against precision, " + scene.label,
+                    .panels = {against("cpu_seconds", "CPU time (s)", "error against CPU time (dashed: adaptive; x: failed)"),
+                               against("rhs_evals", "right-hand-side evaluations", "error against evaluations")},
+                    .front = true};
     sections += fmt::format("### {}\n\n{}Pareto front in CPU time (no other point is both cheaper and more accurate):\n\n", scene.label,
-                            add_figure(out.figures, "work_precision", scene.label, "Work-precision diagram, " + scene.label));
+                            add_figure(out.figures, "work_precision", scene.label, std::move(spec), "Work-precision diagram, " + scene.label));
     sections += markdown_table(fronts,
                                {{"cpu_seconds", "CPU (s)", shown_as("{:.2e}")},
                                 {"error", "error", shown_as("{:.2e}")},
