@@ -178,20 +178,19 @@ document.addEventListener('DOMContentLoaded', () => {
 </script>"""
 
 
-def figures(directory):
-    """{png stem: (HTML of the interactive figure (its div and its JSON), how to use it)}; plotly.js copied into the directory once.
-    Empty where python3-plotly is not installed (the page then shows the PNGs alone)"""
+def twin(directory, stem):
+    """(HTML of the figure to explore (its div and its JSON), how to use it), or None where python3-plotly is not
+    installed (the page then shows the PNG alone); one figure, so that plot.py's workers build them side by side"""
     if not available():
-        return {}
-    shutil.copyfile(PLOTLY_JS, os.path.join(directory, "plotly.js"))
-    groups = Groups(directory)
-    tables = figure_spec.Tables(directory)
-    drawn = {stem: figure(directory, groups, spec, tables) for stem, spec in figure_spec.specs(directory).items()}
-    def embedded(stem, fig):
-        spec = fig.to_json().replace("</", "<\\/")  # no text in the JSON can close its script element
-        return (f'<div id="figure-{stem}" class="lazy-plot" style="height: {fig.layout.height}px"></div>'
-                f'<script type="application/json" id="data-figure-{stem}">{spec}</script>')
+        return None
+    fig, methods = figure(directory, Groups(directory), figure_spec.specs(directory)[stem], figure_spec.Tables(directory))
+    spec = fig.to_json().replace("</", "<\\/")  # no text in the JSON can close its script element
     hint = ("hover for a point's method, setting, error and cost; click a legend entry to hide or show a method, a group's button above "
-            "the plot for the whole group")
-    return {stem: (embedded(stem, fig), hint if methods else "hover for a point's values; click a legend entry to hide or show its line")
-            for stem, (fig, methods) in drawn.items()}
+            "the plot for the whole group") if methods else "hover for a point's values; click a legend entry to hide or show its line"
+    return (f'<div id="figure-{stem}" class="lazy-plot" style="height: {fig.layout.height}px"></div>'
+            f'<script type="application/json" id="data-figure-{stem}">{spec}</script>'), hint
+
+
+def copy_plotly(directory):
+    """plotly.js into the report's folder, once, for the page to load without a network"""
+    shutil.copyfile(PLOTLY_JS, os.path.join(directory, "plotly.js"))

@@ -21,6 +21,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # report/interactive.py and figure_spec.py beside it
 import figure_spec  # noqa: E402
+import interactive  # noqa: E402
 
 try:
     import matplotlib
@@ -169,7 +170,7 @@ def collapse_long_tables(body):
     return re.sub(r"<table>.*?</table>", wrap, body, flags=re.S)
 
 
-def html(directory):
+def html(directory, twins):
     """report.md as index.html: a table of contents at hand beside the text (every section and subsection), the
     long tables folded to their first rows"""
     try:
@@ -180,9 +181,9 @@ def html(directory):
     with open(os.path.join(directory, "report.md")) as f:
         converter = markdown.Markdown(extensions=["tables", "toc"], extension_configs={"toc": {"toc_depth": "2-3"}})
         body = collapse_long_tables(converter.convert(f.read()))
-    # the figures to explore in place of their PNGs (report/interactive.py), each captioned with a link to its PNG
-    import interactive
-    twins = interactive.figures(directory)
+    # the figures to explore in place of their PNGs (`twins`: report/interactive.py's), each captioned with a link to its PNG
+    if twins:
+        interactive.copy_plotly(directory)
 
     def explore(m):
         alt, stem = m.group(1), m.group(2)
@@ -228,11 +229,13 @@ figcaption {{ font-size: 0.85em; color: #555; }}
     os.replace(path + ".tmp", path)
 
 
-def draw(directory, stem, dpi):
-    """One figure (in a worker process: the resolution passed, not inherited)."""
+def draw(directory, stem, dpi, explore):
+    """One figure (in a worker process: the resolution passed, not inherited); with `explore`, its twin to explore
+    in index.html (report/interactive.py's, or None without python3-plotly)."""
     global DPI
     DPI = dpi
     draw_figure(directory, stem, Styles(directory))
+    return interactive.twin(directory, stem) if explore else None
 
 
 def die_with_parent(parent):
@@ -253,22 +256,25 @@ def main():
         DPI = int(sys.argv[sys.argv.index("--dpi") + 1])
     jobs = int(sys.argv[sys.argv.index("--jobs") + 1]) if "--jobs" in sys.argv else 1
     specs = figure_spec.specs(directory)
-    figures = [(directory, f["stem"], DPI) for f in read(directory, "figures")]
-    for _, stem, _ in figures:
+    explore = "--html" in sys.argv[2:]
+    figures = [(directory, f["stem"], DPI, explore) for f in read(directory, "figures")]
+    for _, stem, _, _ in figures:
         if stem not in specs:
             sys.exit(f"plot.py: figures.csv: {stem} has no spec in figures.json")
         if problems := figure_spec.problems(directory, stem, specs[stem]):
             sys.exit(f"plot.py: figures.json: {problems[0]}")
+    if explore and interactive.available():
+        import plotly.graph_objects  # noqa: F401  (imported once, before the workers fork, rather than in each)
+        import plotly.subplots  # noqa: F401
     if jobs > 1 and len(figures) > 1:
-        # the figures are independent (each reads CSVs and writes its own PNG): drawn by forked workers, one
-        # figure at a time each; a worker's exception is raised here
+        # the figures are independent (each reads CSVs and writes its own PNG, and returns its twin to explore):
+        # drawn by forked workers, one figure at a time each; a worker's exception is raised here
         with multiprocessing.get_context("fork").Pool(min(jobs, len(figures)), die_with_parent, (os.getpid(),)) as pool:
-            pool.starmap(draw, figures, chunksize=1)
+            twins = pool.starmap(draw, figures, chunksize=1)
     else:
-        for figure in figures:
-            draw(*figure)
-    if "--html" in sys.argv[2:]:
-        html(directory)
+        twins = [draw(*figure) for figure in figures]
+    if explore:
+        html(directory, {figure[1]: twin for figure, twin in zip(figures, twins) if twin})
 
 
 if __name__ == "__main__":

@@ -1,5 +1,7 @@
 #include "studies.hpp"
 
+#include "solvers/method_table.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -7,6 +9,12 @@
 #include <stdexcept>
 
 namespace stepwise {
+
+std::vector<std::string> method_names_where(const std::function<bool(const Method&)>& keep) {
+  std::vector<std::string> names;
+  for (const Method* m : methods_where(keep)) names.emplace_back(m->name);
+  return names;
+}
 
 std::string sci(double v) { return std::isfinite(v) ? fmt::format("{:.2e}", v) : "—"; }
 

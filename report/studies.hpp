@@ -2,6 +2,7 @@
 #pragma once
 
 #include "run/csv.hpp"
+#include "solvers/method.hpp"
 #include "sweep.hpp"
 
 #include <filesystem>
@@ -118,6 +119,9 @@ std::vector<FigureSpec::Layer> by_mode(FigureSpec::Layer layer);
 
 // adds the figure to the list; returns its Markdown (an image line and a blank line) for the section
 std::string add_figure(std::vector<Figure>& figures, const std::string& kind, const std::string& subject, FigureSpec spec, const std::string& caption);
+
+// the names of the methods `keep` keeps, in the table's order (solvers/method_table.hpp's methods_where)
+std::vector<std::string> method_names_where(const std::function<bool(const Method&)>& keep);
 
 // a number in scientific notation with 3 digits, or a dash for nan and inf
 std::string sci(double v);

@@ -57,6 +57,13 @@ std::span<const Method> methods() { return table().all(); }
 
 const Method* find_method(std::string_view name) { return table().find(name); }
 
+std::vector<const Method*> methods_where(const std::function<bool(const Method&)>& keep) {
+  std::vector<const Method*> kept;
+  for (const Method& m : table().all())
+    if (keep(m)) kept.push_back(&m);
+  return kept;
+}
+
 std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control) {
   const Method* m = find_method(method);
   if (!m) throw BadMethod(fmt::format("unknown method '{}' (see `stepwise methods`)", method));

@@ -5,15 +5,20 @@
 
 #include "method.hpp"
 
+#include <functional>
 #include <memory>
 #include <span>
 #include <string_view>
+#include <vector>
 
 namespace stepwise {
 
 std::span<const Method> methods();
 // nullptr for a name not in the table
 const Method* find_method(std::string_view name);
+// the methods `keep` keeps, in the table's order: how a study chooses its methods, by what the table says of
+// them (family, source, stepping, order, what is known of their stability), not by spelling their names
+std::vector<const Method*> methods_where(const std::function<bool(const Method&)>& keep);
 
 // the integrator for one run: BadMethod for an unknown name or a step control the method cannot use
 std::unique_ptr<Integrator> make_integrator(std::string_view method, const StepControl& control);

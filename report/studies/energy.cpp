@@ -54,8 +54,11 @@ StudyOutput energy(const StudyContext& ctx) {
                                "error at the end. A symplectic method keeps it bounded; explicit Euler's grows and "
                                "implicit Euler's decays towards the bottom of the well (-1).\n\n",
                                theta0, periods, samples);
-  for (const std::string method : {"euler", "symplectic-euler", "implicit-euler", "rk4"}) {
-    if (!method_applies(*find_method(method), *model)) continue;
+  // the hand-written fixed-step methods whose stability is known in closed form (an R(z) or a mass-spring mode's
+  // limit): explicit, symplectic and implicit Euler and rk4, each that applies to the model
+  for (const std::string& method : method_names_where([&](const Method& m) {
+         return m.source == "hand-written" && m.stepping == Stepping::fixed && (m.stability.R || m.stability.oscillator_dt) && method_applies(m, *model);
+       })) {
     StepControl control;
     control.dt = dt;
     const Measured m = run_and_measure(*model, method, control, t_end, sample_dt);
