@@ -76,11 +76,12 @@ def figure(directory, groups, spec, tables):
     from plotly.subplots import make_subplots
     panels = figure_spec.panels(directory, spec, tables)
     fig = make_subplots(rows=1, cols=len(panels), subplot_titles=[p.title for p in panels] if len(panels) > 1 else None)
+    fig.update_annotations(font_size=12)  # the panels' titles, side by side
     others = {}
 
     def colour(key, method):
         return groups.colour.get(groups.of(key), "#999999") if method else PALETTE[others.setdefault(key, len(others)) % len(PALETTE)]
-    methods = {line.name: line.key for p in panels for line in p.lines if line.method}
+    methods = {line.name: line.key for p in panels for line in p.lines if line.method and line.mark != "star"}
     # at first: every line, or (with `front` or many methods) the front's and each group's best
     shown = set(methods)
     if spec["front"] or len(methods) > 12:
@@ -106,21 +107,24 @@ def figure(directory, groups, spec, tables):
         if title:
             titled.add(group)
         return dict(name=name, legendgroup=name, showlegend=first, legendgrouptitle_text=title,
-                    visible=True if not method or name in shown else "legendonly")
+                    visible=True if name not in methods or name in shown else "legendonly")
     for col, p in enumerate(panels, start=1):
         if fronts[col - 1]:
             front = fronts[col - 1]
             fig.add_trace(go.Scatter(x=[q[0] for q in front], y=[q[1] for q in front], mode="lines", name="Pareto front", legendgroup="front",
                                      showlegend=col == 1, line=dict(color="#888888", width=6), opacity=0.35, hoverinfo="skip"), row=1, col=col)
         for c in p.contours:
+            # a contour in a colour of its own (methods of one group would share theirs, and a contour has no marker)
+            hue = colour(c.name, False)
             fig.add_trace(go.Contour(x=c.x, y=c.y, z=c.z, contours=dict(start=1, end=1, size=1, coloring="lines"), showscale=False,
-                                     line=dict(color=colour(c.key, c.key in groups.group), width=2), hoverinfo="skip",
-                                     **{k: v for k, v in legend_of(c.name, c.key, False).items() if k != "showlegend"}),
+                                     colorscale=[[0, hue], [1, hue]], line=dict(width=2), hoverinfo="skip", name=c.name, legendgroup=c.name),
                           row=1, col=col)
             # a contour has no legend entry of its own: a line without points stands for it
-            fig.add_trace(go.Scatter(x=[None], y=[None], mode="lines", line=dict(color=colour(c.key, c.key in groups.group), width=2),
-                                     name=c.name, legendgroup=c.name, showlegend=col == 1), row=1, col=col)
-        for line in p.lines:
+            fig.add_trace(go.Scatter(x=[None], y=[None], mode="lines", line=dict(color=hue, width=2), name=c.name, legendgroup=c.name,
+                                     showlegend=col == 1), row=1, col=col)
+        # a method's traces group by group (the legend lists them in this order, each group under its title)
+        rank = {g: i for i, g in enumerate(groups.order)}
+        for line in sorted(p.lines, key=lambda line: rank.get(groups.of(line.key), len(rank)) if line.method else -1):
             hue = "#000000" if line.mark == "guide" else colour(line.key, line.method)
             marker = dict(symbol="star" if line.mark == "star" else groups.marker.get(line.key, MARKERS[others.get(line.key, 0) % len(MARKERS)]),
                           size=16 if line.mark == "star" else 7, color="gold" if line.mark == "star" else hue)
@@ -141,7 +145,7 @@ def figure(directory, groups, spec, tables):
         for k, ref in enumerate(p.references):
             line = dict(color="#444444" if ref["label"] else "#bbbbbb", dash=("dot", "dash")[k % 2] if ref["label"] else "solid", width=1)
             add = fig.add_vline if ref["axis"] == "x" else fig.add_hline
-            add(**{ref["axis"]: ref["value"]}, line=line, annotation_text=ref["label"] or None, row=1, col=col)
+            add(**{ref["axis"]: ref["value"]}, line=line, row=1, col=col, **({"annotation_text": ref["label"]} if ref["label"] else {}))
         fig.update_xaxes(type="log" if p.log_x else "linear", title=p.x_label, exponentformat="power", row=1, col=col)
         fig.update_yaxes(type="log" if p.log_y else "linear", title=p.y_label, exponentformat="power", row=1, col=col)
         if p.equal_aspect:
