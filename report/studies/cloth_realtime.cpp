@@ -85,13 +85,14 @@ StudyOutput cloth_realtime(const StudyContext& ctx) {
     labels.push_back(fmt::format("{} {}", p.method, p.setting));
     groups.push_back(p.method);
     const double steps = p.control.dt ? t_end / *p.control.dt : 0;
-    const bool arkode = find_method(p.method)->family == "arkode";
-    costs.push_back(arkode                          ? 4e10
-                    : !p.control.dt                 ? 2e9
-                    : p.method == "gpu-cloth"       ? steps * 2.5e5
-                    : p.method == "symplectic-euler" ? steps * 25 * n
-                    : p.method == "rk4"             ? steps * 100 * n
-                                                    : steps * 5e6);
+    // by the method table's attributes: an explicit fixed-step method (one with a derived mode limit) takes as
+    // many stages as its order, up to rk4's four
+    const Method& m = *find_method(p.method);
+    costs.push_back(m.family == "arkode"                ? 4e10
+                    : !p.control.dt                     ? 2e9
+                    : m.source == "OpenGL shader"       ? steps * 2.5e5
+                    : m.stability.oscillator_dt         ? steps * 25 * n * m.order.min
+                                                        : steps * 5e6);
   }
   const auto runs = ctx.sweep<Measured>(labels, [&](size_t i) {
     const auto model = make_model("cloth", {});
