@@ -32,6 +32,20 @@ Measured run_and_measure(const Model& model, std::string_view method, const Step
   return m;
 }
 
+StateSamples sample_states(const Model& model, std::string_view method, StepControl control, double t_end, double interval) {
+  StateSamples s{{0.0}, {model.initial_state()}, {}};
+  if (!(t_end > 0)) return s;
+  control.observe = [](const Eigen::VectorXd& y) { return y; };
+  Measured m = run_and_measure(model, method, control, t_end, interval);
+  for (size_t k = 0; k < m.result.trajectory.t.size(); ++k) {
+    s.t.push_back(m.result.trajectory.t[k]);
+    s.y.push_back(std::move(m.result.trajectory.y[k]));
+  }
+  m.result.trajectory = {};
+  s.result = std::move(m.result);
+  return s;
+}
+
 void measure_error(const Model& model, Measured& m, double t_end) {
   m.error = exact_error(model, m.result, t_end);
   if (!m.error || std::isfinite(*m.error)) return;

@@ -21,6 +21,16 @@ struct Measured {
 // output times t0 + k * output_dt up to t_end, t_end always last
 std::vector<double> output_times(double t_end, double output_dt);
 
+// the run's whole state (not the model's summary of it) at t = 0 and every `interval` to t_end, for drawing:
+// the pictures' frames and trail samples, the side-by-side videos' panels. A run that stopped early has fewer
+// (`result` says why); t_end = 0 is the initial state alone, nothing run
+struct StateSamples {
+  std::vector<double> t;
+  std::vector<Eigen::VectorXd> y;
+  RunResult result;  // its trajectory moved into t and y
+};
+StateSamples sample_states(const Model& model, std::string_view method, StepControl control, double t_end, double interval);
+
 // integrate model from its initial state at t = 0 to t_end, sampling every output_dt
 Measured run_and_measure(const Model& model, std::string_view method, const StepControl& control, double t_end,
                          double output_dt);

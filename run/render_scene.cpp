@@ -75,23 +75,10 @@ FramePlan plan_frames(const PreparedRun& p, int frames, bool trails) {
   return plan;
 }
 
-Samples simulate(PreparedRun& p, const FramePlan& plan) {
-  const size_t stride = plan.stride;
-  const double interval = plan.interval, frame_interval = interval * static_cast<double>(stride);
-  const int count = plan.count;
-  Samples s;
-  s.stride = stride;
-  s.t.push_back(0);
-  s.y.push_back(p.model->initial_state());
-  if (count == 1) return s;
-  p.control.observe = [](const Eigen::VectorXd& y) { return y; };
-  Measured m = run_and_measure(*p.model, p.method, p.control, frame_interval * (count - 1), interval);
-  for (size_t k = 0; k < m.result.trajectory.t.size(); ++k) {
-    s.t.push_back(m.result.trajectory.t[k]);
-    s.y.push_back(std::move(m.result.trajectory.y[k]));
-  }
-  s.result = std::move(m.result);
-  return s;
+Samples simulate(const PreparedRun& p, const FramePlan& plan) {
+  const double frame_interval = plan.interval * static_cast<double>(plan.stride);
+  StateSamples s = sample_states(*p.model, p.method, p.control, frame_interval * (plan.count - 1), plan.interval);
+  return {std::move(s.t), std::move(s.y), plan.stride, std::move(s.result)};
 }
 
 // ffmpeg refuses a picture whose (width + 128)(height + 128) reaches INT_MAX / 8 (libavutil's

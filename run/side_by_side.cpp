@@ -25,26 +25,22 @@ struct PanelRun {
   RunResult result;
 };
 
-PanelRun run_panel(PreparedRun& p, double interval, int frames) {
+PanelRun run_panel(const PreparedRun& p, double interval, int frames) {
   PanelRun r;
-  r.shapes.push_back(*p.model->shapes(p.model->initial_state()));
-  r.shown_t.push_back(0);
-  p.control.observe = [](const Eigen::VectorXd& y) { return y; };
-  Measured m = run_and_measure(*p.model, p.method, p.control, interval * (frames - 1), interval);
-  const auto& trajectory = m.result.trajectory;
-  // the outputs on the frames' times, in order; a diverged run's last output may fall between them
-  for (size_t k = 0; k < trajectory.t.size() && r.shapes.size() < static_cast<size_t>(frames); ++k) {
+  StateSamples s = sample_states(*p.model, p.method, p.control, interval * (frames - 1), interval);
+  // the samples on the frames' times, in order; a diverged run's last output may fall between them
+  for (size_t k = 0; k < s.t.size() && r.shapes.size() < static_cast<size_t>(frames); ++k) {
     const double t = interval * static_cast<double>(r.shapes.size());
-    if (std::abs(trajectory.t[k] - t) > 1e-9 * interval * frames || !trajectory.y[k].allFinite()) break;
-    r.shapes.push_back(*p.model->shapes(trajectory.y[k]));
-    r.shown_t.push_back(trajectory.t[k]);
+    if (std::abs(s.t[k] - t) > 1e-9 * interval * frames || !s.y[k].allFinite()) break;
+    r.shapes.push_back(*p.model->shapes(s.y[k]));
+    r.shown_t.push_back(s.t[k]);
   }
   r.reached = r.shapes.size();
   while (r.shapes.size() < static_cast<size_t>(frames)) {
     r.shapes.push_back(r.shapes.back());
     r.shown_t.push_back(r.shown_t.back());
   }
-  r.result = std::move(m.result);
+  r.result = std::move(s.result);
   return r;
 }
 
