@@ -420,7 +420,7 @@ Figure advice_figure(const Advice& advice) {
                           .lines = {{'y', advice.target, "the error asked"}}};
   panel.layers.push_back({.table = "advice_summary", .x = "cpu_seconds", .y = "error", .series = "method", .label = "advised: {}", .mark = "star",
                           .where = {{"scene", {advice.scene}}}, .hover = {{"setting", "setting"}}});
-  return {"advice", advice.scene, {.title = "The advice's sweep, " + advice.scene, .panels = {std::move(panel)}, .front = true}};
+  return {"advice", advice.scene, {.title = "The advice's sweep, " + advice.scene, .panels = {std::move(panel)}}};
 }
 
 int advise_command(const AdviseOptions& o) {

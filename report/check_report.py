@@ -13,7 +13,7 @@
   shown (whole numbers are counts);
 - index.html's table of contents links every section;
 - every figure (figures.csv) is declared in figures.json, names tables and columns the report has, and draws
-  something in each of its panels (report/figure_spec.py's problems()).
+  something in each of its panels (report/figure_spec.py's problems() and empty()).
 Prints each problem on a line and exits 1 if there is any.
 """
 import bisect
@@ -101,7 +101,11 @@ def main():
     specs = figure_spec.specs(directory)
     with open(os.path.join(directory, "figures.csv"), newline="") as f:
         for row in csv.DictReader(f):
-            problems += [f"{row['stem']}: no spec in figures.json"] if row["stem"] not in specs else figure_spec.problems(directory, row["stem"], specs[row["stem"]])
+            stem = row["stem"]
+            if stem not in specs:
+                problems.append(f"{stem}: no spec in figures.json")
+            else:
+                problems += figure_spec.problems(directory, stem, specs[stem]) or figure_spec.empty(stem, figure_spec.panels(directory, specs[stem]))
     if page.count("<table>") != md.count("\n|---"):
         problems.append(f"index.html has {page.count('<table>')} tables, report.md {md.count(chr(10) + '|---')}")
 

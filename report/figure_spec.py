@@ -18,7 +18,7 @@ class Line:
     name: str          # the legend's
     key: str           # what styles it: a method (coloured by its group, marked by itself), else its name
     method: bool       # its series is a method
-    mark: str          # "line", "points", "line+points", "star", "guide"
+    mark: str          # "line", "points", "line+points", "star", "front", "guide"
     dashed: bool
     x: list
     y: list
@@ -118,10 +118,15 @@ def layer_lines(rows, layer, panel):
 
     def style_key(values, name):
         return values[0] if method else name
+    def grouped(rows):
+        """{key: its rows}, in the order the keys first come"""
+        out = {}
+        for r in rows:
+            out.setdefault(key_of(r), []).append(r)
+        return out
     if layer["mark"] == "contour":
         out = []
-        for values in dict.fromkeys(key_of(r) for r in ok):
-            mine = [r for r in ok if key_of(r) == values]
+        for values, mine in grouped(ok).items():
             xs = sorted({number(r[layer["x"]]) for r in mine})
             ys = sorted({number(r[layer["y"]]) for r in mine})
             at = {(number(r[layer["x"]]), number(r[layer["y"]])): number(r[layer["z"]]) for r in mine}
@@ -130,11 +135,9 @@ def layer_lines(rows, layer, panel):
         return [], out, []
     transform, floor = TRANSFORMS[layer["y_of"]], layer["floor"]
     lines, seen_series = [], set()
-    for values in dict.fromkeys(key_of(r) for r in ok):
+    for values, mine in grouped(ok).items():
         points = {}
-        for r in ok:
-            if key_of(r) != values:
-                continue
+        for r in mine:
             x, y = number(r[layer["x"]]), transform(number(r[layer["y"]]))
             if floor > 0 and math.isfinite(y):
                 y = max(y, floor)
@@ -150,9 +153,8 @@ def layer_lines(rows, layer, panel):
         lines.append(Line(name, style_key(values, name), method, layer["mark"].replace("dashed", "line"), dashed,
                           [p[0] for p in ordered], [p[1] for p in ordered], [points[p] for p in ordered]))
     fails = []
-    for values in dict.fromkeys(key_of(r) for r in failed):
-        xs = [number(r[layer["x"]]) for r in failed if key_of(r) == values]
-        xs = [x for x in xs if usable(x, panel["log_x"])]
+    for values, mine in grouped(failed).items():
+        xs = [x for x in (number(r[layer["x"]]) for r in mine) if usable(x, panel["log_x"])]
         if xs:
             name = name_of(values)
             fails.append(Failed(name, style_key(values, name), method, xs))
@@ -170,9 +172,9 @@ def guide(panel, lines):
     return [Line(panel["guide_label"], panel["guide_label"], False, "guide", False, xs, [y0 * (x / x0) ** panel["guide_slope"] for x in xs])]
 
 
-def panels(directory, spec, tables=None):
+def panels(directory, spec):
     """[Panel] in the figure's order: its panels, once per facet value where it has a facet"""
-    tables = tables or Tables(directory)
+    tables = Tables(directory)
     facets = [{}]
     if spec["facet"]:
         first = spec["panels"][0]["layers"][0]
@@ -193,20 +195,9 @@ def panels(directory, spec, tables=None):
     return out
 
 
-def pareto(points):
-    """the points no other is both cheaper and more accurate than: (x, y, ...) sorted by x"""
-    front, best = [], math.inf
-    for p in sorted(points, key=lambda p: (p[0], p[1])):
-        if p[1] < best:
-            front.append(p)
-            best = p[1]
-    return front
-
-
-def problems(directory, stem, spec, tables=None):
+def problems(directory, stem, spec):
     """what keeps the figure from being drawn as declared, a line each: a table it names missing, a column its
-    table lacks, a panel with nothing to draw"""
-    tables = tables or Tables(directory)
+    table lacks (the tables' headers alone are read)"""
     out = []
     for panel in spec["panels"]:
         for layer in panel["layers"]:
@@ -223,6 +214,9 @@ def problems(directory, stem, spec, tables=None):
         with open(os.path.join(directory, first["table"] + ".csv"), newline="") as f:
             header = next(csv.reader(f), [])
         out += [f"{stem}: facet column '{c}' is not in {first['table']}.csv" for c in spec["facet"] if c not in header]
-    if not out:
-        out += [f"{stem}: panel '{p.title}' has nothing to draw" for p in panels(directory, spec, tables) if not p.lines and not p.contours]
     return out
+
+
+def empty(stem, drawn):
+    """a line for each of the figure's panels (as panels() reads them) with nothing to draw"""
+    return [f"{stem}: panel '{p.title}' has nothing to draw" for p in drawn if not p.lines and not p.contours]

@@ -6,17 +6,16 @@ Ito's colour-blind-safe palette) with a marker of its own; the legend lists the 
 of each under its group's title (the titles are not clickable in the plotly.js Debian ships, 2.6.3), a method's
 entry hides or shows it in every panel, and a button per group above the plot shows or hides the whole group.
 Hover shows the line, its x and y and the values its spec names (setting, calls, CPU time). Log axes where the
-spec says. A diagram of many methods shows at first its Pareto front (where the spec asks for it) and each
-group's best method; the others are one click away. plotly.js comes from Debian's python3-plotly, copied once into
+spec says. A diagram of many methods shows at first each group's best method and those on the Pareto front the
+study found (a layer of its spec); the others are one click away. plotly.js comes from Debian's python3-plotly, copied once into
 the report's folder (no network when the page is viewed); the figures are built with plotly's Python API
 (plotly.graph_objects), not by hand.
 
-Used by plot.py's html(); figures(directory) returns {png stem: (HTML of its interactive twin, how to use it)}."""
+Used by plot.py: twin() for each figure in the worker that draws its PNG, copy_plotly() once for the page."""
 import csv
 import os
 import shutil
 
-import figure_spec
 
 PLOTLY_JS = "/usr/share/python3-plotly/plotly.js"
 # Okabe & Ito (2008): eight colours told apart under the common colour-vision deficiencies
@@ -41,7 +40,6 @@ def rows(directory, stem):
         return list(csv.DictReader(f))
 
 
-number = figure_spec.number  # a CSV cell as a float, nan where it is none
 
 
 class Groups:
@@ -65,16 +63,15 @@ class Groups:
         return self.group.get(method, "other")
 
 
-def figure(directory, groups, spec, tables):
-    """a figure (figures.json's spec) as figure_spec reads it, the twin of plot.py's draw_figure: a panel each side
+def figure(groups, spec, panels):
+    """a figure's panels (its spec as figure_spec reads it), the twin of plot.py's draw_figure: a panel each side
     by side; a method's traces in its group's colour and its own marker, sharing one legend entry across panels and
     layers (a click hides or shows the method everywhere), the first of each group titled with the group; another
-    line in a palette colour of its own; a failed run a cross at the panel's top; a contour at level 1. With
-    `front`, or where more than 12 methods are drawn, only the Pareto front's methods (with `front`, the front too)
-    and each group's best (the least y) are shown at first; a button per group shows or hides the whole group"""
+    line in a palette colour of its own; a Pareto front broad and pale; a failed run a cross at the panel's top; a
+    contour at level 1. Where more than 12 methods are drawn, only each group's best (the least y) and the methods
+    with a point on a front are shown at first; a button per group shows or hides the whole group"""
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
-    panels = figure_spec.panels(directory, spec, tables)
     fig = make_subplots(rows=1, cols=len(panels), subplot_titles=[p.title for p in panels] if len(panels) > 1 else None)
     fig.update_annotations(font_size=12)  # the panels' titles, side by side
     others = {}
@@ -82,21 +79,19 @@ def figure(directory, groups, spec, tables):
     def colour(key, method):
         return groups.colour.get(groups.of(key), "#999999") if method else PALETTE[others.setdefault(key, len(others)) % len(PALETTE)]
     methods = {line.name: line.key for p in panels for line in p.lines if line.method and line.mark != "star"}
-    # at first: every line, or (with `front` or many methods) the front's and each group's best
+    # at first: every line, or (many methods) each group's best and the methods with a point on a front
     shown = set(methods)
-    if spec["front"] or len(methods) > 12:
+    if len(methods) > 12:
         best = {}
         for p in panels:
-            for line in (line for line in p.lines if line.method and line.mark != "star"):
+            for line in (line for line in p.lines if line.name in methods):
                 g, least = groups.of(line.key), min(line.y)
                 if g not in best or least < best[g][1]:
                     best[g] = (line.name, least)
         shown = {name for name, _ in best.values()}
-    fronts = []
-    for p in panels:
-        points = [(x, y, line.name, hover) for line in p.lines if line.method and line.mark != "star" for x, y, hover in zip(line.x, line.y, line.hover)]
-        fronts.append(figure_spec.pareto(points) if spec["front"] else [])
-        shown |= {q[2] for q in fronts[-1]}
+        for p in panels:
+            on_front = {(x, y) for line in p.lines if line.mark == "front" for x, y in zip(line.x, line.y)}
+            shown |= {line.name for line in p.lines if line.name in methods and on_front.intersection(zip(line.x, line.y))}
     legend_seen, titled = set(), set()
 
     def legend_of(name, key, method):
@@ -109,10 +104,6 @@ def figure(directory, groups, spec, tables):
         return dict(name=name, legendgroup=name, showlegend=first, legendgrouptitle_text=title,
                     visible=True if name not in methods or name in shown else "legendonly")
     for col, p in enumerate(panels, start=1):
-        if fronts[col - 1]:
-            front = fronts[col - 1]
-            fig.add_trace(go.Scatter(x=[q[0] for q in front], y=[q[1] for q in front], mode="lines", name="Pareto front", legendgroup="front",
-                                     showlegend=col == 1, line=dict(color="#888888", width=6), opacity=0.35, hoverinfo="skip"), row=1, col=col)
         for c in p.contours:
             # a contour in a colour of its own (methods of one group would share theirs, and a contour has no marker)
             hue = colour(c.name, False)
@@ -125,14 +116,15 @@ def figure(directory, groups, spec, tables):
         # a method's traces group by group (the legend lists them in this order, each group under its title)
         rank = {g: i for i, g in enumerate(groups.order)}
         for line in sorted(p.lines, key=lambda line: rank.get(groups.of(line.key), len(rank)) if line.method else -1):
-            hue = "#000000" if line.mark == "guide" else colour(line.key, line.method)
+            hue = {"guide": "#000000", "front": "#888888"}.get(line.mark) or colour(line.key, line.method)
             marker = dict(symbol="star" if line.mark == "star" else groups.marker.get(line.key, MARKERS[others.get(line.key, 0) % len(MARKERS)]),
                           size=16 if line.mark == "star" else 7, color="gold" if line.mark == "star" else hue)
-            mode = {"line": "lines", "guide": "lines", "points": "markers", "star": "markers"}.get(line.mark, "lines+markers")
+            mode = {"line": "lines", "guide": "lines", "front": "lines", "points": "markers", "star": "markers"}.get(line.mark, "lines+markers")
             extra = ["<br>" + "<br>".join(h) if h else "" for h in line.hover] if line.hover else None
             fig.add_trace(go.Scatter(
-                x=line.x, y=line.y, mode=mode, line=dict(color=hue, width=1.5, dash="dash" if line.dashed else "dot" if line.mark == "guide" else None),
-                marker=marker, customdata=extra,
+                x=line.x, y=line.y, mode=mode, line=dict(color=hue, width=6 if line.mark == "front" else 1.5,
+                                                         dash="dash" if line.dashed else "dot" if line.mark == "guide" else None),
+                opacity=0.35 if line.mark == "front" else 1, marker=marker, customdata=extra,
                 hovertemplate=f"<b>{line.name}</b><br>{p.y_label} %{{y:.3g}}<br>{p.x_label} %{{x:.3g}}{'%{customdata}' if extra else ''}"
                               f"<extra>{groups.of(line.key) if line.method else ''}</extra>",
                 **legend_of(line.name, line.key, line.method)), row=1, col=col)
@@ -182,12 +174,13 @@ document.addEventListener('DOMContentLoaded', () => {
 </script>"""
 
 
-def twin(directory, stem):
+def twin(directory, stem, spec, panels):
     """(HTML of the figure to explore (its div and its JSON), how to use it), or None where python3-plotly is not
-    installed (the page then shows the PNG alone); one figure, so that plot.py's workers build them side by side"""
+    installed (the page then shows the PNG alone); one figure, from the panels plot.py read for its PNG, so that
+    plot.py's workers build them side by side"""
     if not available():
         return None
-    fig, methods = figure(directory, Groups(directory), figure_spec.specs(directory)[stem], figure_spec.Tables(directory))
+    fig, methods = figure(Groups(directory), spec, panels)
     spec = fig.to_json().replace("</", "<\\/")  # no text in the JSON can close its script element
     hint = ("hover for a point's method, setting, error and cost; click a legend entry to hide or show a method, a group's button above "
             "the plot for the whole group") if methods else "hover for a point's values; click a legend entry to hide or show its line"

@@ -79,15 +79,15 @@ def legend(ax, **kw):
 
 
 STAR = dict(marker="*", markersize=16, color="gold", markeredgecolor="black", linestyle="none")
+FRONT = dict(color="#bbbbbb", linewidth=6, alpha=0.6, marker=None, zorder=0)
 GUIDE = dict(color="black", linestyle=":", marker=None)
 
 
-def draw_figure(directory, stem, styles):
-    """a figure (figures.json's spec) as figure_spec reads it: a panel each side by side; a method's line in its own
-    colour and marker, another line in a colour of its own (the same in every panel), a dashed line dashed, points
-    without a line, a failed run a cross at the panel's top, a contour at level 1, the reference lines grey"""
-    spec = figure_spec.specs(directory)[stem]
-    panels = figure_spec.panels(directory, spec)
+def draw_figure(directory, stem, panels, styles):
+    """a figure's panels (its spec as figure_spec reads it) side by side: a method's line in its own colour and
+    marker, another line in a colour of its own (the same in every panel), a dashed line dashed, points without a
+    line, a Pareto front broad and pale behind, a failed run a cross at the panel's top, a contour at level 1, the
+    reference lines grey"""
     many = max(len({line.name for line in p.lines}) for p in panels) > 12  # a legend this long goes beside the panel
     width = (5.2 if all(p.equal_aspect for p in panels) else 6) * len(panels) + (3 if many else 0)
     fig, axes = plt.subplots(1, len(panels), figsize=(8 if len(panels) == 1 and not many else width, 5.5 if many else 5), squeeze=False)
@@ -110,7 +110,7 @@ def draw_figure(directory, stem, styles):
             ax.contour(c.x, c.y, c.z, levels=[1], colors=[hue], linewidths=1.5)
             ax.plot([], [], color=hue, label=c.name)
         for line in panel.lines:
-            kw = dict(GUIDE) if line.mark == "guide" else dict(STAR) if line.mark == "star" else dict(style(line.key, line.method))
+            kw = dict({"guide": GUIDE, "star": STAR, "front": FRONT}.get(line.mark) or style(line.key, line.method))
             if line.mark == "line":
                 kw["marker"] = None
             if line.mark == "points":
@@ -118,7 +118,7 @@ def draw_figure(directory, stem, styles):
             if line.dashed:
                 kw["linestyle"] = "--"
             ax.plot(line.x, line.y, label=None if line.name in named else line.name, markersize=kw.pop("markersize", 4 if line.mark != "points" or line.method else 3),
-                    linewidth=1, **kw)
+                    linewidth=kw.pop("linewidth", 1), **kw)
             named.add(line.name)
         if panel.failed:
             ys = [y for line in panel.lines for y in line.y]
@@ -230,12 +230,14 @@ figcaption {{ font-size: 0.85em; color: #555; }}
 
 
 def draw(directory, stem, dpi, explore):
-    """One figure (in a worker process: the resolution passed, not inherited); with `explore`, its twin to explore
-    in index.html (report/interactive.py's, or None without python3-plotly)."""
+    """One figure (in a worker process: the resolution passed, not inherited), its data read once; with `explore`,
+    its twin to explore in index.html (report/interactive.py's, or None without python3-plotly)."""
     global DPI
     DPI = dpi
-    draw_figure(directory, stem, Styles(directory))
-    return interactive.twin(directory, stem) if explore else None
+    spec = figure_spec.specs(directory)[stem]
+    panels = figure_spec.panels(directory, spec)
+    draw_figure(directory, stem, panels, Styles(directory))
+    return interactive.twin(directory, stem, spec, panels) if explore else None
 
 
 def die_with_parent(parent):

@@ -35,7 +35,7 @@ std::vector<FigureSpec::Layer> by_mode(FigureSpec::Layer layer) {
 }
 
 nlohmann::json FigureSpec::json() const {
-  nlohmann::json j{{"title", title}, {"facet", facet}, {"front", front}, {"panels", nlohmann::json::array()}};
+  nlohmann::json j{{"title", title}, {"facet", facet}, {"panels", nlohmann::json::array()}};
   for (const auto& p : panels) {
     nlohmann::json panel{{"title", p.title},   {"x_label", p.x_label},          {"y_label", p.y_label},         {"log_x", p.log_x},
                          {"log_y", p.log_y},   {"guide_slope", p.guide_slope},  {"guide_label", p.guide_label}, {"equal_aspect", p.equal_aspect}, {"symlog_x", p.symlog_x},

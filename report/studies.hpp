@@ -34,7 +34,9 @@ struct FigureSpec {
     bool split_dashed = false;      // a series' second and later lines dashed
     std::string label = "{}";       // a line's legend name: "{}" its series' value, "{column}" a split column's
     std::string mark = "line+points";  // "line", "points", "line+points", "dashed", "dashed+points", "star" (a point marked out),
-                                       // "contour" (z's level 1 over the grid of x and y)
+                                       // "contour" (z's level 1 over the grid of x and y), "front" (a Pareto front the study
+                                       // found: drawn broad and pale behind, and in index.html the methods with a point on
+                                       // it shown at first)
     std::string z;                  // "contour": the column whose level 1 is drawn (named after a method: in its colour)
     std::string y_of;               // "": y as it is; "abs": |y|; "minus_one": y - 1
     double floor = 0;               // > 0: a y under it (an exact 0) drawn at it, on a log axis
@@ -63,8 +65,6 @@ struct FigureSpec {
   std::string title;
   std::vector<Panel> panels;
   std::vector<std::string> facet;   // the panels once per distinct value of these columns (the first layer's table's)
-  bool front = false;               // interactive: the Pareto front of each panel's points, and at first only the
-                                    // methods on it and each group's best shown (the rest one click away)
   nlohmann::json json() const;
 };
 

@@ -73,7 +73,11 @@ StudyOutput stability_regions(const StudyContext& ctx) {
   const size_t grid = 81;
   Table plane_spectrum{{"scene", "step", "re", "im"}, {}};
   std::vector<std::string> plane_columns{"scene", "re", "im"};
-  for (const auto& method : region_methods) plane_columns.push_back(method);
+  std::vector<std::complex<double> (*)(std::complex<double>)> regions;  // each region method's R
+  for (const auto& method : region_methods) {
+    plane_columns.push_back(method);
+    regions.push_back(find_method(method)->stability.R);
+  }
   Table plane{plane_columns, {}};
   for (size_t i = 0; i < scenes.size(); ++i) {
     const auto rk4 = std::find_if(limits.begin(), limits.end(), [&](const Limit& l) { return l.scene == i && l.method == "rk4"; });
@@ -88,7 +92,7 @@ StudyOutput stability_regions(const StudyContext& ctx) {
       for (size_t b = 0; b < grid; ++b) {
         const std::complex<double> z(-reach + 1.6 * reach * static_cast<double>(a) / (grid - 1), -reach + 2 * reach * static_cast<double>(b) / (grid - 1));
         std::vector<Cell> row{scenes[i].label, z.real(), z.imag()};
-        for (const auto& method : region_methods) row.push_back(std::abs(find_method(method)->stability.R(z)));
+        for (const auto R : regions) row.push_back(std::abs(R(z)));
         plane.rows.push_back(std::move(row));
       }
   }

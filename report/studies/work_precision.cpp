@@ -206,15 +206,18 @@ StudyOutput work_precision(const StudyContext& ctx) {
                              static_cast<long>(best->coarsest), *best->error, best->cpu_seconds, best->rhs_evals, runner_name, runner_cpu, runner_cpu / best->cpu_seconds});
     }
 
+    // each cost's panel: the sweep, and behind it the front found above (work_precision_pareto.csv)
     const auto against = [&](std::string cost, std::string label, std::string title) {
-      return FigureSpec::Panel{.title = fmt::format("{}: {}", scene.label, title), .x_label = std::move(label), .y_label = "max-norm error at t_end",
-                               .log_x = true, .log_y = true,
-                               .layers = by_mode({.table = "work_precision", .x = std::move(cost), .y = "error", .where = {{"scene", {scene.label}}}})};
+      FigureSpec::Panel panel{.title = fmt::format("{}: {}", scene.label, title), .x_label = std::move(label), .y_label = "max-norm error at t_end",
+                              .log_x = true, .log_y = true,
+                              .layers = {{.table = "work_precision_pareto", .x = cost, .y = "error", .label = "Pareto front", .mark = "front",
+                                          .where = {{"scene", {scene.label}}, {"cost", {cost}}}, .hover = {{"method", "method"}, {"setting", "setting"}}}}};
+      for (auto& layer : by_mode({.table = "work_precision", .x = cost, .y = "error", .where = {{"scene", {scene.label}}}})) panel.layers.push_back(std::move(layer));
+      return panel;
     };
     FigureSpec spec{.title = "Work against precision, " + scene.label,
                     .panels = {against("cpu_seconds", "CPU time (s)", "error against CPU time (dashed: adaptive; x: failed)"),
-                               against("rhs_evals", "right-hand-side evaluations", "error against evaluations")},
-                    .front = true};
+                               against("rhs_evals", "right-hand-side evaluations", "error against evaluations")}};
     sections += fmt::format("### {}\n\n{}Pareto front in CPU time (no other point is both cheaper and more accurate):\n\n", scene.label,
                             add_figure(out.figures, "work_precision", scene.label, std::move(spec), "Work-precision diagram, " + scene.label));
     sections += markdown_table(fronts,
