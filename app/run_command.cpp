@@ -1,5 +1,6 @@
 #include "run_command.hpp"
 
+#include "models/equations.hpp"
 #include "run/atomic_write.hpp"
 #include "run/distributed_run.hpp"
 #include "run/interrupt.hpp"
@@ -40,6 +41,10 @@ int run_command(const RunOptions& options) {
       }
     }
     if (leader) {
+      // what was chosen for the user, and what runs while a large system compiles
+      if (!p.method_choice.empty()) fmt::print(stderr, "stepwise run: {}\n", p.method_choice);
+      if (const auto e = equations_evaluation(*p.model); e && e->background && !e->compiled)
+        fmt::print(stderr, "stepwise run: {} equations: {}\n", p.model->size(), e->detail);
       // every output checked before the directory is made or anything runs: a refusal leaves nothing behind
       check_writable_directory(options.out);
       check_output_fits(options.out, p);

@@ -8,7 +8,10 @@
 #include <ginac/ginac.h>
 
 #include <algorithm>
+#include <iterator>
 #include <array>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -17,6 +20,7 @@
 #include <regex>
 #include <set>
 #include <sstream>
+#include <thread>
 
 namespace stepwise {
 namespace {
@@ -117,7 +121,9 @@ double* scratch(int depth) {
   return stack.data();
 }
 
-// the tape's C: one constant a step, the result assigned to `target`
+// the tape's C: one constant an operation (a leaf, a number or a load, is written where it is used), the result
+// assigned to `target`. The operations and their order are the tape's, so the compiled f rounds as the
+// interpreter does
 std::string c_of(const Tape& tape, const std::string& target) {
   std::vector<std::string> stack;
   std::string body;
@@ -134,10 +140,10 @@ std::string c_of(const Tape& tape, const std::string& target) {
   };
   for (const Instruction& in : tape.code) {
     switch (in.op) {
-      case Op::number: push(fmt::format("({:a})", in.value)); break;
-      case Op::variable: push(fmt::format("y[{}]", in.arg)); break;
-      case Op::parameter: push(fmt::format("p[{}]", in.arg)); break;
-      case Op::time: push("t"); break;
+      case Op::number: stack.push_back(fmt::format("({:a})", in.value)); break;
+      case Op::variable: stack.push_back(fmt::format("y[{}]", in.arg)); break;
+      case Op::parameter: stack.push_back(fmt::format("p[{}]", in.arg)); break;
+      case Op::time: stack.push_back("t"); break;
       case Op::add:
       case Op::mul: {
         std::vector<std::string> operands(static_cast<size_t>(in.arg));
@@ -162,6 +168,48 @@ std::string c_of(const Tape& tape, const std::string& target) {
     }
   }
   return fmt::format("  {{\n{}    {} = {};\n  }}\n", body, target, stack.back());
+}
+
+std::string bytes_text(size_t bytes) {
+  return bytes < (1u << 20) ? fmt::format("{:.0f} kB", bytes / 1e3) : fmt::format("{:.3g} MB", bytes / 1e6);
+}
+
+// f and its Jacobian's nonzeros as C: `stepwise_rhs` and `stepwise_jacobian` (t, y, p, out). A list of tapes
+// longer than `function_bytes` of C is split into parts (functions of that size: the compiler's time and memory
+// grow faster than a function's length), called in order by the named function; the parts are gathered into
+// units of about `unit_bytes`, each compiled apart and in parallel (JiTCODE's chunking)
+NativeSource c_source(const std::vector<Tape>& rhs, const std::vector<Tape>& jacobian, size_t function_bytes, size_t unit_bytes) {
+  constexpr std::string_view signature = "(double t, const double* y, const double* p, double* out)";
+  NativeSource source;
+  source.common = fmt::format("#include <math.h>\n{}", c_integer_power);
+  std::vector<std::string> functions;  // every definition, in order
+  std::string declarations;
+  for (const auto& [name, tapes] : {std::pair{"stepwise_rhs", &rhs}, std::pair{"stepwise_jacobian", &jacobian}}) {
+    std::vector<std::string> bodies(1);
+    for (size_t k = 0; k < tapes->size(); ++k) {
+      if (bodies.back().size() > function_bytes) bodies.emplace_back();
+      bodies.back() += c_of((*tapes)[k], fmt::format("out[{}]", k));
+    }
+    const std::string opening = fmt::format("{{\n  (void)t; (void)y; (void)p; (void)out;\n");
+    if (bodies.size() == 1) {
+      functions.push_back(fmt::format("void {}{} {}{}}}\n", name, signature, opening, bodies[0]));
+      continue;
+    }
+    std::string calls;
+    for (size_t part = 0; part < bodies.size(); ++part) {
+      declarations += fmt::format("void {}_part{}{};\n", name, part, signature);
+      functions.push_back(fmt::format("void {}_part{}{} {}{}}}\n", name, part, signature, opening, bodies[part]));
+      calls += fmt::format("  {}_part{}(t, y, p, out);\n", name, part);
+    }
+    functions.push_back(fmt::format("void {}{} {{\n{}}}\n", name, signature, calls));
+  }
+  source.common += declarations;
+  source.units.emplace_back();
+  for (const auto& f : functions) {
+    if (!source.units.back().empty() && source.units.back().size() + f.size() > unit_bytes) source.units.emplace_back();
+    source.units.back() += f;
+  }
+  return source;
 }
 
 // ---- GiNaC: the symbols of a system and the formulas parsed against them.
@@ -254,6 +302,68 @@ GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, 
                                    variable ? "this formula cannot use the variable" : "unknown symbol", name, defined, allow_time ? "; and t" : ""));
   }
 }
+
+// derivatives in the variables, differentiating only the parts that hold the variable. GiNaC's diff walks every
+// operand of a sum or product, and differentiates a function (sin, exp, ...) by first trying an explicit
+// derivative that throws, and catching: a dense system's n^2 derivatives of n-term formulas cost n^3 of those
+// throws (300 mean-field oscillators: two minutes before the first step). Here a part without the variable is
+// skipped (its variables found once per part), so each derivative costs the terms that hold its variable
+class Differentiator {
+ public:
+  explicit Differentiator(const Symbols& s) : s_(s) {
+    for (size_t i = 0; i < s.variable_names.size(); ++i) index_[s.variable_names[i]] = static_cast<int>(i);
+  }
+  // d e / d variables[c]
+  GiNaC::ex derivative(const GiNaC::ex& e, int c) {
+    using namespace GiNaC;
+    const Part& part = part_of(e);
+    if (!std::binary_search(part.variables.begin(), part.variables.end(), c)) return 0;
+    const bool sum = is_a<add>(e);
+    if (!sum && !is_a<mul>(e)) return e.diff(s_.variables[static_cast<size_t>(c)]);
+    // the operands that hold the variable: a sum's derivatives added, a product's by the product rule
+    const auto [first, last] = std::equal_range(part.holders.begin(), part.holders.end(), std::pair{c, 0},
+                                                [](const auto& a, const auto& b) { return a.first < b.first; });
+    exvector terms;
+    for (auto it = first; it != last; ++it) {
+      const ex d = derivative(part.operands[static_cast<size_t>(it->second)], c);
+      if (sum) {
+        terms.push_back(d);
+        continue;
+      }
+      exvector factors(part.operands);
+      factors[static_cast<size_t>(it->second)] = d;
+      terms.push_back(mul(factors));
+    }
+    return add(terms);
+  }
+
+ private:
+  // an expression's operands (GiNaC makes a sum's or product's anew at each op()), the variables it holds (in
+  // order), and for a sum or product which operand holds which variable, by variable
+  struct Part {
+    GiNaC::exvector operands;
+    std::vector<int> variables;
+    std::vector<std::pair<int, int>> holders;  // (variable, operand)
+  };
+  const Part& part_of(const GiNaC::ex& e) {
+    if (const auto it = memo_.find(e); it != memo_.end()) return it->second;
+    Part part;
+    if (GiNaC::is_a<GiNaC::symbol>(e)) {
+      if (const auto it = index_.find(GiNaC::ex_to<GiNaC::symbol>(e).get_name()); it != index_.end()) part.variables.push_back(it->second);
+    } else {
+      for (size_t k = 0; k < e.nops(); ++k) part.operands.push_back(e.op(k));
+      for (size_t k = 0; k < part.operands.size(); ++k)
+        for (const int v : part_of(part.operands[k]).variables) part.holders.emplace_back(v, static_cast<int>(k));
+      std::sort(part.holders.begin(), part.holders.end());
+      for (const auto& [v, k] : part.holders)
+        if (part.variables.empty() || part.variables.back() != v) part.variables.push_back(v);
+    }
+    return memo_.emplace(e, std::move(part)).first->second;
+  }
+  const Symbols& s_;
+  std::map<std::string, int, std::less<>> index_;
+  std::map<GiNaC::ex, Part, GiNaC::ex_is_less> memo_;
+};
 
 std::string text_of(const GiNaC::ex& e) {
   std::ostringstream text;
@@ -451,17 +561,26 @@ class TapeBuilder {
   const Formula* formula_;
 };
 
-bool identifier(const std::string& name) { return std::regex_match(name, std::regex("[A-Za-z_][A-Za-z0-9_]*")); }
+// the names GiNaC's lexer reads as one symbol: a letter, then letters, digits or _ (a leading _ is a token of its
+// own there, so a name starting with one could be declared and never used)
+bool identifier(const std::string& name) { return std::regex_match(name, std::regex("[A-Za-z][A-Za-z0-9_]*")); }
 
 // ---- the model
 using NativeFn = void (*)(double t, const double* y, const double* p, double* out);
 
 class Equations final : public Model {
  public:
-  Equations(const EquationsSpec& spec, const Params& values, bool compile) {
+  Equations(const EquationsSpec& spec, const Params& values, const EquationsOptions& options) {
     std::lock_guard lock(ginac_mutex);
-    build(spec, values, compile);
+    build(spec, values, options);
   }
+  // a compile still running in the background is stopped (its compiler's process group killed)
+  ~Equations() override {
+    cancel_.store(true);
+    if (background_.joinable()) background_.join();
+  }
+  Equations(const Equations&) = delete;
+  Equations& operator=(const Equations&) = delete;
 
   std::string_view name() const override { return "equations"; }
   int size() const override { return static_cast<int>(names_.size()); }
@@ -470,7 +589,7 @@ class Equations final : public Model {
   Eigen::VectorXd initial_state() const override { return y0_; }
 
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
-    if (native_rhs_) return native_rhs_(t, y.data(), p_.data(), dydt.data());
+    if (const NativeFn native = native_rhs_.load(std::memory_order_acquire)) return native(t, y.data(), p_.data(), dydt.data());
     double* stack = scratch(depth_);
     for (size_t i = 0; i < rhs_.size(); ++i) dydt[static_cast<Eigen::Index>(i)] = run(rhs_[i], t, y.data(), p_.data(), stack);
   }
@@ -513,16 +632,21 @@ class Equations final : public Model {
     if (second_order_.positions > 0) return offer(type, second_order_);
     return inline_rhs_ ? offer(type, *inline_rhs_) : nullptr;
   }
-  const EquationsEvaluation& evaluation() const { return evaluation_; }
+  EquationsEvaluation evaluation() const {
+    std::lock_guard lock(evaluation_mutex_);
+    return evaluation_;
+  }
 
  private:
   void jacobian_values(double t, const double* y, double* values) const {
-    if (native_jacobian_) return native_jacobian_(t, y, p_.data(), values);
+    if (const NativeFn native = native_jacobian_.load(std::memory_order_acquire)) return native(t, y, p_.data(), values);
     double* stack = scratch(depth_);
     for (size_t k = 0; k < jacobian_.size(); ++k) values[k] = run(jacobian_[k], t, y, p_.data(), stack);
   }
 
-  void build(const EquationsSpec& spec, const Params& values, bool compile);
+  void build(const EquationsSpec& spec, const Params& values, const EquationsOptions& options);
+  bool adopt(std::shared_ptr<const NativeCode> code);
+  NativeSource native_source(const EquationsOptions& options);
 
   std::vector<std::string> names_;
   Eigen::VectorXd y0_;
@@ -534,12 +658,15 @@ class Equations final : public Model {
   bool autonomous_ = true;
   SecondOrderView second_order_;
   std::shared_ptr<const NativeCode> native_;
-  NativeFn native_rhs_ = nullptr, native_jacobian_ = nullptr;
+  std::atomic<NativeFn> native_rhs_{nullptr}, native_jacobian_{nullptr};  // null: the interpreter
   std::optional<InlineRhs> inline_rhs_;  // the compiled f for the steppers that call it inline (sizes 2-4)
+  mutable std::mutex evaluation_mutex_;  // the background compile writes evaluation_ and native_
   EquationsEvaluation evaluation_;
+  std::atomic<bool> cancel_{false};
+  std::thread background_;               // the compile of a large system, while the interpreter runs
 };
 
-void Equations::build(const EquationsSpec& spec, const Params& values, bool compile) {
+void Equations::build(const EquationsSpec& spec, const Params& values, const EquationsOptions& options) {
   // ---- the shape: names, one initial value and one equation per variable, nothing else
   const size_t n = spec.variables.size();
   if (n == 0) throw BadEquations(fmt::format("{}: the system is empty (variables = [\"x\", ...] names the state)", spec.variables_where));
@@ -547,13 +674,13 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
     throw BadEquations(fmt::format("{}: {} variables, more than the {} an equations scene may hold", spec.variables_where, n, max_equations));
   std::set<std::string, std::less<>> seen;
   for (const auto& name : spec.variables) {
-    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name (a letter or _, then letters, digits or _)", spec.variables_where, name));
+    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name (a letter, then letters, digits or _)", spec.variables_where, name));
     if (reserved(name)) throw BadEquations(fmt::format("{}: the variable '{}' would shadow {}", spec.variables_where, name, name == "t" ? "the time t" : "a function or constant of the formulas"));
     if (!seen.insert(name).second) throw BadEquations(fmt::format("{}: the variable '{}' is named twice", spec.variables_where, name));
   }
   for (const auto& [name, value] : spec.parameters) {
     const std::string where = fmt::format("{}: parameters.{}", spec.file, name);
-    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name a formula can use", where, name));
+    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name a formula can use (a letter, then letters, digits or _)", where, name));
     if (reserved(name)) throw BadEquations(fmt::format("{}: the parameter '{}' would shadow {}", where, name, name == "t" ? "the time t" : "a function or constant of the formulas"));
     if (seen.count(name)) throw BadEquations(fmt::format("{}: '{}' is both a variable and a parameter", where, name));
   }
@@ -619,10 +746,10 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
 
   // the exact Jacobian and its pattern, column by column; the diagonal always in it (the Newton matrix I - h J has it)
   columns_.push_back(0);
-  std::vector<GiNaC::ex> entries;
+  Differentiator differentiate(s);
   for (size_t c = 0; c < n; ++c) {
     for (size_t r = 0; r < n; ++r) {
-      const GiNaC::ex d = f[r].diff(s.variables[c]);
+      const GiNaC::ex d = differentiate.derivative(f[r], static_cast<int>(c));
       if (d.is_zero() && r != c) continue;
       rows_.push_back(static_cast<int>(r));
       jacobian_.push_back(TapeBuilder(s, derived, fmt::format("{} (its derivative in {})", formula_of[r]->where(), names_[c])).build(d));
@@ -674,33 +801,74 @@ void Equations::build(const EquationsSpec& spec, const Params& values, bool comp
   }
 
   // ---- compiled: the tapes printed as C, built once and cached
-  if (!compile) {
+  if (!options.compile) {
     evaluation_.detail = "the interpreter was asked for";
     return;
   }
-  std::string source = "#include <math.h>\n";
-  source += c_integer_power;
-  source += "void stepwise_rhs(double t, const double* y, const double* p, double* out) {\n  (void)t; (void)y; (void)p;\n";
-  for (size_t i = 0; i < n; ++i) source += c_of(rhs_[i], fmt::format("out[{}]", i));
-  source += "}\nvoid stepwise_jacobian(double t, const double* y, const double* p, double* out) {\n  (void)t; (void)y; (void)p;\n";
-  for (size_t k = 0; k < jacobian_.size(); ++k) source += c_of(jacobian_[k], fmt::format("out[{}]", k));
-  source += "}\n";
-  std::string why;
-  native_ = load_native(source, why);
-  if (native_) {
-    native_rhs_ = reinterpret_cast<NativeFn>(native_->symbol("stepwise_rhs"));
-    native_jacobian_ = reinterpret_cast<NativeFn>(native_->symbol("stepwise_jacobian"));
-  }
-  if (!native_rhs_ || !native_jacobian_) {
-    native_rhs_ = native_jacobian_ = nullptr;
-    evaluation_.detail = why.empty() ? "the compiled object lacks its functions" : why;
+  // the C's size told from the tapes before any is printed (measured: about 20 bytes of C an instruction)
+  size_t instructions = 0;
+  for (const auto* tapes : {&rhs_, &jacobian_})
+    for (const Tape& t : *tapes) instructions += t.code.size();
+  if (instructions * 20 <= options.background_above) {
+    const NativeSource source = native_source(options);
+    std::string why;
+    const auto code = load_native(source, CompileLimits{options.compile_seconds, nullptr}, why);
+    if (!adopt(code)) evaluation_.detail = why.empty() ? "the compiled object lacks its functions" : why;
     return;
   }
+  // large: the interpreter runs while the C is printed and compiled, and f switches to the compiled code when it
+  // is loaded (the same bits: the same operations in the same order)
+  evaluation_.background = true;
+  evaluation_.detail = fmt::format("the interpreter, while f and its Jacobian ({} operations) are compiled in the background", instructions);
+  background_ = std::thread([this, options] {
+    const auto start = std::chrono::steady_clock::now();
+    const NativeSource source = native_source(options);
+    std::string why;
+    auto code = cached_native(source);
+    if (!code) code = load_native(source, CompileLimits{options.compile_seconds, &cancel_}, why);
+    const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::lock_guard lock(evaluation_mutex_);
+    evaluation_.compile_seconds = took;
+    evaluation_.source_bytes = source.bytes();
+    evaluation_.units = static_cast<int>(source.units.size());
+    if (!adopt(code))
+      evaluation_.detail = fmt::format("the interpreter: the background compile of {} of C ended after {:.3g} s: {}", bytes_text(source.bytes()), took,
+                                       why.empty() ? "the compiled object lacks its functions" : why);
+  });
+}
+
+// f and its Jacobian as C in units, at the optimisation level for its size; its size noted in the evaluation
+// (by the constructor, or by the background compile under evaluation_mutex_)
+NativeSource Equations::native_source(const EquationsOptions& options) {
+  NativeSource source = c_source(rhs_, jacobian_, options.function_bytes, options.unit_bytes);
+  if (source.bytes() > options.optimise_below) source.optimisation = "-O1";
+  if (!evaluation_.background) {
+    evaluation_.source_bytes = source.bytes();
+    evaluation_.units = static_cast<int>(source.units.size());
+  }
+  return source;
+}
+
+// the compiled object's functions in use from now on (they compute what the interpreter does); false if it has
+// none (null, or without them). Called by the constructor, or by the background compile under evaluation_mutex_
+bool Equations::adopt(std::shared_ptr<const NativeCode> code) {
+  if (!code) return false;
+  const auto rhs = reinterpret_cast<NativeFn>(code->symbol("stepwise_rhs"));
+  const auto jacobian = reinterpret_cast<NativeFn>(code->symbol("stepwise_jacobian"));
+  if (!rhs || !jacobian) return false;
+  native_ = std::move(code);
+  native_jacobian_.store(jacobian, std::memory_order_release);
+  native_rhs_.store(rhs, std::memory_order_release);
   evaluation_.compiled = true;
-  evaluation_.detail = native_->path();
-  if (n == 2) inline_rhs_ = InlineRhs{NativeRhs<2>{native_rhs_, p_.data()}};
-  if (n == 3) inline_rhs_ = InlineRhs{NativeRhs<3>{native_rhs_, p_.data()}};
-  if (n == 4) inline_rhs_ = InlineRhs{NativeRhs<4>{native_rhs_, p_.data()}};
+  evaluation_.from_cache = !native_->compiled();
+  evaluation_.detail = evaluation_.background
+                           ? fmt::format("{} (compiled in the background in {:.3g} s; the interpreter ran until then)", native_->path(), evaluation_.compile_seconds)
+                           : native_->path();
+  // the inline path only from the constructor: a capability is not to change under a running stepper
+  if (const auto n = size(); !evaluation_.background && n == 2) inline_rhs_ = InlineRhs{NativeRhs<2>{rhs, p_.data()}};
+  else if (!evaluation_.background && n == 3) inline_rhs_ = InlineRhs{NativeRhs<3>{rhs, p_.data()}};
+  else if (!evaluation_.background && n == 4) inline_rhs_ = InlineRhs{NativeRhs<4>{rhs, p_.data()}};
+  return true;
 }
 
 }  // namespace
@@ -711,8 +879,14 @@ std::string Formula::where(int column_in_text) const {
   return line > 0 ? fmt::format("{}:{}: {}", file, line, key) : fmt::format("{}: {}", file, key);
 }
 
+std::unique_ptr<Model> make_equations(const EquationsSpec& spec, const Params& values, const EquationsOptions& options) {
+  return std::make_unique<Equations>(spec, values, options);
+}
+
 std::unique_ptr<Model> make_equations(const EquationsSpec& spec, const Params& values, bool compile) {
-  return std::make_unique<Equations>(spec, values, compile);
+  EquationsOptions options;
+  options.compile = compile;
+  return make_equations(spec, values, options);
 }
 
 std::vector<std::string> equations_keys(const EquationsSpec& spec) {

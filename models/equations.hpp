@@ -61,7 +61,12 @@ struct BadEquations : std::invalid_argument {
 // what the model says of itself, for summary.json: how f is evaluated (a compiled shared object, or the
 // interpreter, and why), and whether [exact] is used
 struct EquationsEvaluation {
-  bool compiled = false;
+  bool compiled = false;   // f is the compiled code now
+  bool from_cache = false; // the compiled code was a verified cache entry (else compiled by this model)
+  bool background = false; // compiled in the background while the interpreter ran (a large system)
+  double compile_seconds = 0;  // the background compile's wall-clock time, once it ended
+  size_t source_bytes = 0; // the C's size
+  int units = 0;           // the compiler calls it is split into
   std::string detail;      // the cache file loaded, or why the interpreter runs
   std::string exact_note;  // empty, or why [exact] is not used (it does not match the initial state)
   int second_order = 0;    // positions n where the equations read x' = v (SecondOrderView), else 0
@@ -71,6 +76,19 @@ struct EquationsEvaluation {
 // the key for an unknown name or a non-finite value, BadEquations for a system or formula at fault (one that does
 // not parse, names an unknown symbol, calls a function outside the whitelist, or is not finite at the initial
 // state), all before anything is compiled.
+// how f is evaluated: compiled C, or the interpreter over the same tapes (the same bits). The C is split into
+// functions and units whose sizes keep the compiler's time and memory linear in the system (measured in
+// docs/performance.md); a large one is compiled in the background while the interpreter runs
+struct EquationsOptions {
+  bool compile = true;                    // false: the interpreter, as where no compiler is
+  size_t function_bytes = 64 << 10;       // C in one function at most (a longer f is split into parts)
+  size_t unit_bytes = 1 << 20;            // C in one compiler call at most (units compiled in parallel)
+  size_t optimise_below = 1 << 20;        // -O2 below this much C, -O1 above
+  size_t background_above = 256 << 10;    // more C: compiled in the background while the interpreter runs
+  double compile_seconds = 600;           // the compiler's time limit; past it, the interpreter, saying so
+};
+
+std::unique_ptr<Model> make_equations(const EquationsSpec& spec, const Params& values, const EquationsOptions& options);
 // `compile`: try the compiler (false: the interpreter, as where none is)
 std::unique_ptr<Model> make_equations(const EquationsSpec& spec, const Params& values, bool compile = true);
 

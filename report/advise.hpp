@@ -9,6 +9,7 @@
 #include "report/studies/study_scenes.hpp"
 #include "run/csv.hpp"
 #include "run/prepare.hpp"
+#include "solvers/stability.hpp"  // stiffness_threshold
 
 #include <optional>
 #include <string>
@@ -56,10 +57,6 @@ struct Advice {
   std::vector<Candidate> candidates;  // the advised method first, then the runner-up, then by cost
   std::optional<AdvisePoint> reproduced;  // the advised setting run again as `stepwise run` runs it
 };
-
-// a stiffness this large (t_end times the fastest decay rate) holds an explicit method to steps far below what
-// accuracy asks: rk4 is stable for h |lambda| < 2.8, so it needs at least stiffness / 2.8 steps whatever E
-inline constexpr double stiffness_threshold = 1000;
 
 // InputError, the command's one-line message, unless E is a positive finite number and the budget 1 to 86400 s
 void check_advice_request(double error, double budget_seconds);

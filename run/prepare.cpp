@@ -41,6 +41,17 @@ void require_positive(std::optional<double> value, const std::string& where) {
 
 PreparedRun prepare_run(const RunOptions& o) { return prepare_run(o, load_scene(o.scene_file)); }
 
+std::pair<std::string, std::string> default_method(const Model& model, double t_end, bool fixed_step) {
+  if (fixed_step) return {"rk4", "no method named, a step given: rk4, the classical fixed-step method"};
+  const auto decay = fastest_decay(model, 0, model.initial_state());
+  if (decay && t_end * *decay >= stiffness_threshold)
+    return {"cvode-bdf", fmt::format("no method named: cvode-bdf (variable-order BDF), as the system is stiff at its start (t_end x fastest decay "
+                                     "= {:.3g}, over {:g})", t_end * *decay, stiffness_threshold)};
+  return {"tsitouras54", fmt::format("no method named: tsitouras54 (an adaptive 5(4) pair, as SciPy's RK45), as the system is {} (t_end x fastest "
+                                     "decay{})", decay ? "not stiff at its start" : "taken as not stiff",
+                                     decay ? fmt::format(" = {:.3g}, under {:g}", t_end * *decay, stiffness_threshold) : std::string(" not known: no Jacobian"))};
+}
+
 PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   PreparedRun p;
   p.scene = std::move(scene);
@@ -125,8 +136,11 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
     }
   }
 
-  // method and step control: the command line wins over the scene; --dt and --rtol exclude each other
-  p.method = o.method.value_or(s.method.value_or("rk4"));
+  // method and step control: the command line wins over the scene; --dt and --rtol exclude each other. Neither
+  // naming a method: one chosen for the scene, and said why (default_method)
+  p.t_end = o.t_end.value_or(s.t_end.value_or(10.0));
+  if (o.method || s.method) p.method = o.method ? *o.method : *s.method;
+  else std::tie(p.method, p.method_choice) = default_method(*p.model, p.t_end, o.dt || s.dt);
   const Method* method = find_method(p.method);
   if (!method) throw InputError(fmt::format("{}: unknown method '{}' (see `stepwise methods`)", o.method ? "--method" : s.where("run.method"), p.method));
   if (o.dt && (o.rtol || o.atol)) throw InputError("--dt: give either --dt or --rtol/--atol, not both");
@@ -183,7 +197,6 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
     throw InputError(fmt::format("{}: event location '{}' is neither linear nor restep",
                                  o.event_location ? "--event-location" : s.where("run.event_location"), location));
 
-  p.t_end = o.t_end.value_or(s.t_end.value_or(10.0));
   if (p.control.dt && *p.control.dt > p.t_end)
     throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.t_end));
   // a step past the method's stability limit is the user's to try: said (once: by rank 0 under mpirun), then

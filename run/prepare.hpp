@@ -33,6 +33,7 @@ struct PreparedRun {
   std::unique_ptr<Model> model;
   Params params;  // resolved: defaults overlaid by the scene and --set
   std::string method;
+  std::string method_choice;  // empty, or why this method when neither the scene nor the command line named one
   StepControl control;
   double t_end = 0;
   double output_dt = 0;
@@ -40,6 +41,11 @@ struct PreparedRun {
   double output_bytes = 0;  // the trajectory's size, estimated from its rows and columns
   int ranks = 1;            // the MPI ranks the run uses: 1, or under mpirun all of them for a split run (run/distributed_run.hpp)
 };
+
+// the method for a scene that names none, and why: rk4 where a step is given; else cvode-bdf where the system is
+// stiff at its start (t_end times the fastest decay rate of its Jacobian at least stiffness_threshold), else
+// tsitouras54
+std::pair<std::string, std::string> default_method(const Model& model, double t_end, bool fixed_step);
 
 // the options checked against the scene, its model and the method; InputError (or BadMethod) naming the
 // file, line, key or option at fault

@@ -2,6 +2,8 @@
 
 #include "interrupt.hpp"
 
+#include "models/native_code.hpp"  // find_program
+
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/socket.h>
@@ -21,17 +23,6 @@ extern char** environ;
 
 namespace stepwise {
 namespace {
-
-// args[0] itself when it names a path, else the first executable of that name on PATH
-std::optional<std::string> resolve(const std::string& name) {
-  if (name.find('/') != std::string::npos) return ::access(name.c_str(), X_OK) == 0 ? std::optional(name) : std::nullopt;
-  const char* path = std::getenv("PATH");
-  if (!path) return std::nullopt;
-  std::stringstream dirs(path);
-  for (std::string dir; std::getline(dirs, dir, ':');)
-    if (const auto file = (std::filesystem::path(dir.empty() ? "." : dir) / name).string(); ::access(file.c_str(), X_OK) == 0) return file;
-  return std::nullopt;
-}
 
 // forks and execs `program` with args, its standard input `input` where given (-1: ours); the child's pid, or
 // -1 with errno set
@@ -65,7 +56,7 @@ int wait_for(pid_t pid) {
 }  // namespace
 
 std::optional<int> run_process(const std::vector<std::string>& args, std::string* why) {
-  const std::optional<std::string> program = resolve(args[0]);
+  const std::optional<std::string> program = find_program(args[0]);
   if (!program) {
     if (why) *why = std::strerror(ENOENT);
     return std::nullopt;
@@ -80,7 +71,7 @@ std::optional<int> run_process(const std::vector<std::string>& args, std::string
 }
 
 FedProcess::FedProcess(const std::vector<std::string>& args) {
-  const std::optional<std::string> program = resolve(args[0]);
+  const std::optional<std::string> program = find_program(args[0]);
   if (!program) throw std::runtime_error(fmt::format("{}: {}", args[0], std::strerror(ENOENT)));
   int ends[2];
   if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, ends) < 0)
@@ -120,6 +111,6 @@ int FedProcess::finish() {
   return status;
 }
 
-bool on_path(const std::string& name) { return name.find('/') == std::string::npos && resolve(name).has_value(); }
+bool on_path(const std::string& name) { return name.find('/') == std::string::npos && find_program(name).has_value(); }
 
 }  // namespace stepwise

@@ -55,9 +55,13 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m) {
     j["events"].push_back({{"t", e.t}, {"kind", e.kind}, {"event", e.event < events.size() ? events[e.event].name : "contacts"}});
   j["parameters"] = nlohmann::json::object();
   for (const auto& [key, value] : p.params) j["parameters"][key] = value;
+  if (!p.method_choice.empty()) j["method_choice"] = p.method_choice;
   // a scene's own equations: whether the compiled right-hand side ran or the interpreter, and why
   if (const auto e = equations_evaluation(*p.model)) {
-    j["equations"] = {{"evaluation", e->compiled ? "compiled" : "interpreted"}, {"detail", e->detail}, {"second_order", e->second_order > 0}};
+    // a compile still running in the background when the run ended is stopped with the model
+    const std::string detail = e->background && !e->compiled && e->compile_seconds == 0 ? e->detail + "; the run ended first, and the compile was stopped" : e->detail;
+    j["equations"] = {{"evaluation", e->compiled ? "compiled" : "interpreted"}, {"detail", detail}, {"second_order", e->second_order > 0},
+                      {"c_bytes", e->source_bytes}, {"compile_units", e->units}, {"compiled_in_background", e->background}};
     if (!e->exact_note.empty()) j["equations"]["exact"] = e->exact_note;
   }
   return j;

@@ -4,8 +4,13 @@
 #include <dlfcn.h>
 #include <fmt/format.h>
 #include <omp.h>
+#include <pthread.h>
 
 #include <algorithm>
+#include <csignal>
+#include <iterator>
+#include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -40,6 +45,43 @@ class SerialOpenMP {
 
  private:
   int levels_;
+};
+
+// METIS (through GKlib) installs handlers of its own for SIGTERM and SIGABRT for the length of each call and
+// puts back the previous ones from thread-local slots: two threads in METIS at once put back each other's, which
+// left METIS's handler (a longjmp to a thread-local jump buffer that other threads never set) installed for good,
+// and the next SIGTERM crashed the process by SIGSEGV in __longjmp_chk instead of ending it cleanly
+// (run/interrupt.hpp). So: one METIS call at a time in the process, the dispositions of the signals it touches
+// and the ones an interruption comes by saved before and put back after, and those signals blocked in the
+// calling thread meanwhile. A signal taken by another thread during the call still meets METIS's handler: the
+// reason `cheaper` calls METIS only for large systems (metis_worth_trying), which the report never analyses
+class MetisCall {
+ public:
+  MetisCall() : lock_(mutex()) {
+    sigset_t set;
+    sigemptyset(&set);
+    for (size_t k = 0; k < std::size(signals); ++k) {
+      ::sigaction(signals[k], nullptr, &saved_[k]);
+      sigaddset(&set, signals[k]);
+    }
+    ::pthread_sigmask(SIG_BLOCK, &set, &mask_);
+  }
+  ~MetisCall() {
+    for (size_t k = 0; k < std::size(signals); ++k) ::sigaction(signals[k], &saved_[k], nullptr);
+    ::pthread_sigmask(SIG_SETMASK, &mask_, nullptr);
+  }
+  MetisCall(const MetisCall&) = delete;
+  MetisCall& operator=(const MetisCall&) = delete;
+
+ private:
+  static constexpr int signals[] = {SIGTERM, SIGINT, SIGHUP, SIGABRT};
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  struct sigaction saved_[std::size(signals)] {};
+  sigset_t mask_{};
 };
 
 }  // namespace
@@ -112,9 +154,12 @@ std::string SparseCholesky::analyze(const Eigen::SparseMatrix<double>& a, Orderi
     m.common.nmethods = 1;
     m.common.method[0].ordering = method;
     m.common.postorder = 1;
+    std::optional<MetisCall> metis;
+    if (method == CHOLMOD_METIS) metis.emplace();
     return cholmod_analyze(m.lower, &m.common);
   };
   m.analysis = {};
+  if (ordering == Ordering::cheaper && n < metis_worth_trying) ordering = Ordering::amd;
   if (ordering == Ordering::cheaper) {
     cholmod_factor* amd = analyse_with(CHOLMOD_AMD);
     if (!amd) return m.status("cholmod_analyze (AMD)");

@@ -16,8 +16,13 @@ namespace stepwise {
 enum class Ordering {
   amd,     // approximate minimum degree
   metis,   // METIS nested dissection
-  cheaper  // both analysed, the one whose factor takes fewer flops kept
+  cheaper  // AMD; from metis_worth_trying unknowns on, METIS too, the one whose factor takes fewer flops kept
 };
+
+// below this many unknowns AMD's factor is the cheaper on the cloth meshes (32^2 and 64^2 nodes: 48 against 51
+// and 424 against 481 Mflop) and METIS's analysis costs 2.5-4x AMD's, so `cheaper` asks METIS only above it
+// (128^2 nodes: 4 312 against 5 228 Mflop, docs/performance.md)
+inline constexpr long metis_worth_trying = 32768;
 
 // what the analysis chose and what the factor will cost
 struct CholeskyAnalysis {

@@ -88,4 +88,16 @@ StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::Vecto
   return {std::sqrt(std::max(lambda, 0.0)), a};
 }
 
+std::optional<double> fastest_decay(const OdeSystem& system, double t, const Eigen::VectorXd& y, int largest) {
+  const int n = system.size();
+  if (!system.has_jacobian() || n > largest) return std::nullopt;
+  Eigen::MatrixXd j(n, n);
+  system.jacobian(t, y, j);
+  if (!j.allFinite()) return std::nullopt;
+  const Eigen::VectorXcd lambda = Eigen::EigenSolver<Eigen::MatrixXd>(j, false).eigenvalues();
+  double fastest = 0;
+  for (const auto& l : lambda) fastest = std::max(fastest, -l.real());
+  return fastest;
+}
+
 }  // namespace stepwise

@@ -2,6 +2,8 @@
 // spectrum from R(z), and the closed forms on a damped oscillator mode that more than one method shares.
 #pragma once
 
+#include <optional>
+
 #include "ode_system.hpp"
 
 #include <Eigen/Dense>
@@ -38,5 +40,13 @@ struct StiffestMode {
   static auto fields(auto& s) { return std::tie(s.omega, s.damping); }
 };
 StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::VectorXd& y);
+
+// a stiffness this large (t_end times the fastest decay rate) holds an explicit method to steps far below what
+// accuracy asks: rk4 is stable for h |lambda| < 2.8, so it needs at least stiffness / 2.8 steps whatever the error
+inline constexpr double stiffness_threshold = 1000;
+
+// the fastest decay rate max(-Re lambda, 0) of the system's exact Jacobian at (t, y) (dense eigenvalues), or
+// nothing where the system has no Jacobian or more than `largest` unknowns
+std::optional<double> fastest_decay(const OdeSystem& system, double t, const Eigen::VectorXd& y, int largest = 1000);
 
 }  // namespace stepwise

@@ -141,6 +141,8 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
     dt = options.pop("dt", None)
     dt = None if dt is None else _number("dt", dt)
     max_step = _number("max_step", options.pop("max_step", np.inf))
+    if not max_step > 0:  # SciPy's rule and message (a negative step cap would integrate backwards)
+        raise ValueError("`max_step` must be positive.")
     max_steps = options.pop("max_steps", None)  # None: StepControl's own cap
     max_steps = None if max_steps is None else _number("max_steps", max_steps)
     if options:

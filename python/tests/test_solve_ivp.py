@@ -176,6 +176,8 @@ def test_gil_is_released_while_compiled_equations_run():
     (dict(fun=42), TypeError, "callable"),
     (dict(y0=[1j, 0]), TypeError, "complex"),
     (dict(dense_output=True), ValueError, "t_eval"),
+    (dict(max_step=-1.0), ValueError, "`max_step` must be positive"),  # SciPy's rule: not a backwards solve that diverges
+    (dict(max_step=0), ValueError, "`max_step` must be positive"),
     (dict(nonsense=1), TypeError, "nonsense"),
 ])
 def test_bad_input_raises(kwargs, error, text):
@@ -228,4 +230,5 @@ def test_ctrl_c_stops_a_compiled_solve():
     timer.start()
     with pytest.raises(KeyboardInterrupt):
         stepwise.solve_ivp(eq, (0, 1e9), [2.9, 0.0], rtol=1e-13, atol=1e-15)
-    assert time.monotonic() - start < 5
+    # a hang bound, not a speed: without the interruption the solve would run for hours
+    assert time.monotonic() - start < 60

@@ -2,6 +2,7 @@
 // built-in pendulum on every method, hand-written right-hand sides, central-difference Jacobians, its own
 // interpreter (bitwise), and the methods' documented orders on a scene with an exact solution.
 #include "models/equations.hpp"
+#include "models/native_code.hpp"
 #include "run/scene.hpp"
 #include "solvers/fd_jacobian.hpp"
 #include "verification/convergence.hpp"
@@ -12,8 +13,14 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
+#include <chrono>
 #include <fstream>
 #include <random>
+#include <thread>
+
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace stepwise {
 namespace {
@@ -70,12 +77,34 @@ TEST_F(Equations, ThePendulumWrittenAsEquationsRunsAsTheBuiltInOneOnEveryMethod)
   EXPECT_GT(compared, 30);
 }
 
+// the compiled f of a background compile, once it is in use (a hang bound only: a compile of these takes well under
+// a second)
+void wait_compiled(const Model& model) {
+  for (int k = 0; k < 1200 && !equations_evaluation(model)->compiled && equations_evaluation(model)->compile_seconds == 0; ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+}
+
+// one function, one unit (the default for small systems); parts of a few formulas each in units of two or three
+// parts, compiled in parallel and linked; the same compiled in the background while the interpreter runs
+const std::pair<const char*, EquationsOptions> layouts[] = {
+    {"one unit", EquationsOptions{}},
+    {"parts in units", EquationsOptions{.function_bytes = 64, .unit_bytes = 512}},
+    {"in the background", EquationsOptions{.function_bytes = 128, .unit_bytes = 700, .background_above = 0}},  // other units: not in the cache yet
+};
+
 TEST_F(Equations, CompiledAndInterpretedAgreeToTheBitAndTheJacobianIsTheDerivative) {
   std::mt19937 rng(7);
+  for (const auto& [layout, options] : layouts)
   for (const char* name : shipped) {
+    SCOPED_TRACE(layout);
     const auto spec = spec_of(name);
-    const auto compiled = make_equations(spec, {}, true);
+    const auto compiled = make_equations(spec, {}, options);
     const auto interpreted = make_equations(spec, {}, false);
+    wait_compiled(*compiled);
+    EXPECT_EQ(equations_evaluation(*compiled)->background, options.background_above == 0) << name;
+    if (options.function_bytes < 1000) {
+      EXPECT_GT(equations_evaluation(*compiled)->units, 1) << name;
+    }
     ASSERT_TRUE(equations_evaluation(*compiled)->compiled) << name << ": " << equations_evaluation(*compiled)->detail;
     ASSERT_FALSE(equations_evaluation(*interpreted)->compiled) << name;
     const int n = compiled->size();
@@ -232,6 +261,88 @@ TEST_F(Equations, TheCacheLoadsOnlyWhatItWrote) {
   ::unsetenv("STEPWISE_CC");
   EXPECT_FALSE(equations_evaluation(*third)->compiled);
   EXPECT_NE(equations_evaluation(*third)->detail.find("no C compiler"), std::string::npos) << equations_evaluation(*third)->detail;
+}
+
+// a cache entry tampered with is compiled anew, never loaded: the .so with a byte flipped (in its .comment, so it
+// would still load), its .sum changed, the .so made group- or world-writable, replaced by a link to a good copy,
+// truncated. A cache directory others can write to is not used at all (the interpreter, saying why)
+TEST_F(Equations, ATamperedCacheEntryIsCompiledAnewNeverLoaded) {
+  namespace fs = std::filesystem;
+  const auto spec = spec_of("lorenz");
+  const auto evaluation_of_new_model = [&] { return *equations_evaluation(*make_equations(spec, {})); };
+  const auto first = evaluation_of_new_model();
+  ASSERT_TRUE(first.compiled && !first.from_cache) << first.detail;
+  const fs::path so = first.detail, sum = fs::path(first.detail).replace_extension(".sum");
+  ASSERT_TRUE(evaluation_of_new_model().from_cache) << "an untouched entry is loaded";
+  const fs::path good = cache_.dir / "good-copy.so";
+  fs::copy_file(so, good);
+  const auto read = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const auto write = [](const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes; };
+  const std::pair<const char*, std::function<void()>> tamperings[] = {
+      {"a byte of the .so flipped", [&] {
+         std::string bytes = read(so);
+         const auto at = bytes.find("GCC: (");
+         ASSERT_NE(at, std::string::npos);
+         bytes[at + 6] ^= 0x20;
+         write(so, bytes);
+       }},
+      {"the .sum changed", [&] {
+         std::string line = read(sum);
+         line[line.size() - 2] = line[line.size() - 2] == '0' ? '1' : '0';
+         write(sum, line);
+       }},
+      {"the .so group-writable", [&] { ::chmod(so.c_str(), 0620); }},
+      {"the .so world-writable", [&] { ::chmod(so.c_str(), 0602); }},
+      {"the .so a symbolic link", [&] {
+         fs::remove(so);
+         fs::create_symlink(good, so);
+       }},
+      {"the .so truncated", [&] { fs::resize_file(so, fs::file_size(so) / 2); }},
+  };
+  for (const auto& [what, tamper] : tamperings) {
+    tamper();
+    const auto e = evaluation_of_new_model();
+    EXPECT_TRUE(e.compiled && !e.from_cache) << what << ": " << e.detail;
+    EXPECT_FALSE(fs::is_symlink(so)) << what;
+    EXPECT_EQ(fs::status(so).permissions() & (fs::perms::group_write | fs::perms::others_write), fs::perms::none) << what;
+  }
+  // the directory writable by others: neither loaded from nor compiled into
+  ::chmod(cache_.dir.c_str(), 0777);
+  const auto open_dir = evaluation_of_new_model();
+  ::chmod(cache_.dir.c_str(), 0700);
+  EXPECT_FALSE(open_dir.compiled);
+  EXPECT_NE(open_dir.detail.find("writable by others"), std::string::npos) << open_dir.detail;
+}
+
+// a shared object that compiles and does not load: dlopen's message, read once, is the reason given
+TEST_F(Equations, AnObjectThatDoesNotLoadSaysWhy) {
+  std::string why;
+  const auto code = load_native("extern void stepwise_no_such_function(void);\nvoid stepwise_rhs(void) { stepwise_no_such_function(); }\n", why);
+  EXPECT_EQ(code, nullptr);
+  EXPECT_NE(why.find("did not load"), std::string::npos) << why;
+  EXPECT_NE(why.find("stepwise_no_such_function"), std::string::npos) << why;
+}
+
+// a compiler that hangs is stopped at its time limit, and the interpreter runs, saying so; a compile cancelled
+// (the model gone) likewise; no compiler process outlives either
+TEST_F(Equations, AHangingCompilerIsStoppedAndTheInterpreterRuns) {
+  const std::string hanging = (cache_.dir / "hanging-cc").string();
+  std::filesystem::create_directories(cache_.dir);
+  std::ofstream(hanging) << "#!/bin/sh\nsleep 300 &\nwait\n";
+  ::chmod(hanging.c_str(), 0700);
+  ::setenv("STEPWISE_CC", hanging.c_str(), 1);
+  EquationsOptions options;
+  options.compile_seconds = 0.5;
+  const auto model = make_equations(spec_of("duffing"), {}, options);
+  ::unsetenv("STEPWISE_CC");
+  const auto e = *equations_evaluation(*model);
+  EXPECT_FALSE(e.compiled);
+  EXPECT_NE(e.detail.find("longer than its 0.5 s limit"), std::string::npos) << e.detail;
+  // the script's sleep was in the compiler's process group: gone with it
+  EXPECT_NE(std::system("pgrep -f '^sleep 300$' > /dev/null"), 0) << "the hanging compiler's child still runs";
 }
 
 }  // namespace
