@@ -116,7 +116,7 @@ def report_pictures(binary, tries):
     try:
         prev, snapshot = previous_report(d)
         rng = random.Random(55)
-        delays = [0.5 + 3.5 * k / (tries - 1) for k in range(tries)] if tries <= 3 else [rng.uniform(0.5, 4.0) for _ in range(tries)]
+        delays = [0.5 + 3.5 * k / max(tries - 1, 1) for k in range(tries)] if tries <= 3 else [rng.uniform(0.5, 4.0) for _ in range(tries)]
         for k, delay in enumerate(delays):
             p = subprocess.Popen([binary, "report", "--quick", "--out", prev], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
             said = []
