@@ -53,7 +53,18 @@ def start(args):
 def stop(p, sig, after):
     time.sleep(after)
     p.send_signal(sig)
-    _, err = p.communicate(timeout=60)
+    try:
+        _, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        # a hang: say whether stepwise itself was still running, or only something holding its standard error
+        # (a child it started), and which processes those were
+        alive = p.poll() is None
+        holders = subprocess.run(["ps", "-eo", "pid,ppid,stat,args"], capture_output=True, text=True).stdout.splitlines()
+        suspects = [line for line in holders if "stepwise" in line or "ffmpeg" in line or "cc1" in line]
+        expect(False, f"{signal.Signals(sig).name} after {after:.2f} s: no end within 60 s (stepwise {'still running' if alive else f'exited {p.returncode}'}); "
+                      f"processes: {suspects[:8]}")
+        p.kill()
+        _, err = p.communicate()
     return p.returncode, err
 
 
