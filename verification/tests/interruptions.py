@@ -59,7 +59,10 @@ def stop(p, sig, after):
         # a hang: say whether stepwise itself was still running, or only something holding its standard error
         # (a child it started), and which processes those were
         alive = p.poll() is None
-        holders = subprocess.run(["ps", "-eo", "pid,ppid,stat,args"], capture_output=True, text=True).stdout.splitlines()
+        try:
+            holders = subprocess.run(["ps", "-eo", "pid,ppid,stat,args"], capture_output=True, text=True).stdout.splitlines()
+        except OSError:
+            holders = []
         suspects = [line for line in holders if "stepwise" in line or "ffmpeg" in line or "cc1" in line]
         expect(False, f"{signal.Signals(sig).name} after {after:.2f} s: no end within 60 s (stepwise {'still running' if alive else f'exited {p.returncode}'}); "
                       f"processes: {suspects[:8]}")
