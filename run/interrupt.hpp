@@ -36,7 +36,9 @@ class Temporary {
 };
 
 // while one lives, `last_words` runs on an interruption before the temporaries go (render writes render.json
-// for the frames it finished); it must take its own lock on what it reads
+// for the frames it finished); it must take its own lock on what it reads, and no thread may make or drop a
+// Temporary (write a file) while holding that lock: the cleaning thread runs the last words holding the
+// registry's lock, which a Temporary takes
 class OnInterrupt {
  public:
   explicit OnInterrupt(std::function<void()> last_words);

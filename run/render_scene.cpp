@@ -324,9 +324,16 @@ RenderedRun render_scene(const RenderOptions& options) {
                                             shapes.size(), width, height)
                               : fmt::format("{} of {} frames show one colour only: the scene is outside the camera's view (see render.json's camera)",
                                             empty_frames, shapes.size()));
-  try {
+  // written outside summary_mutex: a file's temporary registers with the interruption's registry, whose lock the
+  // cleaning thread holds while it runs the last words above, which take summary_mutex (the inverse order
+  // deadlocked a SIGTERM'd `study pictures` for good, one try in a few hundred)
+  std::string text;
+  {
     std::lock_guard lock(summary_mutex);
-    write_file_atomic(out / "render.json", summary.dump(2) + "\n");
+    text = summary.dump(2) + "\n";
+  }
+  try {
+    write_file_atomic(out / "render.json", text);
   } catch (const std::runtime_error& e) {
     throw InputError(e.what());
   }
