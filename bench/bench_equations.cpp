@@ -1,6 +1,6 @@
 // The pendulum written as equations in a scene file (scenes/pendulum-equations.toml: parsed, differentiated and
 // compiled at load time, models/equations.hpp) against the built-in pendulum model, at the same settings, on
-// rk4 (dt 1e-3, 10 s), verner98 and cvode-bdf (rtol 1e-10, atol 1e-13); and the interpreter (no compiler) beside
+// rk4 (dt 1e-3, 10 s), tsitouras54, verner98 and cvode-bdf (rtol 1e-10, atol 1e-13); and the interpreter (no compiler) beside
 // both. Issue 37's target: the compiled equations cost at most 1.2x the built-in model. Ratios printed after the
 // table: equations / built-in, interpreted / built-in. On rk4 also the same f hand-written in C++ behind the
 // OdeSystem interface (bench/users_pendulum.hpp), as a user's C++ model would be: the built-in pendulum's f is
@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   const auto cache = std::filesystem::temp_directory_path() / "stepwise-bench-equations-cache";
   ::setenv("STEPWISE_CACHE", cache.c_str(), 1);
   std::vector<std::pair<std::string, std::string>> ratios;
-  for (const char* method : {"rk4", "verner98", "cvode-bdf"}) {
+  for (const char* method : {"rk4", "tsitouras54", "verner98", "cvode-bdf"}) {
     const std::string base = fmt::format("{}/builtin", method);
     benchmark::RegisterBenchmark(base.c_str(), [method](benchmark::State& s) { run(s, method, Which::builtin); });
     benchmark::RegisterBenchmark(fmt::format("{}/equations", method).c_str(), [method](benchmark::State& s) { run(s, method, Which::compiled); });

@@ -21,6 +21,7 @@
 #include <set>
 #include <sstream>
 #include <thread>
+#include <unordered_map>
 
 namespace stepwise {
 namespace {
@@ -121,88 +122,168 @@ double* scratch(int depth) {
   return stack.data();
 }
 
-// the tape's C: one constant an operation (a leaf, a number or a load, is written where it is used), the result
-// assigned to `target`. The operations and their order are the tape's, so the compiled f rounds as the
-// interpreter does
-std::string c_of(const Tape& tape, const std::string& target) {
-  std::vector<std::string> stack;
-  std::string body;
-  int next = 0;
-  const auto push = [&](const std::string& expr) {
-    const std::string name = fmt::format("s{}", next++);
-    body += fmt::format("    const double {} = {};\n", name, expr);
-    stack.push_back(name);
+// the largest system whose compiled f a stepper calls inline (solvers/capabilities/inline_rhs.hpp)
+constexpr size_t max_inline_size = 4;
+
+// a list of tapes (f's, or its Jacobian's nonzeros) as one computation in which each operation is done once: a
+// value is numbered by its operation and operands, and an entry that computes one already computed reads it (a
+// mean field's Jacobian: the cos(x_j - x_i) of the off-diagonal entries are the terms of the diagonal ones). The
+// operations and their order are the tapes', so each value rounds as the interpreter's does
+struct Dag {
+  struct Operand {
+    int value = -1;    // a computed value's number, or -1 for a leaf
+    std::string leaf;  // a leaf's C: a number, y[i], p[k] or t
   };
-  const auto pop = [&] {
-    std::string top = stack.back();
-    stack.pop_back();
-    return top;
+  struct Node {
+    Op op;
+    int arg;
+    std::vector<Operand> operands;
   };
-  for (const Instruction& in : tape.code) {
-    switch (in.op) {
-      case Op::number: stack.push_back(fmt::format("({:a})", in.value)); break;
-      case Op::variable: stack.push_back(fmt::format("y[{}]", in.arg)); break;
-      case Op::parameter: stack.push_back(fmt::format("p[{}]", in.arg)); break;
-      case Op::time: stack.push_back("t"); break;
-      case Op::add:
-      case Op::mul: {
-        std::vector<std::string> operands(static_cast<size_t>(in.arg));
-        for (int k = in.arg - 1; k >= 0; --k) operands[static_cast<size_t>(k)] = pop();
-        std::string expr = operands[0];
-        for (size_t k = 1; k < operands.size(); ++k) expr = fmt::format("({} {} {})", expr, in.op == Op::add ? '+' : '*', operands[k]);
-        push(expr);
-        break;
+  std::vector<Node> nodes;        // in the order they are first computed
+  std::vector<Operand> outputs;   // out[k]
+  std::vector<size_t> ready;      // outputs[k] can be written once nodes[0, ready[k]) are
+
+  explicit Dag(const std::vector<Tape>& tapes) {
+    std::unordered_map<std::string, int> numbered;
+    std::vector<Operand> stack;
+    for (const Tape& tape : tapes) {
+      stack.clear();
+      for (const Instruction& in : tape.code) {
+        switch (in.op) {
+          case Op::number: stack.push_back({-1, fmt::format("({:a})", in.value)}); continue;
+          case Op::variable: stack.push_back({-1, fmt::format("y[{}]", in.arg)}); continue;
+          case Op::parameter: stack.push_back({-1, fmt::format("p[{}]", in.arg)}); continue;
+          case Op::time: stack.push_back({-1, "t"}); continue;
+          default: break;
+        }
+        const size_t arity = in.op == Op::add || in.op == Op::mul ? static_cast<size_t>(in.arg)
+                             : in.op == Op::power || in.op == Op::atan2 ? 2 : 1;
+        Node node{in.op, in.arg, {stack.end() - static_cast<std::ptrdiff_t>(arity), stack.end()}};
+        stack.resize(stack.size() - arity);
+        std::string key = fmt::format("{}:{}", static_cast<int>(in.op), in.arg);
+        for (const auto& o : node.operands) key += o.value >= 0 ? fmt::format(",#{}", o.value) : "," + o.leaf;
+        const auto [it, added] = numbered.emplace(std::move(key), static_cast<int>(nodes.size()));
+        if (added) nodes.push_back(std::move(node));
+        stack.push_back({it->second, {}});
       }
-      case Op::power: {
-        const std::string e = pop(), b = pop();
-        push(fmt::format("pow({}, {})", b, e));
-        break;
-      }
-      case Op::integer_power: push(fmt::format("stepwise_ipow({}, {})", pop(), in.arg)); break;
-      case Op::call: push(fmt::format("{}({})", functions1[static_cast<size_t>(in.arg)].c, pop())); break;
-      case Op::atan2: {
-        const std::string x = pop(), y = pop();
-        push(fmt::format("atan2({}, {})", y, x));
-        break;
-      }
+      outputs.push_back(stack.back());
+      ready.push_back(nodes.size());
     }
   }
-  return fmt::format("  {{\n{}    {} = {};\n  }}\n", body, target, stack.back());
+};
+
+// the C of one operation on its operands' C
+std::string c_of(const Dag::Node& node, const std::vector<std::string>& x) {
+  switch (node.op) {
+    case Op::add:
+    case Op::mul: {
+      std::string expr = x[0];
+      for (size_t k = 1; k < x.size(); ++k) expr = fmt::format("({} {} {})", expr, node.op == Op::add ? '+' : '*', x[k]);
+      return expr;
+    }
+    case Op::power: return fmt::format("pow({}, {})", x[0], x[1]);
+    case Op::integer_power: return fmt::format("stepwise_ipow({}, {})", x[0], node.arg);
+    case Op::call: return fmt::format("{}({})", functions1[static_cast<size_t>(node.arg)].c, x[0]);
+    case Op::atan2: return fmt::format("atan2({}, {})", x[0], x[1]);
+    default: return x[0];
+  }
 }
 
 std::string bytes_text(size_t bytes) {
   return bytes < (1u << 20) ? fmt::format("{:.0f} kB", bytes / 1e3) : fmt::format("{:.3g} MB", bytes / 1e6);
 }
 
-// f and its Jacobian's nonzeros as C: `stepwise_rhs` and `stepwise_jacobian` (t, y, p, out). A list of tapes
-// longer than `function_bytes` of C is split into parts (functions of that size: the compiler's time and memory
-// grow faster than a function's length), called in order by the named function; the parts are gathered into
-// units of about `unit_bytes`, each compiled apart and in parallel (JiTCODE's chunking)
-NativeSource c_source(const std::vector<Tape>& rhs, const std::vector<Tape>& jacobian, size_t function_bytes, size_t unit_bytes) {
+// one of f's or the Jacobian's functions as C: `name` (t, y, p, out). Its values are computed in parts of about
+// `function_bytes` of C (the compiler's time and memory grow faster than a function's length), called in order;
+// a value one part computes and a later part reads goes through a thread's workspace (a sweep's threads share
+// the object), the others stay local
+std::vector<std::string> c_functions(const std::string& name, const std::vector<Tape>& tapes, size_t function_bytes, std::string& declarations) {
+  const Dag dag(tapes);
+  // each value's part, and each output's: a part ends once its C passes function_bytes (told
+  // from each value's operands, before any is written)
+  std::vector<int> part_of(dag.nodes.size()), output_part(dag.outputs.size());
+  {
+    int part = 0;
+    size_t bytes = 0, k = 0;
+    for (size_t v = 0; v <= dag.nodes.size(); ++v) {
+      for (; k < dag.outputs.size() && dag.ready[k] <= v; ++k) output_part[k] = part, bytes += 20;
+      if (v == dag.nodes.size()) break;
+      if (bytes > function_bytes) ++part, bytes = 0;
+      part_of[v] = part;
+      bytes += 30;
+      for (const auto& o : dag.nodes[v].operands) bytes += o.value >= 0 ? 8 : o.leaf.size() + 2;
+    }
+  }
+  // the values read by a later part than their own: a slot each in the workspace
+  std::vector<int> slot(dag.nodes.size(), -1);
+  int slots = 0;
+  const auto read_in = [&](const Dag::Operand& o, int part) {
+    if (o.value >= 0 && part_of[static_cast<size_t>(o.value)] != part && slot[static_cast<size_t>(o.value)] < 0) slot[static_cast<size_t>(o.value)] = slots++;
+  };
+  for (size_t v = 0; v < dag.nodes.size(); ++v)
+    for (const auto& o : dag.nodes[v].operands) read_in(o, part_of[v]);
+  for (size_t k = 0; k < dag.outputs.size(); ++k) read_in(dag.outputs[k], output_part[k]);
+
+  const int parts = dag.nodes.empty() ? 1 : part_of.back() + 1;
+  std::vector<std::string> bodies(static_cast<size_t>(std::max(parts, output_part.empty() ? 1 : output_part.back() + 1)));
+  const auto text = [&](const Dag::Operand& o, int part) {
+    if (o.value < 0) return o.leaf;
+    const auto v = static_cast<size_t>(o.value);
+    return part_of[v] == part ? fmt::format("v{}", v) : fmt::format("w[{}]", slot[v]);
+  };
+  size_t k = 0;
+  const auto write_outputs = [&](size_t upto) {
+    for (; k < dag.outputs.size() && dag.ready[k] <= upto; ++k)
+      bodies[static_cast<size_t>(output_part[k])] += fmt::format("  out[{}] = {};\n", k, text(dag.outputs[k], output_part[k]));
+  };
+  for (size_t v = 0; v < dag.nodes.size(); ++v) {
+    write_outputs(v);
+    const int part = part_of[v];
+    std::vector<std::string> x;
+    for (const auto& o : dag.nodes[v].operands) x.push_back(text(o, part));
+    std::string& body = bodies[static_cast<size_t>(part)];
+    body += fmt::format("  const double v{} = {};\n", v, c_of(dag.nodes[v], x));
+    if (slot[v] >= 0) body += fmt::format("  w[{}] = v{};\n", slot[v], v);
+  }
+  write_outputs(dag.nodes.size());
+
   constexpr std::string_view signature = "(double t, const double* y, const double* p, double* out)";
+  const std::string opening = "{\n  (void)t; (void)y; (void)p; (void)out;\n";
+  if (bodies.size() == 1) return {fmt::format("void {}{} {}{}}}\n", name, signature, opening, bodies[0])};
+  std::vector<std::string> functions;
+  std::string calls;
+  for (size_t part = 0; part < bodies.size(); ++part) {
+    declarations += fmt::format("void {}_part{}(double t, const double* y, const double* p, double* out, double* w);\n", name, part);
+    functions.push_back(fmt::format("void {}_part{}(double t, const double* y, const double* p, double* out, double* w) {}  (void)w;\n{}}}\n",
+                                    name, part, opening, bodies[part]));
+    calls += fmt::format("  {}_part{}(t, y, p, out, w);\n", name, part);
+  }
+  functions.push_back(fmt::format("static _Thread_local double {}_workspace[{}];\nvoid {}{} {{\n  double* w = {}_workspace;\n{}}}\n", name,
+                                  std::max(slots, 1), name, signature, name, calls));
+  return functions;
+}
+
+// f and its Jacobian's nonzeros as C: `stepwise_rhs` and `stepwise_jacobian` (t, y, p, out), their parts
+// gathered into units of about `unit_bytes`, each compiled apart and in parallel (JiTCODE's chunking)
+NativeSource c_source(const std::vector<Tape>& rhs, const std::vector<Tape>& jacobian, size_t function_bytes, size_t unit_bytes) {
   NativeSource source;
   source.common = fmt::format("#include <math.h>\n{}", c_integer_power);
-  std::vector<std::string> functions;  // every definition, in order
   std::string declarations;
-  for (const auto& [name, tapes] : {std::pair{"stepwise_rhs", &rhs}, std::pair{"stepwise_jacobian", &jacobian}}) {
-    std::vector<std::string> bodies(1);
-    for (size_t k = 0; k < tapes->size(); ++k) {
-      if (bodies.back().size() > function_bytes) bodies.emplace_back();
-      bodies.back() += c_of((*tapes)[k], fmt::format("out[{}]", k));
-    }
-    const std::string opening = fmt::format("{{\n  (void)t; (void)y; (void)p; (void)out;\n");
-    if (bodies.size() == 1) {
-      functions.push_back(fmt::format("void {}{} {}{}}}\n", name, signature, opening, bodies[0]));
-      continue;
-    }
-    std::string calls;
-    for (size_t part = 0; part < bodies.size(); ++part) {
-      declarations += fmt::format("void {}_part{}{};\n", name, part, signature);
-      functions.push_back(fmt::format("void {}_part{}{} {}{}}}\n", name, part, signature, opening, bodies[part]));
-      calls += fmt::format("  {}_part{}(t, y, p, out);\n", name, part);
-    }
-    functions.push_back(fmt::format("void {}{} {{\n{}}}\n", name, signature, calls));
+  std::vector<std::string> functions = c_functions("stepwise_rhs", rhs, function_bytes, declarations);
+  // for 2 to 4 unknowns, f with the state in and f out by value (solvers/capabilities/inline_rhs.hpp: NativeRhs);
+  // f's body is a static inline function both call, so the two compute the same operations
+  if (const size_t n = rhs.size(); n >= 2 && n <= max_inline_size && functions.size() == 1) {
+    std::string& f = functions.front();
+    const std::string head = "void stepwise_rhs(double t, const double* y, const double* p, double* out) ";
+    f = "static inline void stepwise_rhs_body(double t, const double* y, const double* p, double* out) " + f.substr(head.size());
+    std::string args, state;
+    for (size_t i = 0; i < n; ++i) args += fmt::format("double y{}, ", i), state += fmt::format("{}y{}", i ? ", " : "", i);
+    f += fmt::format("void stepwise_rhs(double t, const double* y, const double* p, double* out) {{ stepwise_rhs_body(t, y, p, out); }}\n"
+                     "typedef struct {{ double v[{0}]; }} stepwise_values;\n"
+                     "stepwise_values stepwise_rhs_values(double t, {1}const double* p) {{\n"
+                     "  const double y[{0}] = {{{2}}};\n  stepwise_values r;\n  stepwise_rhs_body(t, y, p, r.v);\n  return r;\n}}\n", n, args, state);
   }
+  for (auto& f : c_functions("stepwise_jacobian", jacobian, function_bytes, declarations)) functions.push_back(std::move(f));
   source.common += declarations;
   source.units.emplace_back();
   for (const auto& f : functions) {
@@ -230,6 +311,7 @@ struct Symbols {
   std::vector<GiNaC::realsymbol> variables, parameters;
   GiNaC::realsymbol t = symbol_named("t");
   std::vector<std::string> variable_names, parameter_names;
+  std::unordered_map<std::string, std::pair<bool, int>> index;  // name -> (a variable, else a parameter; its position)
   std::string defined;  // the names in words, for a message about an unknown one
 };
 
@@ -310,9 +392,7 @@ GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, 
 // skipped (its variables found once per part), so each derivative costs the terms that hold its variable
 class Differentiator {
  public:
-  explicit Differentiator(const Symbols& s) : s_(s) {
-    for (size_t i = 0; i < s.variable_names.size(); ++i) index_[s.variable_names[i]] = static_cast<int>(i);
-  }
+  explicit Differentiator(const Symbols& s) : s_(s) {}
   // d e / d variables[c]
   GiNaC::ex derivative(const GiNaC::ex& e, int c) {
     using namespace GiNaC;
@@ -337,6 +417,11 @@ class Differentiator {
     return add(terms);
   }
 
+  // about how many nodes the derivatives of e in all its variables hold together (the Jacobian's size before
+  // any is made, from the parts alone): a sum's are its operands'; a product's add, for each operand's variables,
+  // the other factors; a function's or power's repeat the whole once per variable, as its outer derivative
+  size_t derivative_nodes(const GiNaC::ex& e) { return part_of(e).derivative_nodes; }
+
  private:
   // an expression's operands (GiNaC makes a sum's or product's anew at each op()), the variables it holds (in
   // order), and for a sum or product which operand holds which variable, by variable
@@ -344,12 +429,16 @@ class Differentiator {
     GiNaC::exvector operands;
     std::vector<int> variables;
     std::vector<std::pair<int, int>> holders;  // (variable, operand)
+    size_t nodes = 1, derivative_nodes = 0;    // the tree's size; derivative_nodes() of it
   };
   const Part& part_of(const GiNaC::ex& e) {
     if (const auto it = memo_.find(e); it != memo_.end()) return it->second;
     Part part;
     if (GiNaC::is_a<GiNaC::symbol>(e)) {
-      if (const auto it = index_.find(GiNaC::ex_to<GiNaC::symbol>(e).get_name()); it != index_.end()) part.variables.push_back(it->second);
+      if (const auto it = s_.index.find(GiNaC::ex_to<GiNaC::symbol>(e).get_name()); it != s_.index.end() && it->second.first) {
+        part.variables.push_back(it->second.second);
+        part.derivative_nodes = 1;
+      }
     } else {
       for (size_t k = 0; k < e.nops(); ++k) part.operands.push_back(e.op(k));
       for (size_t k = 0; k < part.operands.size(); ++k)
@@ -357,12 +446,18 @@ class Differentiator {
       std::sort(part.holders.begin(), part.holders.end());
       for (const auto& [v, k] : part.holders)
         if (part.variables.empty() || part.variables.back() != v) part.variables.push_back(v);
+      for (const auto& operand : part.operands) part.nodes += part_of(operand).nodes;
+      const bool sum = GiNaC::is_a<GiNaC::add>(e), product = GiNaC::is_a<GiNaC::mul>(e);
+      for (const auto& operand : part.operands) {
+        const Part& o = part_of(operand);
+        part.derivative_nodes += o.derivative_nodes + (product ? o.variables.size() * (part.nodes - o.nodes) : 0);
+      }
+      if (!sum && !product) part.derivative_nodes += part.variables.size() * part.nodes;
     }
     return memo_.emplace(e, std::move(part)).first->second;
   }
   const Symbols& s_;
-  std::map<std::string, int, std::less<>> index_;
-  std::map<GiNaC::ex, Part, GiNaC::ex_is_less> memo_;
+  std::unordered_map<GiNaC::ex, Part> memo_;  // by GiNaC's hash and equality
 };
 
 std::string text_of(const GiNaC::ex& e) {
@@ -452,10 +547,11 @@ class TapeBuilder {
       return push(Op::number, 0, v, fmt::format("{:a}", v), false);
     }
     if (is_a<symbol>(e)) {
-      for (size_t i = 0; i < s_.variables.size(); ++i)
-        if (e.is_equal(s_.variables[i])) return push(Op::variable, static_cast<int>(i), 0, fmt::format("y{}", i), true);
-      for (size_t i = 0; i < s_.parameters.size(); ++i)
-        if (e.is_equal(s_.parameters[i])) return push(Op::parameter, static_cast<int>(i), 0, fmt::format("p{}", i), false);
+      // by name: one symbol a name (symbol_named), and a comparison of symbols costs a copy of each
+      if (const auto it = s_.index.find(ex_to<symbol>(e).get_name()); it != s_.index.end()) {
+        const auto [variable, i] = it->second;
+        return variable ? push(Op::variable, i, 0, fmt::format("y{}", i), true) : push(Op::parameter, i, 0, fmt::format("p{}", i), false);
+      }
       if (e.is_equal(s_.t)) return push(Op::time, 0, 0, "t", true);
       throw BadEquations(fmt::format("{}: unknown symbol {}", where_, text_of(e)));
     }
@@ -568,16 +664,44 @@ bool identifier(const std::string& name) { return std::regex_match(name, std::re
 // ---- the model
 using NativeFn = void (*)(double t, const double* y, const double* p, double* out);
 
+// what the Jacobian is made from: the parsed formulas and their symbols, kept until it is made
+struct JacobianWork {
+  Symbols symbols;
+  std::vector<GiNaC::ex> f;
+  std::vector<std::string> where;  // each formula's place, for a message about its derivative
+  Derived derived;                 // the derived slots so far (f's), which the Jacobian's continue
+  Differentiator differentiate{symbols};
+};
+
+// the exact Jacobian: its nonzeros' tapes column by column (CSC order) with the pattern, and the parameter
+// array its tapes read (f's, then the derived slots of the Jacobian's own)
+struct JacobianTapes {
+  std::vector<Tape> tapes;
+  std::vector<int> columns, rows;  // column c's entries are [columns[c], columns[c+1])
+  std::vector<double> p;
+  int depth = 1;
+};
+
+// a model destroyed while its Jacobian is made in the background stops that
+struct Cancelled {};
+
 class Equations final : public Model {
  public:
   Equations(const EquationsSpec& spec, const Params& values, const EquationsOptions& options) {
     std::lock_guard lock(ginac_mutex);
-    build(spec, values, options);
+    try {
+      build(spec, values, options);
+    } catch (...) {
+      work_.reset();  // GiNaC's objects go under the lock
+      throw;
+    }
   }
   // a compile still running in the background is stopped (its compiler's process group killed)
   ~Equations() override {
     cancel_.store(true);
     if (background_.joinable()) background_.join();
+    std::lock_guard lock(ginac_mutex);
+    work_.reset();
   }
   Equations(const Equations&) = delete;
   Equations& operator=(const Equations&) = delete;
@@ -596,19 +720,21 @@ class Equations final : public Model {
 
   bool has_jacobian() const override { return true; }
   void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
+    const JacobianTapes& J = jacobian_tapes();
     thread_local std::vector<double> values;
-    values.resize(rows_.size());
+    values.resize(J.rows.size());
     jacobian_values(t, y.data(), values.data());
     dfdy.setZero();
     for (Eigen::Index c = 0; c < size(); ++c)
-      for (int k = columns_[static_cast<size_t>(c)]; k < columns_[static_cast<size_t>(c) + 1]; ++k) dfdy(rows_[static_cast<size_t>(k)], c) = values[static_cast<size_t>(k)];
+      for (int k = J.columns[static_cast<size_t>(c)]; k < J.columns[static_cast<size_t>(c) + 1]; ++k) dfdy(J.rows[static_cast<size_t>(k)], c) = values[static_cast<size_t>(k)];
   }
   bool has_sparse_jacobian() const override { return true; }
   void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
-    if (dfdy.rows() != size() || dfdy.cols() != size() || dfdy.nonZeros() != static_cast<Eigen::Index>(rows_.size()) || !dfdy.isCompressed()) {
+    const JacobianTapes& J = jacobian_tapes();
+    if (dfdy.rows() != size() || dfdy.cols() != size() || dfdy.nonZeros() != static_cast<Eigen::Index>(J.rows.size()) || !dfdy.isCompressed()) {
       std::vector<Eigen::Triplet<double>> pattern;
       for (int c = 0; c < size(); ++c)
-        for (int k = columns_[static_cast<size_t>(c)]; k < columns_[static_cast<size_t>(c) + 1]; ++k) pattern.emplace_back(rows_[static_cast<size_t>(k)], c, 1.0);
+        for (int k = J.columns[static_cast<size_t>(c)]; k < J.columns[static_cast<size_t>(c) + 1]; ++k) pattern.emplace_back(J.rows[static_cast<size_t>(k)], c, 1.0);
       dfdy.resize(size(), size());
       dfdy.setFromTriplets(pattern.begin(), pattern.end());
       dfdy.makeCompressed();
@@ -639,10 +765,18 @@ class Equations final : public Model {
 
  private:
   void jacobian_values(double t, const double* y, double* values) const {
-    if (const NativeFn native = native_jacobian_.load(std::memory_order_acquire)) return native(t, y, p_.data(), values);
-    double* stack = scratch(depth_);
-    for (size_t k = 0; k < jacobian_.size(); ++k) values[k] = run(jacobian_[k], t, y, p_.data(), stack);
+    const JacobianTapes& J = jacobian_tapes();
+    if (const NativeFn native = native_jacobian_.load(std::memory_order_acquire)) return native(t, y, J.p.data(), values);
+    double* stack = scratch(J.depth);
+    for (size_t k = 0; k < J.tapes.size(); ++k) values[k] = run(J.tapes[k], t, y, J.p.data(), stack);
   }
+  // the Jacobian, made on first use: by the constructor for a small system; for a large one by the background
+  // compile or the first method that asks, whichever comes first (the other waits)
+  const JacobianTapes& jacobian_tapes(bool ginac_held = false) const {
+    std::call_once(jacobian_once_, [&] { make_jacobian(ginac_held); });
+    return *jacobian_;
+  }
+  void make_jacobian(bool ginac_held) const;
 
   void build(const EquationsSpec& spec, const Params& values, const EquationsOptions& options);
   bool adopt(std::shared_ptr<const NativeCode> code);
@@ -651,10 +785,13 @@ class Equations final : public Model {
   std::vector<std::string> names_;
   Eigen::VectorXd y0_;
   std::vector<double> p_;
-  std::vector<Tape> rhs_, jacobian_, exact_;  // jacobian_: the nonzeros, column by column (CSC order)
+  std::vector<Tape> rhs_, exact_;
   std::optional<Tape> energy_;
-  std::vector<int> columns_, rows_;           // the pattern, CSC: column c's entries are [columns_[c], columns_[c+1])
   int depth_ = 1;
+  // made once (jacobian_tapes()); work_ from build until then
+  mutable std::unique_ptr<JacobianWork> work_;
+  mutable std::unique_ptr<const JacobianTapes> jacobian_;
+  mutable std::once_flag jacobian_once_;
   bool autonomous_ = true;
   SecondOrderView second_order_;
   std::shared_ptr<const NativeCode> native_;
@@ -717,12 +854,15 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
   }
 
   // ---- the symbols and the formulas
-  Symbols s;
+  work_ = std::make_unique<JacobianWork>();
+  Symbols& s = work_->symbols;
   for (const auto& v : spec.variables) {
+    s.index[v] = {true, static_cast<int>(s.variables.size())};
     s.variables.push_back(symbol_named(v));
     s.variable_names.push_back(v);
   }
   for (const auto& [name, value] : parameters) {
+    s.index[name] = {false, static_cast<int>(s.parameters.size())};
     s.parameters.push_back(symbol_named(name));
     s.parameter_names.push_back(name);
     p_.push_back(value);
@@ -733,29 +873,20 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
   y0_.resize(static_cast<Eigen::Index>(n));
   for (size_t i = 0; i < n; ++i) y0_[static_cast<Eigen::Index>(i)] = initial.at(spec.variables[i]);
 
-  std::vector<GiNaC::ex> f(n);
+  std::vector<GiNaC::ex>& f = work_->f;
+  f.resize(n);
   std::vector<const Formula*> formula_of(n);
   for (const auto& formula : spec.equations) {
     const size_t i = static_cast<size_t>(std::find(names_.begin(), names_.end(), formula.name) - names_.begin());
     f[i] = parse(formula, s, true, true);
     formula_of[i] = &formula;
+    work_->where.resize(n);
+    work_->where[i] = formula.where();
   }
   autonomous_ = std::none_of(f.begin(), f.end(), [&](const GiNaC::ex& e) { return e.has(s.t); });
-  Derived derived{static_cast<int>(p_.size()), {}, {}};
+  Derived& derived = work_->derived;
+  derived.first_slot = static_cast<int>(p_.size());
   for (size_t i = 0; i < n; ++i) rhs_.push_back(TapeBuilder(s, derived, formula_of[i]->where(), formula_of[i]).build(f[i]));
-
-  // the exact Jacobian and its pattern, column by column; the diagonal always in it (the Newton matrix I - h J has it)
-  columns_.push_back(0);
-  Differentiator differentiate(s);
-  for (size_t c = 0; c < n; ++c) {
-    for (size_t r = 0; r < n; ++r) {
-      const GiNaC::ex d = differentiate.derivative(f[r], static_cast<int>(c));
-      if (d.is_zero() && r != c) continue;
-      rows_.push_back(static_cast<int>(r));
-      jacobian_.push_back(TapeBuilder(s, derived, fmt::format("{} (its derivative in {})", formula_of[r]->where(), names_[c])).build(d));
-    }
-    columns_.push_back(static_cast<int>(rows_.size()));
-  }
   exact_.resize(spec.exact.size());  // one per variable (checked above), in the variables' order
   for (const auto& formula : spec.exact) {
     const size_t i = static_cast<size_t>(std::find(names_.begin(), names_.end(), formula.name) - names_.begin());
@@ -765,7 +896,7 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
   // the derived slots, from the parameters (each reads parameters and numbers only)
   for (const Tape& t : derived.tapes) depth_ = std::max(depth_, t.depth);
   for (const Tape& t : derived.tapes) p_.push_back(run(t, 0, nullptr, p_.data(), scratch(depth_)));
-  for (const auto* tapes : {&rhs_, &jacobian_, &exact_})
+  for (const auto* tapes : {&rhs_, &exact_})
     for (const Tape& t : *tapes) depth_ = std::max(depth_, t.depth);
   if (energy_) depth_ = std::max(depth_, energy_->depth);
 
@@ -800,16 +931,18 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
                                            "solves): errors are not measured against it", mismatch);
   }
 
-  // ---- compiled: the tapes printed as C, built once and cached
+  // ---- the Jacobian and the compiled code. Their size told before either is made: f's instructions and the
+  // nodes of the derivatives (about one instruction a node), at about 20 bytes of C an instruction (measured)
+  size_t instructions = 0;
+  for (const Tape& t : rhs_) instructions += t.code.size();
+  for (const auto& e : f) instructions += work_->differentiate.derivative_nodes(e);
+  const bool large = instructions * 20 > options.background_above;
+  if (!large || !options.compile) jacobian_tapes(true);  // small, or no compile to make it in the background
   if (!options.compile) {
     evaluation_.detail = "the interpreter was asked for";
     return;
   }
-  // the C's size told from the tapes before any is printed (measured: about 20 bytes of C an instruction)
-  size_t instructions = 0;
-  for (const auto* tapes : {&rhs_, &jacobian_})
-    for (const Tape& t : *tapes) instructions += t.code.size();
-  if (instructions * 20 <= options.background_above) {
+  if (!large) {
     const NativeSource source = native_source(options);
     std::string why;
     const auto code = load_native(source, CompileLimits{options.compile_seconds, nullptr}, why);
@@ -819,9 +952,14 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
   // large: the interpreter runs while the C is printed and compiled, and f switches to the compiled code when it
   // is loaded (the same bits: the same operations in the same order)
   evaluation_.background = true;
-  evaluation_.detail = fmt::format("the interpreter, while f and its Jacobian ({} operations) are compiled in the background", instructions);
+  evaluation_.detail = fmt::format("the interpreter, while f and its Jacobian (about {} operations) are made and compiled in the background", instructions);
   background_ = std::thread([this, options] {
     const auto start = std::chrono::steady_clock::now();
+    try {
+      jacobian_tapes();
+    } catch (const Cancelled&) {
+      return;
+    }
     const NativeSource source = native_source(options);
     std::string why;
     auto code = cached_native(source);
@@ -837,11 +975,45 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
   });
 }
 
+// the exact Jacobian and its pattern, column by column, the diagonal always in it (the Newton matrix I - h J has
+// it); then the formulas are let go. `ginac_held`: the caller holds ginac_mutex (the constructor); else it is taken
+// a column at a time, so that a large system's Jacobian made in the background does not hold other models back
+void Equations::make_jacobian(bool ginac_held) const {
+  auto J = std::make_unique<JacobianTapes>();
+  JacobianWork& w = *work_;
+  const size_t n = names_.size();
+  J->columns.push_back(0);
+  for (size_t c = 0; c < n; ++c) {
+    std::unique_lock lock(ginac_mutex, std::defer_lock);
+    if (!ginac_held) lock.lock();
+    if (cancel_.load()) throw Cancelled{};
+    for (size_t r = 0; r < n; ++r) {
+      const GiNaC::ex d = w.differentiate.derivative(w.f[r], static_cast<int>(c));
+      if (d.is_zero() && r != c) continue;
+      J->rows.push_back(static_cast<int>(r));
+      J->tapes.push_back(TapeBuilder(w.symbols, w.derived, fmt::format("{} (its derivative in {})", w.where[r], names_[c])).build(d));
+    }
+    J->columns.push_back(static_cast<int>(J->rows.size()));
+  }
+  // the derived slots: f's (p_), then the Jacobian's own, each from the parameters
+  J->p = p_;
+  for (const Tape& t : J->tapes) J->depth = std::max(J->depth, t.depth);
+  for (size_t k = J->p.size() - static_cast<size_t>(w.derived.first_slot); k < w.derived.tapes.size(); ++k) {
+    J->depth = std::max(J->depth, w.derived.tapes[k].depth);
+    J->p.push_back(run(w.derived.tapes[k], 0, nullptr, J->p.data(), scratch(J->depth)));
+  }
+  jacobian_ = std::move(J);
+  std::unique_lock lock(ginac_mutex, std::defer_lock);
+  if (!ginac_held) lock.lock();
+  work_.reset();
+}
+
 // f and its Jacobian as C in units, at the optimisation level for its size; its size noted in the evaluation
 // (by the constructor, or by the background compile under evaluation_mutex_)
 NativeSource Equations::native_source(const EquationsOptions& options) {
-  NativeSource source = c_source(rhs_, jacobian_, options.function_bytes, options.unit_bytes);
-  if (source.bytes() > options.optimise_below) source.optimisation = "-O1";
+  NativeSource source = c_source(rhs_, jacobian_tapes().tapes, options.function_bytes, options.unit_bytes);
+  if (source.bytes() > options.optimise_none_above) source.optimisation = "-O0";
+  else if (source.bytes() > options.optimise_below) source.optimisation = "-O1";
   if (!evaluation_.background) {
     evaluation_.source_bytes = source.bytes();
     evaluation_.units = static_cast<int>(source.units.size());
@@ -865,9 +1037,12 @@ bool Equations::adopt(std::shared_ptr<const NativeCode> code) {
                            ? fmt::format("{} (compiled in the background in {:.3g} s; the interpreter ran until then)", native_->path(), evaluation_.compile_seconds)
                            : native_->path();
   // the inline path only from the constructor: a capability is not to change under a running stepper
-  if (const auto n = size(); !evaluation_.background && n == 2) inline_rhs_ = InlineRhs{NativeRhs<2>{rhs, p_.data()}};
-  else if (!evaluation_.background && n == 3) inline_rhs_ = InlineRhs{NativeRhs<3>{rhs, p_.data()}};
-  else if (!evaluation_.background && n == 4) inline_rhs_ = InlineRhs{NativeRhs<4>{rhs, p_.data()}};
+  if (void* values = native_->symbol("stepwise_rhs_values"); values && !evaluation_.background) {
+    const auto n = size();
+    if (n == 2) inline_rhs_ = InlineRhs{NativeRhs<2>{reinterpret_cast<NativeValuesFn<2>::type>(values), p_.data()}};
+    else if (n == 3) inline_rhs_ = InlineRhs{NativeRhs<3>{reinterpret_cast<NativeValuesFn<3>::type>(values), p_.data()}};
+    else if (n == 4) inline_rhs_ = InlineRhs{NativeRhs<4>{reinterpret_cast<NativeValuesFn<4>::type>(values), p_.data()}};
+  }
   return true;
 }
 

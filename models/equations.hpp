@@ -84,6 +84,7 @@ struct EquationsOptions {
   size_t function_bytes = 64 << 10;       // C in one function at most (a longer f is split into parts)
   size_t unit_bytes = 1 << 20;            // C in one compiler call at most (units compiled in parallel)
   size_t optimise_below = 1 << 20;        // -O2 below this much C, -O1 above
+  size_t optimise_none_above = 4 << 20;   // -O0 above this much C (a MB at -O2, -O1, -O0: 9.1, 7.4, 2.9 s here)
   size_t background_above = 256 << 10;    // more C: compiled in the background while the interpreter runs
   double compile_seconds = 600;           // the compiler's time limit; past it, the interpreter, saying so
 };

@@ -41,9 +41,9 @@ void require_positive(std::optional<double> value, const std::string& where) {
 
 PreparedRun prepare_run(const RunOptions& o) { return prepare_run(o, load_scene(o.scene_file)); }
 
-std::pair<std::string, std::string> default_method(const Model& model, double t_end, bool fixed_step) {
+std::pair<std::string, std::string> default_method(const Model* model, double t_end, bool fixed_step) {
   if (fixed_step) return {"rk4", "no method named, a step given: rk4, the classical fixed-step method"};
-  const auto decay = fastest_decay(model, 0, model.initial_state());
+  const auto decay = fastest_decay(*model, 0, model->initial_state());
   if (decay && t_end * *decay >= stiffness_threshold)
     return {"cvode-bdf", fmt::format("no method named: cvode-bdf (variable-order BDF), as the system is stiff at its start (t_end x fastest decay "
                                      "= {:.3g}, over {:g})", t_end * *decay, stiffness_threshold)};
@@ -52,97 +52,60 @@ std::pair<std::string, std::string> default_method(const Model& model, double t_
                                      decay ? fmt::format(" = {:.3g}, under {:g}", t_end * *decay, stiffness_threshold) : std::string(" not known: no Jacobian"))};
 }
 
-PreparedRun prepare_run(const RunOptions& o, Scene scene) {
-  PreparedRun p;
-  p.scene = std::move(scene);
-  Scene& s = p.scene;
+namespace {
 
-  // parameters: the scene's, then --set overrides
-  Params values = s.parameters;
+// the scene's parameters with the --set overrides over them, and for each overridden key the option that set it
+struct Values {
+  Params values;
   std::map<std::string, std::string, std::less<>> set_origin;
+  // where a key's value came from: "--set key", or the scene's parameters.key
+  std::string where(const Scene& s, const std::string& key) const {
+    const auto origin = set_origin.find(key);
+    return origin != set_origin.end() ? origin->second : s.where("parameters." + key);
+  }
+};
+
+Values overridden(const RunOptions& o, const Scene& s) {
+  Values v{s.parameters, {}};
   for (const auto& set : o.sets) {
     const auto eq = set.find('=');
     if (eq == std::string::npos || eq == 0) throw InputError(fmt::format("--set {}: expected key=value", set));
     const std::string key = set.substr(0, eq);
     const auto value = parse_number(set.substr(eq + 1));
     if (!value) throw InputError(fmt::format("--set {}: value '{}' is not a number", key, set.substr(eq + 1)));
-    values[key] = *value;
-    set_origin[key] = "--set " + key;
+    v.values[key] = *value;
+    v.set_origin[key] = "--set " + key;
   }
-  const ModelInfo* info = s.equations ? nullptr : find_model(s.model);
-  if (!info && !s.equations) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
-  if (s.mesh && (!info || !info->make_with_mesh)) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
-  if (s.pins && (!info || !info->make_with_pins)) throw InputError(fmt::format("{}: model {} takes no pins", s.where("pins"), s.model));
-  const std::string output_dt_origin = o.output_dt ? std::string("--output-dt")
-                                       : s.output_dt ? s.where("run.output_dt")
-                                                     : std::string("the default output step (t_end / 1000)");
-  // the output budget before a model whose size its parameters set is made: at least the rows an output step
-  // gives once rounded to a fixed step (at most 1.5 times longer) times its columns, against the space where it goes
-  if (info && info->output_columns && !o.out.empty()) try {
-      const Params resolved = resolve_params(*info, values);
-      const double t_end = o.t_end.value_or(s.t_end.value_or(10.0)), output_dt = o.output_dt.value_or(s.output_dt.value_or(t_end / 1000));
-      const double columns = info->output_columns(resolved);
-      const double at_least = trajectory_bytes(std::floor(t_end / (1.5 * output_dt)), columns);
-      const auto free_bytes = free_bytes_at(o.out);
-      if (std::isfinite(t_end) && t_end > 0 && output_dt > 0 && free_bytes && at_least > *free_bytes)
-        throw InputError(fmt::format("{}: the trajectory, a row every {:g} s of {:.0f} columns, would take at least {:.3g} GB, more than the {:.3g} GB "
-                                     "free in {}: sample less often (--output-dt)",
-                                     output_dt_origin, output_dt, columns + 2, at_least / 1e9, *free_bytes / 1e9, o.out));
-    } catch (const BadParameter&) {
-      // the model's own check below names it
-    }
+  return v;
+}
+
+std::string where_method(const RunOptions& o, const Scene& s) { return o.method ? "--method" : s.where("run.method"); }
+
+// a method's step control from the options over the scene's: adaptive (rtol, atol) where a tolerance is given, or
+// no step is and the method adapts; else the fixed step, which a fixed-step method must be given. Checked by the
+// method's own check, the one every way into a method goes through
+StepControl step_control(const RunOptions& o, const Scene& s, const Method& method, StepControl control) {
+  const bool adaptive = o.rtol || o.atol || (!o.dt && (!s.dt || !method.fixed_step()) && method.adaptive());
+  if (adaptive) {
+    control.rtol = o.rtol.value_or(s.rtol.value_or(control.rtol));
+    control.atol = o.atol.value_or(s.atol.value_or(control.atol));
+  } else {
+    control.dt = o.dt ? o.dt : s.dt;
+    if (!control.dt) throw InputError(fmt::format("{}: {} is a fixed-step method and neither --dt nor run.dt is given", s.file, method.name));
+  }
   try {
-    if (s.equations) {
-      // the user's equations: parameters and initial values by name, --set on either (models/equations.hpp)
-      p.model = make_equations(*s.equations, values);
-      p.params = s.equations->parameters;
-      for (const auto& [key, value] : s.equations->initial) p.params[key] = value;
-      for (const auto& [key, value] : values) p.params[key] = value;
-    } else {
-      p.params = resolve_params(*info, values);
-      p.model = s.mesh ? info->make_with_mesh(p.params, *s.mesh) : s.pins ? info->make_with_pins(p.params, *s.pins) : info->make(p.params);
-    }
-  } catch (const BadEquations& e) {
-    throw InputError(e.what());
-  } catch (const BadParameter& e) {
-    const auto origin = set_origin.find(e.key);
-    throw InputError(fmt::format("{}: {}", origin != set_origin.end() ? origin->second
-                                           : e.key == "mesh"             ? s.where("mesh")
-                                           : e.key == "pins"             ? s.where("pins")
-                                                                         : s.where("parameters." + e.key),
-                                 e.what()));
+    check_step_control(method, control);
+  } catch (const BadMethod& e) {
+    throw InputError(fmt::format("{}: {}", adaptive ? "--rtol" : "--dt", e.what()));
   }
+  return control;
+}
+std::string where_dt(const RunOptions& o, const Scene& s) { return o.dt ? "--dt" : s.where("run.dt"); }
 
-  // a state that overflows from the start (a speed of 1e200 m/s squares to infinity) is refused, not run
-  {
-    const Eigen::VectorXd y0 = p.model->initial_state();
-    if (!y0.allFinite()) throw InputError(fmt::format("{}: the parameters give a non-finite initial state", s.where("parameters")));
-    if (const auto e0 = p.model->energy(y0); e0 && !std::isfinite(*e0))
-      throw InputError(fmt::format("{}: the parameters give an initial energy that overflows ({})", s.where("parameters"), *e0));
-    // the blow-up test compares |y| with blowup x max(1, |y0|): a start so large that the bound overflows (an angle
-    // of 1e308) could never be seen to diverge, and ran to `ok` with an error of 1e308. Refused, naming the
-    // parameter that gave the entry where one did (else the state entry)
-    Eigen::Index at = 0;
-    const double largest = y0.size() ? y0.cwiseAbs().maxCoeff(&at) : 0.0;
-    if (const StepControl control{}; !std::isfinite(divergence_bound(control, largest))) {
-      std::string where = s.where("parameters");
-      for (const auto& [key, value] : values)
-        if (std::abs(value) == largest) where = set_origin.count(key) ? set_origin.at(key) : s.where("parameters." + key);
-      const auto names = p.model->state_names();
-      throw InputError(fmt::format("{}: the initial {} = {:g} is too large for a run to tell divergence from it (the blow-up test at {:g} "
-                                   "x |y0| overflows above |y0| = {:.3g})",
-                                   where, at < static_cast<Eigen::Index>(names.size()) ? names[static_cast<size_t>(at)] : "state", y0[at],
-                                   control.blowup, std::numeric_limits<double>::max() / control.blowup));
-    }
-  }
-
-  // method and step control: the command line wins over the scene; --dt and --rtol exclude each other. Neither
-  // naming a method: one chosen for the scene, and said why (default_method)
-  p.t_end = o.t_end.value_or(s.t_end.value_or(10.0));
-  if (o.method || s.method) p.method = o.method ? *o.method : *s.method;
-  else std::tie(p.method, p.method_choice) = default_method(*p.model, p.t_end, o.dt || s.dt);
-  const Method* method = find_method(p.method);
-  if (!method) throw InputError(fmt::format("{}: unknown method '{}' (see `stepwise methods`)", o.method ? "--method" : s.where("run.method"), p.method));
+// the options' values on their own: each number in range, the names known, the step control a named method takes,
+// and the budgets of steps and output rows. All before a model is made (a user's large system takes seconds to)
+void check_options(const RunOptions& o, PreparedRun& p) {
+  const Scene& s = p.scene;
   if (o.dt && (o.rtol || o.atol)) throw InputError("--dt: give either --dt or --rtol/--atol, not both");
   require_positive(o.dt, "--dt");
   require_positive(o.rtol, "--rtol");
@@ -157,89 +120,174 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   // a relative tolerance of 1 or more asks for no digit at all
   for (const auto& [value, where] : {std::pair{o.rtol, std::string("--rtol")}, std::pair{s.rtol, s.where("run.rtol")}})
     if (value && *value >= 1) throw InputError(fmt::format("{}: a relative tolerance must be below 1, got {}", where, *value));
-
-  const bool adaptive = o.rtol || o.atol || (!o.dt && (!s.dt || !method->fixed_step()) && method->adaptive());
-  if (adaptive) {
-    p.control.rtol = o.rtol.value_or(s.rtol.value_or(p.control.rtol));
-    p.control.atol = o.atol.value_or(s.atol.value_or(p.control.atol));
-  } else {
-    p.control.dt = o.dt ? o.dt : s.dt;
-    if (!p.control.dt) throw InputError(fmt::format("{}: {} is a fixed-step method and neither --dt nor run.dt is given", s.file, p.method));
-  }
-  // the method's own check, the one every way into a method goes through
-  try {
-    check_step_control(*method, p.control);
-  } catch (const BadMethod& e) {
-    throw InputError(fmt::format("{}: {}", adaptive ? "--rtol" : "--dt", e.what()));
-  }
-  if (const double bytes = dense_matrix_bytes(*method, *p.model); over_memory_budget(bytes))
-    throw InputError(fmt::format("{}: {} keeps dense {} x {} matrices ({:.3g} GiB) for this {}-entry state, {}: use an explicit method{}",
-                                 o.method ? "--method" : s.where("run.method"), p.method, p.model->size(), p.model->size(),
-                                 bytes / 0x1p30, p.model->size(), memory_budget_text(),
-                                 p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
-  // and the time: a dense LU of the Newton matrix takes (2/3) n^3 flops, at least once per step; past 1e12 (a
-  // minute or more on one core here) a run of any length takes hours
-  if (const double n = p.model->size(); dense_matrix_bytes(*method, *p.model) > 0 && 2.0 / 3.0 * n * n * n > 1e12)
-    throw InputError(fmt::format("{}: {} factorises a dense {} x {} Newton matrix, {:.2g} flops each time (at least once a step): "
-                                 "too slow to run; use an explicit method{}", o.method ? "--method" : s.where("run.method"), p.method,
-                                 p.model->size(), p.model->size(), 2.0 / 3.0 * n * n * n,
-                                 p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : ""));
-  if (!method_applies(*method, *p.model))
-    throw InputError(fmt::format("{}: {} (model {})", o.method ? "--method" : s.where("run.method"), method_requirement(*method, *p.model), s.model));
-  // a method with a device of its own (a GPU method: its grid must be a texture the device renders to) is asked
-  if (method->device_problem)
-    if (const std::string problem = method->device_problem(*p.model); !problem.empty())
-      throw InputError(fmt::format("{}: {}: {}", o.method ? "--method" : s.where("run.method"), p.method, problem));
-
   const std::string location = o.event_location.value_or(s.event_location.value_or("linear"));
   if (location == "restep") p.control.event_location = EventLocation::restep;
   else if (location != "linear")
     throw InputError(fmt::format("{}: event location '{}' is neither linear nor restep",
                                  o.event_location ? "--event-location" : s.where("run.event_location"), location));
-
-  if (p.control.dt && *p.control.dt > p.t_end)
-    throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.t_end));
-  // a step past the method's stability limit is the user's to try: said (once: by rank 0 under mpirun), then
-  // run, and reported diverged
-  const bool speaks = ranks::rank() == 0;
-  if (const auto* grid = p.model->as<WaveGridView>(); grid && p.control.dt && method->stability.wave_dt)
-    if (const double limit = method->stability.wave_dt(*grid); *p.control.dt > limit && speaks)
-      fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s on this grid (d = {} m, c = {} m/s, "
-                 "mu = {} 1/s); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method, limit,
-                 grid->spacing, grid->c, grid->mu);
-  // and on a mass-spring system, the limit its stiffest mode sets at the start (verification/stability.hpp), for
-  // the methods that have one (asked first with any mode, so the eigenproblem is solved only for those)
-  if (p.model->as<MassSpringView>() && p.control.dt && method->stability.oscillator_dt && speaks) {
-    const StiffestMode mode = stiffest_mode(*p.model, 0, p.model->initial_state());
-    if (const double limit = method->stability.oscillator_dt(mode.omega, mode.damping); *p.control.dt > limit)
-      fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s for this system's stiffest mode (omega = {:.6g} "
-                 "rad/s, damping {:.3g} 1/s at the start); running it anyway\n", o.dt ? "--dt" : s.where("run.dt"), *p.control.dt, p.method,
-                 limit, mode.omega, mode.damping);
-  }
-  p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
-  p.output_dt_origin = output_dt_origin;
-  // budgets, from the inputs alone, before anything runs: the steps and the output rows
   const double max_steps = o.max_steps.value_or(default_max_steps);
   if (o.max_steps && !(max_steps >= 1 && max_steps <= 1e15 && std::floor(max_steps) == max_steps))
     throw InputError(fmt::format("--max-steps {}: must be a whole number in 1..1e15", max_steps));
   p.control.max_steps = static_cast<long>(max_steps);
-  const auto where_t_end = [&] { return o.t_end ? std::string("--t-end") : s.t_end ? s.where("run.t_end") : std::string("t_end"); };
-  if (p.control.dt) {
-    if (const double steps = std::ceil(p.t_end / *p.control.dt * (1 - 1e-12)); steps > max_steps)
-      throw InputError(fmt::format("{} and {}: t_end / dt = {:.3g} steps, more than the {:.3g} allowed: take a larger step or a shorter run, "
-                                   "or raise the limit with --max-steps", o.dt ? "--dt" : s.where("run.dt"), where_t_end(), steps, max_steps));
+  p.t_end = o.t_end.value_or(s.t_end.value_or(10.0));
+  // the method where the inputs name it, or a step does (rk4); else it is chosen once the model is made
+  if (o.method || s.method) {
+    p.method = o.method ? *o.method : *s.method;
+    if (!find_method(p.method)) throw InputError(fmt::format("{}: unknown method '{}' (see `stepwise methods`)", where_method(o, s), p.method));
+  } else if (o.dt || s.dt) {
+    std::tie(p.method, p.method_choice) = default_method(nullptr, p.t_end, true);
   }
-  // a fixed-step run samples on its own step grid: an output time between grid points would shorten a step
-  // and change the very run being sampled (a dt beyond the stability limit would be hidden by short steps).
-  // Rounded first, so that the rows counted are the rows written (an output step of 1e-16 at dt = 1e-3 is one
-  // row a step, not 1e13 rows)
-  if (p.control.dt) p.output_dt = std::max(1.0, std::round(p.output_dt / *p.control.dt)) * *p.control.dt;
-  const double rows = std::floor(p.t_end / p.output_dt);
+  // the step: the method's control, told now wherever the method is (a method chosen later is adaptive)
+  if (!p.method.empty()) p.control = step_control(o, s, *find_method(p.method), p.control);
+  const double dt = p.control.dt.value_or(0);
+  if (dt > p.t_end) throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", where_dt(o, s), dt, p.t_end));
+  const auto where_t_end = [&] { return o.t_end ? std::string("--t-end") : s.t_end ? s.where("run.t_end") : std::string("t_end"); };
+  if (dt > 0)
+    if (const double steps = std::ceil(p.t_end / dt * (1 - 1e-12)); steps > max_steps)
+      throw InputError(fmt::format("{} and {}: t_end / dt = {:.3g} steps, more than the {:.3g} allowed: take a larger step or a shorter run, "
+                                   "or raise the limit with --max-steps", where_dt(o, s), where_t_end(), steps, max_steps));
+  // the output rows: a fixed-step run samples on its own step grid (an output time between grid points would
+  // shorten a step and change the very run being sampled: a dt beyond the stability limit would be hidden by short
+  // steps); rounded first, so that the rows counted are the rows written (an output step of 1e-16 at dt = 1e-3 is
+  // one row a step, not 1e13 rows). A run that turns out adaptive samples at the output step as given
+  p.output_dt_origin = o.output_dt ? std::string("--output-dt") : s.output_dt ? s.where("run.output_dt") : std::string("the default output step (t_end / 1000)");
+  p.output_dt = o.output_dt.value_or(s.output_dt.value_or(p.t_end / 1000));
+  const double rows = std::floor(p.t_end / (dt > 0 ? std::max(1.0, std::round(p.output_dt / dt)) * dt : p.output_dt));
   if (rows > max_steps)
     throw InputError(fmt::format("{}: t_end / output_dt = {:.3g} output rows, more than the {:.3g} allowed: sample less often, or raise "
                                  "the limit with --max-steps", p.output_dt_origin, rows, max_steps));
+}
+
+// the trajectory's size before a model whose size its parameters set is made: at least the rows an output step
+// gives once rounded to a fixed step (at most 1.5 times longer) times its columns, against the space where it goes
+void check_output_before_model(const RunOptions& o, const PreparedRun& p, const ModelInfo& info, const Params& values) {
+  if (!info.output_columns || o.out.empty()) return;
+  try {
+    const double columns = info.output_columns(resolve_params(info, values));
+    const double at_least = trajectory_bytes(std::floor(p.t_end / (1.5 * p.output_dt)), columns);
+    if (const auto free_bytes = free_bytes_at(o.out); free_bytes && at_least > *free_bytes)
+      throw InputError(fmt::format("{}: the trajectory, a row every {:g} s of {:.0f} columns, would take at least {:.3g} GB, more than the {:.3g} GB "
+                                   "free in {}: sample less often (--output-dt)",
+                                   p.output_dt_origin, p.output_dt, columns + 2, at_least / 1e9, *free_bytes / 1e9, o.out));
+  } catch (const BadParameter&) {
+    // the model's own check names it
+  }
+}
+
+// the model, from the scene's equations or the table of built-in models, with the values applied
+void make_model(const RunOptions& o, PreparedRun& p, const Values& v) {
+  const Scene& s = p.scene;
+  const ModelInfo* info = s.equations ? nullptr : find_model(s.model);
+  if (!info && !s.equations) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
+  if (s.mesh && (!info || !info->make_with_mesh)) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
+  if (s.pins && (!info || !info->make_with_pins)) throw InputError(fmt::format("{}: model {} takes no pins", s.where("pins"), s.model));
+  if (info) check_output_before_model(o, p, *info, v.values);
+  try {
+    if (s.equations) {
+      // the user's equations: parameters and initial values by name, --set on either (models/equations.hpp)
+      p.model = make_equations(*s.equations, v.values);
+      p.params = s.equations->parameters;
+      for (const auto& [key, value] : s.equations->initial) p.params[key] = value;
+      for (const auto& [key, value] : v.values) p.params[key] = value;
+    } else {
+      p.params = resolve_params(*info, v.values);
+      p.model = s.mesh ? info->make_with_mesh(p.params, *s.mesh) : s.pins ? info->make_with_pins(p.params, *s.pins) : info->make(p.params);
+    }
+  } catch (const BadEquations& e) {
+    throw InputError(e.what());
+  } catch (const BadParameter& e) {
+    throw InputError(fmt::format("{}: {}", e.key == "mesh" ? s.where("mesh") : e.key == "pins" ? s.where("pins") : v.where(s, e.key), e.what()));
+  }
+}
+
+// a state that overflows from the start (a speed of 1e200 m/s squares to infinity) is refused, not run
+void check_initial_state(const PreparedRun& p, const Values& v) {
+  const Scene& s = p.scene;
+  const Eigen::VectorXd y0 = p.model->initial_state();
+  if (!y0.allFinite()) throw InputError(fmt::format("{}: the parameters give a non-finite initial state", s.where("parameters")));
+  if (const auto e0 = p.model->energy(y0); e0 && !std::isfinite(*e0))
+    throw InputError(fmt::format("{}: the parameters give an initial energy that overflows ({})", s.where("parameters"), *e0));
+  // the blow-up test compares |y| with blowup x max(1, |y0|): a start so large that the bound overflows (an angle
+  // of 1e308) could never be seen to diverge, and ran to `ok` with an error of 1e308. Refused, naming the
+  // parameter that gave the entry where one did (else the state entry)
+  Eigen::Index at = 0;
+  const double largest = y0.size() ? y0.cwiseAbs().maxCoeff(&at) : 0.0;
+  if (const StepControl control{}; !std::isfinite(divergence_bound(control, largest))) {
+    std::string where = s.where("parameters");
+    for (const auto& [key, value] : v.values)
+      if (std::abs(value) == largest) where = v.where(s, key);
+    const auto names = p.model->state_names();
+    throw InputError(fmt::format("{}: the initial {} = {:g} is too large for a run to tell divergence from it (the blow-up test at {:g} "
+                                 "x |y0| overflows above |y0| = {:.3g})",
+                                 where, at < static_cast<Eigen::Index>(names.size()) ? names[static_cast<size_t>(at)] : "state", y0[at],
+                                 control.blowup, std::numeric_limits<double>::max() / control.blowup));
+  }
+}
+
+// the method (named, or chosen for the model: default_method) and its step control: the command line wins over
+// the scene. Then what the method asks of the model: memory, time, what it applies to, its device
+void choose_method(const RunOptions& o, PreparedRun& p) {
+  const Scene& s = p.scene;
+  if (p.method.empty()) {
+    std::tie(p.method, p.method_choice) = default_method(p.model.get(), p.t_end, false);
+    p.control = step_control(o, s, *find_method(p.method), p.control);
+  }
+  const Method* method = find_method(p.method);
+  const std::string sparse_hint = p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : "";
+  if (const double bytes = dense_matrix_bytes(*method, *p.model); over_memory_budget(bytes))
+    throw InputError(fmt::format("{}: {} keeps dense {} x {} matrices ({:.3g} GiB) for this {}-entry state, {}: use an explicit method{}",
+                                 where_method(o, s), p.method, p.model->size(), p.model->size(), bytes / 0x1p30, p.model->size(),
+                                 memory_budget_text(), sparse_hint));
+  // and the time: a dense LU of the Newton matrix takes (2/3) n^3 flops, at least once per step; past 1e12 (a
+  // minute or more on one core here) a run of any length takes hours
+  if (const double n = p.model->size(); dense_matrix_bytes(*method, *p.model) > 0 && 2.0 / 3.0 * n * n * n > 1e12)
+    throw InputError(fmt::format("{}: {} factorises a dense {} x {} Newton matrix, {:.2g} flops each time (at least once a step): "
+                                 "too slow to run; use an explicit method{}", where_method(o, s), p.method, p.model->size(), p.model->size(),
+                                 2.0 / 3.0 * n * n * n, sparse_hint));
+  if (!method_applies(*method, *p.model))
+    throw InputError(fmt::format("{}: {} (model {})", where_method(o, s), method_requirement(*method, *p.model), s.model));
+  // a method with a device of its own (a GPU method: its grid must be a texture the device renders to) is asked
+  if (method->device_problem)
+    if (const std::string problem = method->device_problem(*p.model); !problem.empty())
+      throw InputError(fmt::format("{}: {}: {}", where_method(o, s), p.method, problem));
+}
+
+// a step past the method's stability limit is the user's to try: said (once: by rank 0 under mpirun), then run,
+// and reported diverged
+void warn_past_stability(const RunOptions& o, const PreparedRun& p) {
+  if (!p.control.dt || ranks::rank() != 0) return;
+  const Scene& s = p.scene;
+  const Method& method = *find_method(p.method);
+  if (const auto* grid = p.model->as<WaveGridView>(); grid && method.stability.wave_dt)
+    if (const double limit = method.stability.wave_dt(*grid); *p.control.dt > limit)
+      fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s on this grid (d = {} m, c = {} m/s, "
+                 "mu = {} 1/s); running it anyway\n", where_dt(o, s), *p.control.dt, p.method, limit, grid->spacing, grid->c, grid->mu);
+  // and on a mass-spring system, the limit its stiffest mode sets at the start (verification/stability.hpp), for
+  // the methods that have one (asked first with any mode, so the eigenproblem is solved only for those)
+  if (p.model->as<MassSpringView>() && method.stability.oscillator_dt) {
+    const StiffestMode mode = stiffest_mode(*p.model, 0, p.model->initial_state());
+    if (const double limit = method.stability.oscillator_dt(mode.omega, mode.damping); *p.control.dt > limit)
+      fmt::print(stderr, "{}: warning: dt = {} s is past {}'s stability limit {:.6g} s for this system's stiffest mode (omega = {:.6g} "
+                 "rad/s, damping {:.3g} 1/s at the start); running it anyway\n", where_dt(o, s), *p.control.dt, p.method,
+                 limit, mode.omega, mode.damping);
+  }
+}
+
+}  // namespace
+
+PreparedRun prepare_run(const RunOptions& o, Scene scene) {
+  PreparedRun p;
+  p.scene = std::move(scene);
+  check_options(o, p);
+  const Values values = overridden(o, p.scene);
+  make_model(o, p, values);
+  check_initial_state(p, values);
+  choose_method(o, p);
+  warn_past_stability(o, p);
+  // the trajectory: the output step on the step grid of a fixed-step run (check_options), rows times columns
+  if (p.control.dt) p.output_dt = std::max(1.0, std::round(p.output_dt / *p.control.dt)) * *p.control.dt;
   const double columns = static_cast<double>(p.model->summary_names().empty() ? p.model->state_names().size() : p.model->summary_names().size());
-  p.output_bytes = trajectory_bytes(rows, columns);
+  p.output_bytes = trajectory_bytes(std::floor(p.t_end / p.output_dt), columns);
   return p;
 }
 

@@ -42,10 +42,10 @@ struct PreparedRun {
   int ranks = 1;            // the MPI ranks the run uses: 1, or under mpirun all of them for a split run (run/distributed_run.hpp)
 };
 
-// the method for a scene that names none, and why: rk4 where a step is given; else cvode-bdf where the system is
-// stiff at its start (t_end times the fastest decay rate of its Jacobian at least stiffness_threshold), else
-// tsitouras54
-std::pair<std::string, std::string> default_method(const Model& model, double t_end, bool fixed_step);
+// the method for a scene that names none, and why: rk4 where a step is given (`model` unused, may be null); else
+// cvode-bdf where the system is stiff at its start (t_end times the fastest decay rate of its Jacobian at least
+// stiffness_threshold), else tsitouras54
+std::pair<std::string, std::string> default_method(const Model* model, double t_end, bool fixed_step);
 
 // the options checked against the scene, its model and the method; InputError (or BadMethod) naming the
 // file, line, key or option at fault

@@ -134,8 +134,11 @@ class Stages {
     evaluate(t + T::c[I] * h, tmp, I);
   }
 
-  // k_j = f(t, y), y the step's start or the stage's argument (tmp_), counted either way
-  void evaluate(double t, const double* y, int j) {
+  // k_j = f(t, y), y the step's start or the stage's argument (tmp_), counted either way. Inlined into each stage,
+  // so that an inline f not seen by the compiler (a scene's compiled equations) gets the stage's values from the
+  // registers that computed them rather than from their stores (verner98 on the written pendulum: 1.13-1.23 times
+  // the built-in model out of line)
+  __attribute__((always_inline)) void evaluate(double t, const double* y, int j) {
     if constexpr (inline_f) {
       ++system_.stats().rhs_evals;
       f_(t, y, k(j));

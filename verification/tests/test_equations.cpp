@@ -84,12 +84,13 @@ void wait_compiled(const Model& model) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
 }
 
-// one function, one unit (the default for small systems); parts of a few formulas each in units of two or three
-// parts, compiled in parallel and linked; the same compiled in the background while the interpreter runs
+// one function, one unit (the default for small systems); parts of one or two values each (the values that a later
+// part reads kept in the workspace) in units of one or two parts, compiled in parallel and linked; the same
+// compiled in the background while the interpreter runs
 const std::pair<const char*, EquationsOptions> layouts[] = {
     {"one unit", EquationsOptions{}},
-    {"parts in units", EquationsOptions{.function_bytes = 64, .unit_bytes = 512}},
-    {"in the background", EquationsOptions{.function_bytes = 128, .unit_bytes = 700, .background_above = 0}},  // other units: not in the cache yet
+    {"parts in units", EquationsOptions{.function_bytes = 32, .unit_bytes = 256}},
+    {"in the background", EquationsOptions{.function_bytes = 40, .unit_bytes = 300, .background_above = 0}},  // other units: not in the cache yet
 };
 
 TEST_F(Equations, CompiledAndInterpretedAgreeToTheBitAndTheJacobianIsTheDerivative) {
