@@ -661,6 +661,62 @@ class TapeBuilder {
 // own there, so a name starting with one could be declared and never used)
 bool identifier(const std::string& name) { return std::regex_match(name, std::regex("[A-Za-z][A-Za-z0-9_]*")); }
 
+// the shape: names, one initial value and one equation per variable, nothing else
+void check_shape(const EquationsSpec& spec) {
+  const size_t n = spec.variables.size();
+  if (n == 0) throw BadEquations(fmt::format("{}: the system is empty (variables = [\"x\", ...] names the state)", spec.variables_where));
+  if (n > max_equations)
+    throw BadEquations(fmt::format("{}: {} variables, more than the {} an equations scene may hold", spec.variables_where, n, max_equations));
+  std::set<std::string, std::less<>> seen;
+  for (const auto& name : spec.variables) {
+    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name (a letter, then letters, digits or _)", spec.variables_where, name));
+    if (reserved(name)) throw BadEquations(fmt::format("{}: the variable '{}' would shadow {}", spec.variables_where, name, name == "t" ? "the time t" : "a function or constant of the formulas"));
+    if (!seen.insert(name).second) throw BadEquations(fmt::format("{}: the variable '{}' is named twice", spec.variables_where, name));
+  }
+  for (const auto& [name, value] : spec.parameters) {
+    const std::string where = fmt::format("{}: parameters.{}", spec.file, name);
+    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name a formula can use (a letter, then letters, digits or _)", where, name));
+    if (reserved(name)) throw BadEquations(fmt::format("{}: the parameter '{}' would shadow {}", where, name, name == "t" ? "the time t" : "a function or constant of the formulas"));
+    if (seen.count(name)) throw BadEquations(fmt::format("{}: '{}' is both a variable and a parameter", where, name));
+  }
+  const auto check_cover = [&](const std::vector<Formula>& formulas, std::string_view table, bool required) {
+    for (const auto& f : formulas)
+      if (!seen.count(f.name))
+        throw BadEquations(fmt::format("{}: an {} for '{}', which is not a variable (variables: {}){}", f.where(), table == "equations" ? "equation" : "exact solution",
+                                       f.name, fmt::join(spec.variables, ", "),
+                                       f.name == "energy" ? "; an energy formula goes above the first [table], as TOML puts a key under the table before it" : ""));
+    if (required || !formulas.empty())
+      for (const auto& v : spec.variables)
+        if (std::none_of(formulas.begin(), formulas.end(), [&](const Formula& f) { return f.name == v; }))
+          throw BadEquations(fmt::format("{}: the variable '{}' has no {} ([{}] {} = \"...\")", spec.file, v, table == "equations" ? "equation" : "exact solution", table, v));
+  };
+  check_cover(spec.equations, "equations", true);
+  check_cover(spec.exact, "exact", false);
+  for (const auto& [name, value] : spec.initial)
+    if (!seen.count(name)) throw BadEquations(fmt::format("{}: initial.{}: '{}' is not a variable (variables: {})", spec.file, name, name, fmt::join(spec.variables, ", ")));
+  for (const auto& v : spec.variables)
+    if (!spec.initial.count(v)) throw BadEquations(fmt::format("{}: the variable '{}' has no initial value ([initial] {} = ...)", spec.file, v, v));
+
+}
+
+// the spec's parameters and initial values, with the overrides (--set) applied to a parameter or an initial value
+std::pair<Params, Params> resolved_values(const EquationsSpec& spec, const Params& values) {
+  Params parameters = spec.parameters, initial = spec.initial;
+  for (const auto& [key, value] : values) {
+    Params* target = parameters.count(key) ? &parameters : initial.count(key) ? &initial : nullptr;
+    if (!target) {
+      std::vector<std::string> names;
+      for (const auto& [name, v] : parameters) names.push_back(name);
+      throw BadParameter(key, fmt::format("unknown parameter '{}' of this equations scene (parameters: {}; variables: {})", key,
+                                          names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", ")), fmt::join(spec.variables, ", ")));
+    }
+    if (!std::isfinite(value)) throw BadParameter(key, fmt::format("'{}' must be a finite number, got {}", key, value));
+    (*target)[key] = value;
+  }
+
+  return {parameters, initial};
+}
+
 // ---- the model
 using NativeFn = void (*)(double t, const double* y, const double* p, double* out);
 
@@ -778,7 +834,13 @@ class Equations final : public Model {
   }
   void make_jacobian(bool ginac_held) const;
 
+  // build's steps, in order
   void build(const EquationsSpec& spec, const Params& values, const EquationsOptions& options);
+  void make_symbols(const EquationsSpec& spec, const Params& parameters, const Params& initial);
+  std::vector<const Formula*> make_tapes(const EquationsSpec& spec);
+  void find_second_order();
+  void check_start(const EquationsSpec& spec, const std::vector<const Formula*>& formula_of);
+  void start_native(const EquationsOptions& options);
   bool adopt(std::shared_ptr<const NativeCode> code);
   NativeSource native_source(const EquationsOptions& options);
 
@@ -803,57 +865,9 @@ class Equations final : public Model {
   std::thread background_;               // the compile of a large system, while the interpreter runs
 };
 
-void Equations::build(const EquationsSpec& spec, const Params& values, const EquationsOptions& options) {
-  // ---- the shape: names, one initial value and one equation per variable, nothing else
+// the symbols of the variables and parameters, the parameters' values, the state's names and initial values
+void Equations::make_symbols(const EquationsSpec& spec, const Params& parameters, const Params& initial) {
   const size_t n = spec.variables.size();
-  if (n == 0) throw BadEquations(fmt::format("{}: the system is empty (variables = [\"x\", ...] names the state)", spec.variables_where));
-  if (n > max_equations)
-    throw BadEquations(fmt::format("{}: {} variables, more than the {} an equations scene may hold", spec.variables_where, n, max_equations));
-  std::set<std::string, std::less<>> seen;
-  for (const auto& name : spec.variables) {
-    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name (a letter, then letters, digits or _)", spec.variables_where, name));
-    if (reserved(name)) throw BadEquations(fmt::format("{}: the variable '{}' would shadow {}", spec.variables_where, name, name == "t" ? "the time t" : "a function or constant of the formulas"));
-    if (!seen.insert(name).second) throw BadEquations(fmt::format("{}: the variable '{}' is named twice", spec.variables_where, name));
-  }
-  for (const auto& [name, value] : spec.parameters) {
-    const std::string where = fmt::format("{}: parameters.{}", spec.file, name);
-    if (!identifier(name)) throw BadEquations(fmt::format("{}: '{}' is not a name a formula can use (a letter, then letters, digits or _)", where, name));
-    if (reserved(name)) throw BadEquations(fmt::format("{}: the parameter '{}' would shadow {}", where, name, name == "t" ? "the time t" : "a function or constant of the formulas"));
-    if (seen.count(name)) throw BadEquations(fmt::format("{}: '{}' is both a variable and a parameter", where, name));
-  }
-  const auto check_cover = [&](const std::vector<Formula>& formulas, std::string_view table, bool required) {
-    for (const auto& f : formulas)
-      if (!seen.count(f.name))
-        throw BadEquations(fmt::format("{}: an {} for '{}', which is not a variable (variables: {}){}", f.where(), table == "equations" ? "equation" : "exact solution",
-                                       f.name, fmt::join(spec.variables, ", "),
-                                       f.name == "energy" ? "; an energy formula goes above the first [table], as TOML puts a key under the table before it" : ""));
-    if (required || !formulas.empty())
-      for (const auto& v : spec.variables)
-        if (std::none_of(formulas.begin(), formulas.end(), [&](const Formula& f) { return f.name == v; }))
-          throw BadEquations(fmt::format("{}: the variable '{}' has no {} ([{}] {} = \"...\")", spec.file, v, table == "equations" ? "equation" : "exact solution", table, v));
-  };
-  check_cover(spec.equations, "equations", true);
-  check_cover(spec.exact, "exact", false);
-  for (const auto& [name, value] : spec.initial)
-    if (!seen.count(name)) throw BadEquations(fmt::format("{}: initial.{}: '{}' is not a variable (variables: {})", spec.file, name, name, fmt::join(spec.variables, ", ")));
-  for (const auto& v : spec.variables)
-    if (!spec.initial.count(v)) throw BadEquations(fmt::format("{}: the variable '{}' has no initial value ([initial] {} = ...)", spec.file, v, v));
-
-  // ---- values: the spec's, with the overrides (--set) applied to a parameter or an initial value
-  Params parameters = spec.parameters, initial = spec.initial;
-  for (const auto& [key, value] : values) {
-    Params* target = parameters.count(key) ? &parameters : initial.count(key) ? &initial : nullptr;
-    if (!target) {
-      std::vector<std::string> names;
-      for (const auto& [name, v] : parameters) names.push_back(name);
-      throw BadParameter(key, fmt::format("unknown parameter '{}' of this equations scene (parameters: {}; variables: {})", key,
-                                          names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", ")), fmt::join(spec.variables, ", ")));
-    }
-    if (!std::isfinite(value)) throw BadParameter(key, fmt::format("'{}' must be a finite number, got {}", key, value));
-    (*target)[key] = value;
-  }
-
-  // ---- the symbols and the formulas
   work_ = std::make_unique<JacobianWork>();
   Symbols& s = work_->symbols;
   for (const auto& v : spec.variables) {
@@ -873,6 +887,12 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
   y0_.resize(static_cast<Eigen::Index>(n));
   for (size_t i = 0; i < n; ++i) y0_[static_cast<Eigen::Index>(i)] = initial.at(spec.variables[i]);
 
+}
+
+// the formulas parsed, and their tapes: f's, [exact]'s and the energy's, with the derived slots' values
+std::vector<const Formula*> Equations::make_tapes(const EquationsSpec& spec) {
+  const size_t n = spec.variables.size();
+  Symbols& s = work_->symbols;
   std::vector<GiNaC::ex>& f = work_->f;
   f.resize(n);
   std::vector<const Formula*> formula_of(n);
@@ -900,7 +920,14 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
     for (const Tape& t : *tapes) depth_ = std::max(depth_, t.depth);
   if (energy_) depth_ = std::max(depth_, energy_->depth);
 
-  // x' = v: the first half of the variables' equations are the second half's names
+  return formula_of;
+}
+
+// x' = v: the first half of the variables' equations are the second half's names
+void Equations::find_second_order() {
+  const size_t n = names_.size();
+  const auto& f = work_->f;
+  const auto& s = work_->symbols;
   if (n % 2 == 0) {
     const size_t half = n / 2;
     bool pairs = true;
@@ -909,7 +936,12 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
   }
   evaluation_.second_order = second_order_.positions;
 
-  // ---- finite at the start (each formula named), before anything is compiled
+}
+
+// finite at the start (each formula named), before anything is compiled; [exact] noted where it is not the
+// initial state's
+void Equations::check_start(const EquationsSpec& spec, const std::vector<const Formula*>& formula_of) {
+  const size_t n = names_.size();
   {
     double* stack = scratch(depth_);
     for (size_t i = 0; i < n; ++i)
@@ -931,11 +963,15 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
                                            "solves): errors are not measured against it", mismatch);
   }
 
-  // ---- the Jacobian and the compiled code. Their size told before either is made: f's instructions and the
+}
+
+// the Jacobian and the compiled code, now or (a large system) in the background
+void Equations::start_native(const EquationsOptions& options) {
+  // Their size told before either is made: f's instructions and the
   // nodes of the derivatives (about one instruction a node), at about 20 bytes of C an instruction (measured)
   size_t instructions = 0;
   for (const Tape& t : rhs_) instructions += t.code.size();
-  for (const auto& e : f) instructions += work_->differentiate.derivative_nodes(e);
+  for (const auto& e : work_->f) instructions += work_->differentiate.derivative_nodes(e);
   const bool large = instructions * 20 > options.background_above;
   if (!large || !options.compile) jacobian_tapes(true);  // small, or no compile to make it in the background
   if (!options.compile) {
@@ -973,6 +1009,16 @@ void Equations::build(const EquationsSpec& spec, const Params& values, const Equ
       evaluation_.detail = fmt::format("the interpreter: the background compile of {} of C ended after {:.3g} s: {}", bytes_text(source.bytes()), took,
                                        why.empty() ? "the compiled object lacks its functions" : why);
   });
+}
+
+void Equations::build(const EquationsSpec& spec, const Params& values, const EquationsOptions& options) {
+  check_shape(spec);
+  const auto [parameters, initial] = resolved_values(spec, values);
+  make_symbols(spec, parameters, initial);
+  const std::vector<const Formula*> formula_of = make_tapes(spec);
+  find_second_order();
+  check_start(spec, formula_of);
+  start_native(options);
 }
 
 // the exact Jacobian and its pattern, column by column, the diagonal always in it (the Newton matrix I - h J has
