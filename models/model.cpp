@@ -10,6 +10,7 @@
 #include "particle_system.hpp"
 #include "particles_in_box.hpp"
 #include "pendulum.hpp"
+#include "pendulum_cartesian.hpp"
 #include "projectile.hpp"
 #include "rigid_body.hpp"
 #include "rigid_contact.hpp"
@@ -33,6 +34,8 @@ const std::array model_table{
               pendulum_params(), [](const Params& p) { return make_pendulum(p, false); }},
     ModelInfo{"pendulum-small-angle", "linearised pendulum theta'' + (g/L) theta = 0 (sin theta ~ theta)",
               pendulum_params(), [](const Params& p) { return make_pendulum(p, true); }},
+    ModelInfo{"pendulum-cartesian", "the pendulum as a point mass in the plane held by |x| = L (a distance constraint, compliance alpha); exact for alpha = 0",
+              pendulum_cartesian_params(), [](const Params& p) { return make_pendulum_cartesian(p); }},
     ModelInfo{"flow-particle", "particle carried by the velocity field (x, sin y); exact solution",
               flow_particle_params(), [](const Params& p) { return make_flow_particle(p); }},
     ModelInfo{"flow-particle-3d", "particle carried by the velocity field (x, y, sin x); exact solution via Si",

@@ -369,7 +369,7 @@ py::dict run(const std::string& scene, const std::optional<std::string>& method,
   py::dict d;
   d["columns"] = rows.columns();
   d["values"] = values;
-  d["summary"] = summary_text(p, m);
+  d["summary"] = summary_text(p, m, rows.constraint_drift());
   return d;
 }
 

@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <tuple>
 #include <sys/statvfs.h>
 
 namespace stepwise {
@@ -136,6 +137,15 @@ void check_options(const RunOptions& o, PreparedRun& p) {
     if (!find_method(p.method)) throw InputError(fmt::format("{}: unknown method '{}' (see `stepwise methods`)", where_method(o, s), p.method));
   } else if (o.dt || s.dt) {
     std::tie(p.method, p.method_choice) = default_method(nullptr, p.t_end, true);
+  }
+  // a position-based method's substeps and iterations: whole numbers, and only for such a method
+  for (const auto& [value, option, field] : {std::tuple{o.substeps, "--substeps", &p.control.substeps}, std::tuple{o.iterations, "--iterations", &p.control.iterations}}) {
+    if (!value) continue;
+    if (!(*value >= 1 && *value <= max_substeps && std::floor(*value) == *value))
+      throw InputError(fmt::format("{} {}: must be a whole number in 1..{}", option, *value, max_substeps));
+    if (const Method* m = p.method.empty() ? nullptr : find_method(p.method); !m || !m->substepped)
+      throw InputError(fmt::format("{}: {} takes no substeps or iterations (pbd and xpbd do)", option, p.method.empty() ? "the method chosen for this scene" : p.method));
+    *field = static_cast<int>(*value);
   }
   // the step: the method's control, told now wherever the method is (a method chosen later is adaptive)
   if (!p.method.empty()) p.control = step_control(o, s, *find_method(p.method), p.control);

@@ -20,6 +20,7 @@ struct RunOptions {
   std::optional<std::string> event_location;  // linear | restep
   std::optional<double> dt, rtol, atol, t_end, output_dt;
   std::optional<double> max_steps;  // the steps (and output rows) a run may take; default_max_steps
+  std::optional<double> substeps, iterations;  // a position-based method's (StepControl's)
   std::string out;
 };
 

@@ -2,6 +2,8 @@
 
 #include "run/csv.hpp"
 #include "models/equations.hpp"
+#include "solvers/capabilities/distance_constraints.hpp"
+#include "solvers/method_table.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -17,7 +19,7 @@ std::vector<std::string> sample_names(const Model& model) {
   return names.empty() ? model.state_names() : names;
 }
 
-nlohmann::json summary_json(const PreparedRun& p, const Measured& m) {
+nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::optional<double> constraint_drift) {
   const RunResult& r = m.result;
   nlohmann::json j;
   j["scene"] = p.scene.name;
@@ -56,6 +58,11 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m) {
   j["parameters"] = nlohmann::json::object();
   for (const auto& [key, value] : p.params) j["parameters"][key] = value;
   if (!p.method_choice.empty()) j["method_choice"] = p.method_choice;
+  if (constraint_drift) j["constraint_drift"] = *constraint_drift;
+  if (const Method* method = find_method(p.method); method && method->substepped) {
+    j["substeps"] = p.control.substeps;
+    j["iterations"] = p.control.iterations;
+  }
   // a scene's own equations: whether the compiled right-hand side ran or the interpreter, and why
   if (const auto e = equations_evaluation(*p.model)) {
     // a compile still running in the background when the run ended is stopped with the model
@@ -80,6 +87,7 @@ std::vector<Cell> TrajectoryRows::row(double t, const Eigen::VectorXd& sample, s
   row.reserve(static_cast<size_t>(sample.size()) + 2);
   for (const double v : sample) row.emplace_back(v);
   if (with_energy_) row.emplace_back(*model_.energy(sample));
+  if (const auto* c = model_.summary_names().empty() ? model_.as<DistanceConstraints>() : nullptr) drift_ = std::max(drift_, c->drift(sample.data()));
   for (size_t i = 1; i < row.size() && problem.empty(); ++i)
     if (!std::isfinite(std::get<double>(row[i])))
       problem = fmt::format("{} overflowed ({})", i == static_cast<size_t>(sample.size()) + 1 ? std::string("the energy") : "a sampled value",
@@ -93,7 +101,14 @@ std::optional<std::vector<Cell>> TrajectoryRows::stop_row(const Measured& m, dou
   return row(m.result.t_stop, model_.summary(m.result.y_stop), ignored);
 }
 
-std::string summary_text(const PreparedRun& p, const Measured& m) { return summary_json(p, m).dump(2) + "\n"; }
+std::optional<double> TrajectoryRows::constraint_drift() const {
+  if (!model_.summary_names().empty() || !model_.as<DistanceConstraints>()) return std::nullopt;
+  return drift_;
+}
+
+std::string summary_text(const PreparedRun& p, const Measured& m, std::optional<double> constraint_drift) {
+  return summary_json(p, m, constraint_drift).dump(2) + "\n";
+}
 
 RunOutputs::RunOutputs(const std::filesystem::path& out, const PreparedRun& p) : out_(out), p_(p), trajectory_(out / "trajectory.csv"), rows_(*p.model) {
   std::vector<Cell> header;
@@ -115,7 +130,9 @@ void RunOutputs::finish(const Measured& m) {
   std::error_code ignored;
   std::filesystem::remove(out_ / "summary.json", ignored);  // the manifest goes first and comes back last
   trajectory_.commit();
-  write_file_atomic(out_ / "summary.json", summary_text(p_, m));
+  std::optional<double> drift = rows_.constraint_drift();
+  if (const auto* c = p_.model->as<DistanceConstraints>(); drift && m.result.y_stop.allFinite()) drift = std::max(*drift, c->drift(m.result.y_stop.data()));
+  write_file_atomic(out_ / "summary.json", summary_text(p_, m, drift));
 }
 
 }  // namespace stepwise

@@ -31,15 +31,19 @@ class TrajectoryRows {
   std::vector<Cell> row(double t, const Eigen::VectorXd& sample, std::string& problem) const;
   // the row a run that stopped between output times ends with (after the last output at `last_t`), if any
   std::optional<std::vector<Cell>> stop_row(const Measured& m, double last_t) const;
+  // for a model whose particles are held by distance constraints, the largest |C(x)| / length over the rows made
+  // so far (solvers/capabilities/distance_constraints.hpp); else empty
+  std::optional<double> constraint_drift() const;
 
  private:
   const Model& model_;
   std::vector<std::string> columns_;
   bool with_energy_ = false;
+  mutable double drift_ = 0;
 };
 
-// summary.json's text (DESIGN.md's fields) for a finished run
-std::string summary_text(const PreparedRun& p, const Measured& m);
+// summary.json's text (DESIGN.md's fields) for a finished run; `constraint_drift` where the scene has constraints
+std::string summary_text(const PreparedRun& p, const Measured& m, std::optional<double> constraint_drift = std::nullopt);
 
 class RunOutputs {
  public:

@@ -30,6 +30,11 @@ struct StepControl {
   double blowup = 1e12;  // a state with |y|inf > blowup * max(1, |y0|inf) has diverged
   long max_steps = 5'000'000;  // an adaptive run taking more steps (CVODE: between two outputs) fails
   EventLocation event_location = EventLocation::linear;  // hand-written and GSL steppers; CVODE finds roots itself
+  // a position-based method's frame step dt in `substeps` substeps of `iterations` Gauss-Seidel sweeps over the
+  // constraints each (pbd, xpbd; "small steps" is many substeps of one iteration). PhysX's default of 4
+  // position iterations in one step
+  int substeps = 1;
+  int iterations = 4;
   // what the trajectory keeps at each output time: the whole state when empty, or a summary of it (a
   // particle system's energy and centroid rather than every particle)
   std::function<Eigen::VectorXd(const Eigen::VectorXd& y)> observe;

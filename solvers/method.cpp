@@ -43,6 +43,8 @@ void check_step_control(const Method& method, const StepControl& control) {
     throw BadMethod(fmt::format("dt must be a positive finite number, got {}", *control.dt));
   if (!control.dt && !(control.rtol > 0 && control.atol > 0 && std::isfinite(control.rtol) && std::isfinite(control.atol)))
     throw BadMethod(fmt::format("rtol and atol must be positive finite numbers, got {} and {}", control.rtol, control.atol));
+  if (!(control.substeps >= 1 && control.substeps <= max_substeps && control.iterations >= 1 && control.iterations <= max_substeps))
+    throw BadMethod(fmt::format("substeps and iterations must be whole numbers in 1..{}, got {} and {}", max_substeps, control.substeps, control.iterations));
 }
 
 double dense_matrix_bytes(const Method& method, const OdeSystem& system) {

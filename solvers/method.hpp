@@ -64,6 +64,7 @@ struct Method {
   Stepping stepping = Stepping::fixed;
   Requirement needs;  // the capability it needs of a system (solvers/capabilities/), if any
   DenseMatrices dense = DenseMatrices::none;
+  bool substepped = false;  // takes StepControl's substeps and iterations (the position-based methods)
   OnRanks on_ranks = OnRanks::no;
   MakeIntegrator make;
   Stability stability;
@@ -96,6 +97,9 @@ std::string method_requirement(const Method& method, const OdeSystem& system);
 struct BadMethod : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
+
+// the most substeps a frame, and iterations a substep, a position-based method takes
+inline constexpr int max_substeps = 1000000;
 
 // BadMethod unless the method can be stepped with this control (fixed against adaptive; a finite positive dt,
 // rtol and atol): the one check every way into a method goes through

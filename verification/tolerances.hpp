@@ -517,4 +517,14 @@ inline constexpr double dense_output_rtols = 10;
 inline constexpr double video_noise_levels = 48;
 inline constexpr double video_noise_share = 1e-4;
 
+// position-based dynamics (solvers/methods/position_based.cpp). One projection of a distance constraint with
+// alpha = 0 moves the point by -C along the unit direction: |p - C n| = |p| - C to the rounding of the norm, the
+// division and the update, a few eps of the length (4 eps |x|). XPBD's hanging mass at its static stretch
+// m g alpha is a fixed point of every substep and iteration (dlambda = 0 there): each substep's rounding moves it
+// by at most 4 eps of the length, adding at most linearly over the substeps (the step is contractive). PBD's
+// fixed point differs by a fraction of the stretch (its per-iteration stiffness): over a tenth of it is a
+// different law, not rounding
+inline constexpr double projection_roundoff = 4 * 2.220446049250313e-16;
+inline constexpr double pbd_stretch_differs = 0.1;
+
 }  // namespace stepwise::tolerance

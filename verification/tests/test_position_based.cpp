@@ -1,0 +1,119 @@
+// Position-based dynamics (pbd, xpbd) on the Cartesian pendulum: the claims of Müller et al. (2007) and Macklin,
+// Müller & Chentanez (2016) that the methods' use rests on, each measured.
+#include "models/model.hpp"
+#include "run/measure.hpp"
+#include "solvers/capabilities/distance_constraints.hpp"
+#include "solvers/method_table.hpp"
+#include "verification/tolerances.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+using namespace stepwise;
+
+namespace {
+
+std::unique_ptr<Model> cartesian(double theta0, double compliance, double mass = 1.0) {
+  return make_model("pendulum-cartesian", {{"theta0", theta0}, {"compliance", compliance}, {"mass", mass}});
+}
+
+StepControl frames(double dt, int substeps, int iterations) {
+  StepControl c = StepControl::fixed(dt);
+  c.substeps = substeps;
+  c.iterations = iterations;
+  return c;
+}
+
+RunResult solve(const Model& model, const char* method, const StepControl& control, const Eigen::VectorXd& y0, const std::vector<double>& t_out) {
+  return make_integrator(method, control)->solve(model, 0.0, y0, t_out);
+}
+
+}  // namespace
+
+// one sweep of one iteration puts a point held by an inextensible rod back on its circle, whatever it started
+// from: the projection is exact, to rounding
+TEST(PositionBased, OneIterationWithZeroComplianceSatisfiesTheConstraintToRoundOff) {
+  const auto model = cartesian(1.0, 0.0);
+  for (const char* method : {"xpbd", "pbd"})
+    for (const double speed : {0.0, 3.0, 30.0}) {
+      Eigen::VectorXd y0 = model->initial_state();
+      y0.tail<2>() << speed, -0.5 * speed;  // off the circle's tangent: the free step leaves the circle
+      const RunResult r = solve(*model, method, frames(0.01, 1, 1), y0, {0.01});
+      ASSERT_EQ(r.status, Status::ok) << method;
+      EXPECT_LE(std::abs(r.y_stop.head<2>().norm() - 1.0), tolerance::projection_roundoff) << method << " at speed " << speed;
+    }
+}
+
+// Hooke's law whatever the solver's settings: xpbd's hanging mass rests at the static stretch m g alpha for any
+// substeps and iterations; pbd's rest length moves with the iterations (its compliance is a per-iteration
+// stiffness), and with one iteration the two methods are the same
+TEST(PositionBased, XpbdHangsAtTheStaticStretchMgAlphaAtAnySettingsAndPbdDoesNot) {
+  const double alpha = 1e-3, mass = 2.0, g = 9.81, stretch = mass * g * alpha;
+  const auto model = cartesian(0.0, alpha, mass);
+  Eigen::VectorXd y0(4);
+  y0 << 0, -(1.0 + stretch), 0, 0;
+  std::vector<double> t_out;
+  for (int k = 1; k <= 50; ++k) t_out.push_back(0.02 * k);
+  for (const auto& [substeps, iterations] : {std::pair{1, 1}, {1, 4}, {10, 1}, {4, 10}}) {
+    const StepControl control = frames(1e-3, substeps, iterations);
+    const RunResult x = solve(*model, "xpbd", control, y0, t_out), p = solve(*model, "pbd", control, y0, t_out);
+    ASSERT_EQ(x.status, Status::ok);
+    ASSERT_EQ(p.status, Status::ok);
+    double xpbd_off = 0, pbd_off = 0;
+    for (const auto& y : x.trajectory.y) xpbd_off = std::max(xpbd_off, std::abs(y.head<2>().norm() - (1.0 + stretch)));
+    for (const auto& y : p.trajectory.y) pbd_off = std::max(pbd_off, std::abs(y.head<2>().norm() - (1.0 + stretch)));
+    const double substeps_run = 1000.0 * substeps;  // 1 s of 1 ms frames
+    EXPECT_LE(xpbd_off, substeps_run * tolerance::projection_roundoff) << substeps << " substeps, " << iterations << " iterations";
+    // one iteration from lambda = 0 is the same update in both; from the second on, pbd pulls the whole way again
+    if (iterations == 1) EXPECT_EQ(p.y_stop, x.y_stop) << substeps << " substeps";
+    else EXPECT_GT(pbd_off, tolerance::pbd_stretch_differs * stretch) << substeps << " substeps, " << iterations << " iterations";
+  }
+}
+
+// "small steps": xpbd with one iteration a substep converges to the reduced pendulum at first order in the
+// substep, with the constraint held at round-off throughout
+TEST(PositionBased, XpbdSmallStepsConvergeAtFirstOrderToTheReducedPendulum) {
+  const auto model = cartesian(1.0, 0.0);
+  std::vector<double> log_h, log_error;
+  for (const int substeps : {4, 8, 16, 32, 64}) {
+    const StepControl control = frames(0.01, substeps, 1);
+    const Measured m = run_and_measure(*model, "xpbd", control, 1.0, 0.01);
+    ASSERT_EQ(m.result.status, Status::ok);
+    ASSERT_TRUE(m.error);
+    log_h.push_back(std::log(0.01 / substeps));
+    log_error.push_back(std::log(*m.error));
+    for (const auto& y : m.result.trajectory.y)
+      EXPECT_LE(std::abs(y.head<2>().norm() - 1.0), 100 * substeps * tolerance::projection_roundoff);
+  }
+  // least-squares slope of log error against log h
+  const double n = static_cast<double>(log_h.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (size_t i = 0; i < log_h.size(); ++i) sx += log_h[i], sy += log_error[i], sxx += log_h[i] * log_h[i], sxy += log_h[i] * log_error[i];
+  const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  EXPECT_NEAR(slope, 1.0, tolerance::order_band);
+}
+
+// the same pendulum through an ODE method: the constrained equations of motion reach the reduced pendulum's
+// answer (rk4 at its fourth order), and drift from the constraint by the method's error, not at round-off
+TEST(PositionBased, TheCartesianPendulumOnAnOdeMethodIsTheReducedPendulum) {
+  const auto model = cartesian(1.0, 0.0);
+  const Measured coarse = run_and_measure(*model, "rk4", StepControl::fixed(0.01), 1.0, 0.01);
+  const Measured fine = run_and_measure(*model, "rk4", StepControl::fixed(0.005), 1.0, 0.01);
+  ASSERT_TRUE(coarse.error && fine.error);
+  EXPECT_NEAR(std::log2(*coarse.error / *fine.error), 4.0, 4 * tolerance::order_band);  // two points: a wider band
+  const auto* constraints = model->as<DistanceConstraints>();
+  ASSERT_NE(constraints, nullptr);
+  EXPECT_GT(constraints->drift(coarse.result.y_stop.data()), 0.0);
+}
+
+// a scene without constraints refuses the position-based methods, naming what they need
+TEST(PositionBased, AModelWithoutConstraintsIsRefused) {
+  const auto pendulum = make_model("pendulum", {});
+  for (const char* name : {"pbd", "xpbd"}) {
+    const Method& method = *find_method(name);
+    EXPECT_FALSE(method_applies(method, *pendulum));
+    EXPECT_NE(method_requirement(method, *pendulum).find("distance constraints"), std::string::npos);
+  }
+}
