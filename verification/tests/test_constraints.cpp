@@ -1,5 +1,6 @@
-// Position-based dynamics (pbd, xpbd) on the Cartesian pendulum: the claims of Müller et al. (2007) and Macklin,
-// Müller & Chentanez (2016) that the methods' use rests on, each measured.
+// The constrained methods on the Cartesian pendulum: position-based dynamics (pbd, xpbd), the claims of Müller et
+// al. (2007) and Macklin, Müller & Chentanez (2016) that their use rests on, and RATTLE's (Hairer, Lubich &
+// Wanner, VII.1): second order, symplectic, on the manifold. Each measured.
 #include "models/model.hpp"
 #include "run/measure.hpp"
 #include "solvers/capabilities/distance_constraints.hpp"
@@ -108,10 +109,47 @@ TEST(PositionBased, TheCartesianPendulumOnAnOdeMethodIsTheReducedPendulum) {
   EXPECT_GT(constraints->drift(coarse.result.y_stop.data()), 0.0);
 }
 
-// a scene without constraints refuses the position-based methods, naming what they need
+// RATTLE: second order to the reduced pendulum, the rod held to rounding at every sample
+TEST(Rattle, ConvergesAtSecondOrderOnTheManifold) {
+  const auto model = cartesian(1.0, 0.0);
+  std::vector<double> errors;
+  for (const double dt : {0.02, 0.01, 0.005, 0.0025}) {
+    const Measured m = run_and_measure(*model, "rattle", StepControl::fixed(dt), 1.0, 0.04);  // outputs on every step grid
+    ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+    ASSERT_TRUE(m.error);
+    errors.push_back(*m.error);
+    for (const auto& y : m.result.trajectory.y) EXPECT_LE(std::abs(y.head<2>().norm() - 1.0), tolerance::projection_roundoff);
+  }
+  for (size_t k = 1; k < errors.size(); ++k) EXPECT_NEAR(std::log2(errors[k - 1] / errors[k]), 2.0, tolerance::order_band) << k;
+}
+
+// symplectic: over 10^4 periods the energy error oscillates without drifting (its largest over the last hundred
+// periods no larger than over the first hundred, within the bounded error's own spread), and the rod stays at its
+// length to rounding
+TEST(Rattle, KeepsTheEnergyBoundedOverTenThousandPeriods) {
+  const auto model = cartesian(1.0, 0.0);
+  const double period = 2.1555, t_end = 1e4 * period;  // the pendulum at theta0 = 1 rad: 4 K(sin 1/2) / sqrt(g/L)
+  const Measured m = run_and_measure(*model, "rattle", StepControl::fixed(0.01), t_end, period / 7);
+  ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+  const auto& ys = m.result.trajectory.y;
+  const double e0 = *model->energy(model->initial_state());
+  const size_t window = ys.size() / 100;
+  double first = 0, last = 0, off = 0;
+  for (size_t k = 0; k < ys.size(); ++k) {
+    const double error = std::abs(*model->energy(ys[k]) - e0);
+    if (k < window) first = std::max(first, error);
+    if (k >= ys.size() - window) last = std::max(last, error);
+    off = std::max(off, std::abs(ys[k].head<2>().norm() - 1.0));
+  }
+  EXPECT_GT(first, 0.0);
+  EXPECT_LE(last, 2 * first);
+  EXPECT_LE(off, tolerance::projection_roundoff);
+}
+
+// a scene without constraints refuses the constrained methods, naming what they need
 TEST(PositionBased, AModelWithoutConstraintsIsRefused) {
   const auto pendulum = make_model("pendulum", {});
-  for (const char* name : {"pbd", "xpbd"}) {
+  for (const char* name : {"pbd", "xpbd", "rattle"}) {
     const Method& method = *find_method(name);
     EXPECT_FALSE(method_applies(method, *pendulum));
     EXPECT_NE(method_requirement(method, *pendulum).find("distance constraints"), std::string::npos);
