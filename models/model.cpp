@@ -11,6 +11,7 @@
 #include "particles_in_box.hpp"
 #include "pendulum.hpp"
 #include "pendulum_cartesian.hpp"
+#include "chain.hpp"
 #include "projectile.hpp"
 #include "rigid_body.hpp"
 #include "rigid_contact.hpp"
@@ -36,6 +37,8 @@ const std::array model_table{
               pendulum_params(), [](const Params& p) { return make_pendulum(p, true); }},
     ModelInfo{"pendulum-cartesian", "the pendulum as a point mass in the plane held by |x| = L (a distance constraint, compliance alpha); exact for alpha = 0",
               pendulum_cartesian_params(), [](const Params& p) { return make_pendulum_cartesian(p); }},
+    ModelInfo{"chain", "an inextensible chain of N rigid links pinned at one end (distance constraints), released from the horizontal",
+              chain_params(), [](const Params& p) { return make_chain(p); }, nullptr, nullptr, chain_columns},
     ModelInfo{"flow-particle", "particle carried by the velocity field (x, sin y); exact solution",
               flow_particle_params(), [](const Params& p) { return make_flow_particle(p); }},
     ModelInfo{"flow-particle-3d", "particle carried by the velocity field (x, y, sin x); exact solution via Si",

@@ -526,5 +526,13 @@ inline constexpr double video_noise_share = 1e-4;
 // different law, not rounding
 inline constexpr double projection_roundoff = 4 * 2.220446049250313e-16;
 inline constexpr double pbd_stretch_differs = 0.1;
+// RATTLE's SHAKE stops when each constraint is off by at most 8 eps of (its length + twice its ends' largest
+// coordinate), the rounding of the coordinates it is computed from (solvers/methods/rattle.cpp): the pendulum's
+// rod is then within 8 eps (L + 2 L)
+inline constexpr double shake_converged = 8 * 2.220446049250313e-16;
+// a chain's links after RATTLE's SHAKE: each met to the rounding of coordinates of about the chain's length over
+// the link's (20 links: 20 x 8 eps ~ 4e-14 of a link), and the next step's drift moves them by the rounding of
+// its own update: 1e-12 of a link holds a second of steps, where an unconverged solve leaves 1e-6 or more
+inline constexpr double chain_link_roundoff = 1e-12;
 
 }  // namespace stepwise::tolerance

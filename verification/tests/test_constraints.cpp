@@ -118,7 +118,7 @@ TEST(Rattle, ConvergesAtSecondOrderOnTheManifold) {
     ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
     ASSERT_TRUE(m.error);
     errors.push_back(*m.error);
-    for (const auto& y : m.result.trajectory.y) EXPECT_LE(std::abs(y.head<2>().norm() - 1.0), tolerance::projection_roundoff);
+    for (const auto& y : m.result.trajectory.y) EXPECT_LE(std::abs(y.head<2>().norm() - 1.0), 3 * tolerance::shake_converged);  // L + 2 |x|
   }
   for (size_t k = 1; k < errors.size(); ++k) EXPECT_NEAR(std::log2(errors[k - 1] / errors[k]), 2.0, tolerance::order_band) << k;
 }
@@ -143,7 +143,26 @@ TEST(Rattle, KeepsTheEnergyBoundedOverTenThousandPeriods) {
   }
   EXPECT_GT(first, 0.0);
   EXPECT_LE(last, 2 * first);
-  EXPECT_LE(off, tolerance::projection_roundoff);
+  EXPECT_LE(off, 3 * tolerance::shake_converged);  // L + 2 |x|
+}
+
+// the chain of 20 links released from the horizontal has no closed form: its reference at t = 1 s is verner98 on
+// its constrained equations at rtol 1e-10, and RATTLE converges to it at second order (so the two agree to the
+// digits RATTLE's finest step reaches, and each run keeps its links at their length to rounding)
+TEST(Rattle, TheChainsReferenceIsConvergedTwoWays) {
+  const auto chain = make_model("chain", {});
+  const Measured reference = run_and_measure(*chain, "verner98", StepControl::adaptive(1e-10, 1e-12), 1.0, 0.25);
+  ASSERT_EQ(reference.result.status, Status::ok) << reference.result.message;
+  const auto* constraints = chain->as<DistanceConstraints>();
+  ASSERT_NE(constraints, nullptr);
+  std::vector<double> errors;
+  for (const double dt : {1e-3, 5e-4, 2.5e-4}) {
+    const Measured m = run_and_measure(*chain, "rattle", StepControl::fixed(dt), 1.0, 0.25);
+    ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+    errors.push_back((m.result.y_stop - reference.result.y_stop).cwiseAbs().maxCoeff());
+    EXPECT_LE(constraints->drift(m.result.y_stop.data()), tolerance::chain_link_roundoff);
+  }
+  for (size_t k = 1; k < errors.size(); ++k) EXPECT_NEAR(std::log2(errors[k - 1] / errors[k]), 2.0, tolerance::order_band) << k;
 }
 
 // a scene without constraints refuses the constrained methods, naming what they need
