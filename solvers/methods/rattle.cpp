@@ -99,7 +99,7 @@ class Rattle final : public PlainStepping<Rattle> {
   // the multipliers' system (G(u) W G(w)^T) z = r, G's rows the constraints' directions u and w (+ at a, - at b):
   // a constraint couples only the constraints sharing a particle with it. Up to dense_below constraints by
   // Eigen's dense LU (a pendulum's one: a sparse factorisation's setup cost 20 times the step), else its sparse LU
-  Eigen::VectorXd solve(const Directions& u, const Directions& w, const Eigen::VectorXd& r) const {
+  Eigen::VectorXd solve(const Directions& u, const Directions& w, const Eigen::VectorXd& r) {
     std::vector<Eigen::Triplet<double>> entries;
     for (size_t p = 0; p < touching_.size(); ++p) {
       const double inverse_mass = c_.inverse_mass[p];
@@ -112,11 +112,12 @@ class Rattle final : public PlainStepping<Rattle> {
       for (const auto& e : entries) A(e.row(), e.col()) += e.value();
       return A.partialPivLu().solve(r);
     }
-    Eigen::SparseMatrix<double> A(m_, m_);
-    A.setFromTriplets(entries.begin(), entries.end());
-    Eigen::SparseLU<Eigen::SparseMatrix<double>> lu(A);
-    if (lu.info() != Eigen::Success) return Eigen::VectorXd::Constant(m_, std::numeric_limits<double>::quiet_NaN());
-    return lu.solve(r);
+    // the pattern never changes (which constraints share a particle): ordered and analysed once, factorised anew
+    A_.setFromTriplets(entries.begin(), entries.end());
+    if (!analysed_) lu_.analyzePattern(A_), analysed_ = true;
+    lu_.factorize(A_);
+    if (lu_.info() != Eigen::Success) return Eigen::VectorXd::Constant(m_, std::numeric_limits<double>::quiet_NaN());
+    return lu_.solve(r);
   }
   // z += W G^T s, G's rows the directions n (positions or velocities)
   void move(double* z, const Directions& n, const Eigen::VectorXd& s) const {
@@ -152,6 +153,9 @@ class Rattle final : public PlainStepping<Rattle> {
   Eigen::VectorXd a_;
   Directions n0_, n1_;  // the constraints' directions at the step's start and at x1
   std::vector<std::vector<std::pair<int, double>>> touching_;  // a particle's constraints, with the sign of its end
+  Eigen::SparseMatrix<double> A_{m_, m_};  // the multipliers' system, above dense_below constraints
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
+  bool analysed_ = false;
 };
 
 }  // namespace
