@@ -1,7 +1,9 @@
 #include "prepare.hpp"
 
+#include "projected_model.hpp"
 #include "ranks.hpp"
 
+#include "solvers/capabilities/distance_constraints.hpp"
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/method_table.hpp"
 #include "solvers/run_support.hpp"
@@ -138,6 +140,8 @@ void check_options(const RunOptions& o, PreparedRun& p) {
   } else if (o.dt || s.dt) {
     std::tie(p.method, p.method_choice) = default_method(nullptr, p.t_end, true);
   }
+  if (o.constraint && *o.constraint != "project")
+    throw InputError(fmt::format("--constraint {}: the constraint treatment offered is project (the state put back on the constraints after each step)", *o.constraint));
   // a position-based method's substeps and iterations: whole numbers, and only for such a method
   for (const auto& [value, option, field] : {std::tuple{o.substeps, "--substeps", &p.control.substeps}, std::tuple{o.iterations, "--iterations", &p.control.iterations}}) {
     if (!value) continue;
@@ -293,6 +297,15 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   make_model(o, p, values);
   check_initial_state(p, values);
   choose_method(o, p);
+  if (o.constraint) {
+    // an ODE method kept on a constrained scene's constraints; the constrained methods keep them themselves
+    if (!p.model->as<DistanceConstraints>())
+      throw InputError(fmt::format("--constraint: the scene has no constraints to keep (model {}; pendulum-cartesian and chain have)", p.scene.model));
+    if (find_method(p.method)->needs.type == &typeid(DistanceConstraints))
+      throw InputError(fmt::format("--constraint: {} keeps the constraints itself", p.method));
+    p.model = projected(std::move(p.model));
+    p.constraint = *o.constraint;
+  }
   warn_past_stability(o, p);
   // the trajectory: the output step on the step grid of a fixed-step run (check_options), rows times columns
   if (p.control.dt) p.output_dt = std::max(1.0, std::round(p.output_dt / *p.control.dt)) * *p.control.dt;

@@ -59,6 +59,7 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
   for (const auto& [key, value] : p.params) j["parameters"][key] = value;
   if (!p.method_choice.empty()) j["method_choice"] = p.method_choice;
   if (constraint_drift) j["constraint_drift"] = *constraint_drift;
+  if (!p.constraint.empty()) j["constraint"] = p.constraint;
   if (const Method* method = find_method(p.method); method && method->substepped) {
     j["substeps"] = p.control.substeps;
     j["iterations"] = p.control.iterations;

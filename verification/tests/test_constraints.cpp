@@ -3,6 +3,7 @@
 // Wanner, VII.1): second order, symplectic, on the manifold. Each measured.
 #include "models/model.hpp"
 #include "run/measure.hpp"
+#include "run/projected_model.hpp"
 #include "solvers/capabilities/distance_constraints.hpp"
 #include "solvers/method_table.hpp"
 #include "verification/tolerances.hpp"
@@ -163,6 +164,28 @@ TEST(Rattle, TheChainsReferenceIsConvergedTwoWays) {
     EXPECT_LE(constraints->drift(m.result.y_stop.data()), tolerance::chain_link_roundoff);
   }
   for (size_t k = 1; k < errors.size(); ++k) EXPECT_NEAR(std::log2(errors[k - 1] / errors[k]), 2.0, tolerance::order_band) << k;
+}
+
+// --constraint project: rk4 on the chain's constrained equations drifts off the links by its own error; the
+// same run with the state put back after every step keeps them to rounding, and its answer still converges to the
+// reference (the projection moves the state by the step's local error, not more)
+TEST(Projection, KeepsAnOdeMethodOnTheChainsConstraints) {
+  const auto plain = make_model("chain", {});
+  const auto kept = projected(make_model("chain", {}));
+  const auto* constraints = plain->as<DistanceConstraints>();
+  ASSERT_NE(constraints, nullptr);
+  const Measured a = run_and_measure(*plain, "rk4", StepControl::fixed(1e-3), 1.0, 0.01);
+  const Measured b = run_and_measure(*kept, "rk4", StepControl::fixed(1e-3), 1.0, 0.01);
+  ASSERT_EQ(a.result.status, Status::ok);
+  ASSERT_EQ(b.result.status, Status::ok);
+  EXPECT_EQ(b.result.stats.projections, 1000);
+  double drift_plain = 0, drift_kept = 0;
+  for (const auto& y : a.result.trajectory.y) drift_plain = std::max(drift_plain, constraints->drift(y.data()));
+  for (const auto& y : b.result.trajectory.y) drift_kept = std::max(drift_kept, constraints->drift(y.data()));
+  EXPECT_LE(drift_kept, tolerance::chain_link_roundoff);
+  EXPECT_GT(drift_plain, 1e3 * tolerance::chain_link_roundoff);
+  const Measured reference = run_and_measure(*plain, "verner98", StepControl::adaptive(1e-10, 1e-12), 1.0, 0.25);
+  EXPECT_LE((b.result.y_stop - reference.result.y_stop).cwiseAbs().maxCoeff(), (a.result.y_stop - reference.result.y_stop).cwiseAbs().maxCoeff());
 }
 
 // a scene without constraints refuses the constrained methods, naming what they need
