@@ -17,6 +17,7 @@ constexpr std::array params{
     ParamSpec{"length", 1.0, "m", "the chain's length", Bound::positive},
     ParamSpec{"mass", 1.0, "kg", "the chain's mass", Bound::positive},
     ParamSpec{"g", 9.81, "m/s^2", "gravitational acceleration", Bound::positive},
+    ParamSpec{"baumgarte", 0, "", "Baumgarte stabilisation of the links' equations (1: on, --constraint baumgarte)", Bound::flag},
 };
 
 // a link's state, its constraint and the multipliers' sparse system: well under 1 KiB
@@ -25,7 +26,8 @@ int link_count(const Params& p) { return particle_count(p, "links", 1024, "links
 class Chain final : public Model {
  public:
   explicit Chain(const Params& p)
-      : n_(link_count(p)), link_(p.at("length") / n_), mass_(p.at("mass") / n_), g_(p.at("g")) {
+      : n_(link_count(p)), link_(p.at("length") / n_), mass_(p.at("mass") / n_), g_(p.at("g")),
+        baumgarte_(p.at("baumgarte") == 1 ? baumgarte_rate(g_, link_) : 0.0) {
     constraints_.dimension = 2;
     constraints_.inverse_mass.assign(static_cast<size_t>(n_), 1 / mass_);
     for (int j = 0; j < n_; ++j) constraints_.constraints.push_back(DistanceConstraint{j, j - 1, Eigen::Vector3d::Zero(), link_, 0.0});
@@ -68,6 +70,8 @@ class Chain final : public Model {
         entries.emplace_back(j + 1, j, off);
       }
       b[j] = -(v(j) - v(j - 1)).squaredNorm() - dj.dot(j == 0 ? gravity : Eigen::Vector2d::Zero().eval());
+      // Baumgarte: g_j'' held at -2 w g_j' - w^2 g_j (0 without it)
+      b[j] -= 2 * baumgarte_ * dj.dot(v(j) - v(j - 1)) + baumgarte_ * baumgarte_ * 0.5 * (dj.squaredNorm() - link_ * link_);
     }
     Eigen::SparseMatrix<double> A(n_, n_);
     A.setFromTriplets(entries.begin(), entries.end());
@@ -102,6 +106,7 @@ class Chain final : public Model {
  private:
   int n_;
   double link_, mass_, g_;
+  double baumgarte_;  // w (1/s), 0: off
   SecondOrderView second_order_{2 * n_};
   DistanceConstraints constraints_;
 };

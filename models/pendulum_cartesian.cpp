@@ -17,13 +17,15 @@ constexpr std::array params{
     ParamSpec{"length", 1.0, "m", "pendulum length (the rod's rest length)", Bound::positive},
     ParamSpec{"mass", 1.0, "kg", "bob mass", Bound::positive},
     ParamSpec{"compliance", 0.0, "m/N", "the rod's compliance alpha = 1/stiffness (0: rigid)", Bound::nonnegative},
+    ParamSpec{"baumgarte", 0, "", "Baumgarte stabilisation of the rigid rod's equations (1: on, --constraint baumgarte)", Bound::flag},
 };
 
 class PendulumCartesian final : public Model {
  public:
   explicit PendulumCartesian(const Params& p)
       : theta0_(p.at("theta0")), omega0_(p.at("omega0")), g_(p.at("g")), length_(p.at("length")), mass_(p.at("mass")),
-        compliance_(p.at("compliance")), reduced_(make_pendulum(p, false)) {
+        compliance_(p.at("compliance")), baumgarte_(p.at("baumgarte") == 1 ? baumgarte_rate(g_, length_) : 0.0),
+        reduced_(make_pendulum(p, false)) {
     constraints_.dimension = 2;
     constraints_.inverse_mass = {1 / mass_};
     constraints_.constraints = {DistanceConstraint{0, -1, Eigen::Vector3d::Zero(), length_, compliance_}};
@@ -46,7 +48,9 @@ class PendulumCartesian final : public Model {
       const double r = x.norm();
       a = g - (r - length_) / (mass_ * compliance_) * x / r;
     } else {
-      a = g - (v.squaredNorm() + x.dot(g)) / x.squaredNorm() * x;
+      // g = (|x|^2 - L^2) / 2: g'' = |v|^2 + x . a held at -2 w g' - w^2 g (0 without Baumgarte)
+      const double drift = 0.5 * (x.squaredNorm() - length_ * length_), rate = x.dot(v);
+      a = g - (v.squaredNorm() + x.dot(g) + 2 * baumgarte_ * rate + baumgarte_ * baumgarte_ * drift) / x.squaredNorm() * x;
     }
     dydt << v, a;
   }
@@ -77,6 +81,7 @@ class PendulumCartesian final : public Model {
     return y;
   }
   double theta0_, omega0_, g_, length_, mass_, compliance_;
+  double baumgarte_;  // w (1/s), 0: off
   std::unique_ptr<Model> reduced_;  // the pendulum in its angle: the exact solution
   SecondOrderView second_order_{2};
   DistanceConstraints constraints_;

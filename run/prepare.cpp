@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -140,8 +141,9 @@ void check_options(const RunOptions& o, PreparedRun& p) {
   } else if (o.dt || s.dt) {
     std::tie(p.method, p.method_choice) = default_method(nullptr, p.t_end, true);
   }
-  if (o.constraint && *o.constraint != "project")
-    throw InputError(fmt::format("--constraint {}: the constraint treatment offered is project (the state put back on the constraints after each step)", *o.constraint));
+  if (o.constraint && *o.constraint != "project" && *o.constraint != "baumgarte")
+    throw InputError(fmt::format("--constraint {}: the constraint treatments are project (the state put back on the constraints after each step) "
+                                 "and baumgarte (the equations of motion pulling any drift back)", *o.constraint));
   // a position-based method's substeps and iterations: whole numbers, and only for such a method
   for (const auto& [value, option, field] : {std::tuple{o.substeps, "--substeps", &p.control.substeps}, std::tuple{o.iterations, "--iterations", &p.control.iterations}}) {
     if (!value) continue;
@@ -189,9 +191,16 @@ void check_output_before_model(const RunOptions& o, const PreparedRun& p, const 
 }
 
 // the model, from the scene's equations or the table of built-in models, with the values applied
-void make_model(const RunOptions& o, PreparedRun& p, const Values& v) {
+void make_model(const RunOptions& o, PreparedRun& p, Values v) {
   const Scene& s = p.scene;
   const ModelInfo* info = s.equations ? nullptr : find_model(s.model);
+  // --constraint baumgarte: the constrained models' own flag (models/pendulum_cartesian.hpp, models/chain.hpp)
+  if (o.constraint == "baumgarte") {
+    if (!info || std::none_of(info->params.begin(), info->params.end(), [](const ParamSpec& q) { return q.key == "baumgarte"; }))
+      throw InputError(fmt::format("--constraint: the scene has no constraints to keep (model {}; pendulum-cartesian and chain have)", s.model));
+    v.values["baumgarte"] = 1;
+    v.set_origin["baumgarte"] = "--constraint baumgarte";
+  }
   if (!info && !s.equations) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
   if (s.mesh && (!info || !info->make_with_mesh)) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
   if (s.pins && (!info || !info->make_with_pins)) throw InputError(fmt::format("{}: model {} takes no pins", s.where("pins"), s.model));
@@ -303,7 +312,7 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
       throw InputError(fmt::format("--constraint: the scene has no constraints to keep (model {}; pendulum-cartesian and chain have)", p.scene.model));
     if (find_method(p.method)->needs.type == &typeid(DistanceConstraints))
       throw InputError(fmt::format("--constraint: {} keeps the constraints itself", p.method));
-    p.model = projected(std::move(p.model));
+    if (*o.constraint == "project") p.model = projected(std::move(p.model));
     p.constraint = *o.constraint;
   }
   warn_past_stability(o, p);

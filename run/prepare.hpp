@@ -21,7 +21,9 @@ struct RunOptions {
   std::optional<double> dt, rtol, atol, t_end, output_dt;
   std::optional<double> max_steps;  // the steps (and output rows) a run may take; default_max_steps
   std::optional<double> substeps, iterations;  // a position-based method's (StepControl's)
-  std::optional<std::string> constraint;       // "project": a constrained scene's state put back on its constraints after each step
+  // "project": a constrained scene's state put back on its constraints after each step; "baumgarte": its
+  // equations of motion pulling a drift back (the model's baumgarte flag)
+  std::optional<std::string> constraint;
   std::string out;
 };
 
@@ -36,7 +38,7 @@ struct PreparedRun {
   Params params;  // resolved: defaults overlaid by the scene and --set
   std::string method;
   std::string method_choice;  // empty, or why this method when neither the scene nor the command line named one
-  std::string constraint;     // empty, or how an ODE method is kept on the constraints ("project")
+  std::string constraint;     // empty, or how an ODE method is kept on the constraints ("project", "baumgarte")
   StepControl control;
   double t_end = 0;
   double output_dt = 0;

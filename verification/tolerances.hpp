@@ -530,6 +530,10 @@ inline constexpr double pbd_stretch_differs = 0.1;
 // coordinate), the rounding of the coordinates it is computed from (solvers/methods/rattle.cpp): the pendulum's
 // rod is then within 8 eps (L + 2 L)
 inline constexpr double shake_converged = 8 * 2.220446049250313e-16;
+// Baumgarte's critically damped pull at w returns a drift within ~1/w: over a run of T the drift it leaves is
+// ~1/(w T) of the unstabilised one's (the chain: w = 140/s, T = 1 s, 1/140); a tenth leaves room for the
+// constant, where a sign error in the pull makes the drift grow instead
+inline constexpr double baumgarte_drift_share = 0.1;
 // a chain's links after RATTLE's SHAKE: each met to the rounding of coordinates of about the chain's length over
 // the link's (20 links: 20 x 8 eps ~ 4e-14 of a link), and the next step's drift moves them by the rounding of
 // its own update: 1e-12 of a link holds a second of steps, where an unconverged solve leaves 1e-6 or more

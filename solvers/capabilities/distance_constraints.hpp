@@ -55,6 +55,12 @@ struct DistanceConstraints {
   }
 };
 
+// Baumgarte stabilisation of a constrained model's equations of motion (its `baumgarte` flag): the multipliers
+// hold g'' + 2 w g' + w^2 g = 0 rather than g'' = 0, a critically damped return of any drift, at w = 10 sqrt(g / l)
+// for the shortest link l: ten times the motion's own rate, so a drift is gone within a tenth of a swing, while
+// w dt stays below 1 (explicit methods stable) for steps up to a tenth of the swing's time scale
+inline double baumgarte_rate(double gravity, double shortest_link) { return 10 * std::sqrt(gravity / shortest_link); }
+
 inline const Requirement needs_distance_constraints =
     needs<DistanceConstraints>("a scene whose particles are held by distance constraints (pendulum-cartesian)");
 
