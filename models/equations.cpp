@@ -896,11 +896,11 @@ std::vector<const Formula*> Equations::make_tapes(const EquationsSpec& spec) {
   std::vector<GiNaC::ex>& f = work_->f;
   f.resize(n);
   std::vector<const Formula*> formula_of(n);
+  work_->where.resize(n);
   for (const auto& formula : spec.equations) {
     const size_t i = static_cast<size_t>(std::find(names_.begin(), names_.end(), formula.name) - names_.begin());
     f[i] = parse(formula, s, true, true);
     formula_of[i] = &formula;
-    work_->where.resize(n);
     work_->where[i] = formula.where();
   }
   autonomous_ = std::none_of(f.begin(), f.end(), [&](const GiNaC::ex& e) { return e.has(s.t); });
