@@ -81,6 +81,7 @@ TrajectoryRows::TrajectoryRows(const Model& model) : model_(model), columns_{"t"
   for (const auto& name : sample_names(model)) columns_.push_back(name);
   with_energy_ = model.summary_names().empty() && model.energy(model.initial_state()).has_value();
   if (with_energy_) columns_.emplace_back("energy");
+  if (model.summary_names().empty()) constraints_ = model.as<DistanceConstraints>();
 }
 
 std::vector<Cell> TrajectoryRows::row(double t, const Eigen::VectorXd& sample, std::string& problem) const {
@@ -88,7 +89,7 @@ std::vector<Cell> TrajectoryRows::row(double t, const Eigen::VectorXd& sample, s
   row.reserve(static_cast<size_t>(sample.size()) + 2);
   for (const double v : sample) row.emplace_back(v);
   if (with_energy_) row.emplace_back(*model_.energy(sample));
-  if (const auto* c = model_.summary_names().empty() ? model_.as<DistanceConstraints>() : nullptr) drift_ = std::max(drift_, c->drift(sample.data()));
+  if (constraints_) drift_ = std::max(drift_, constraints_->drift(sample.data()));
   for (size_t i = 1; i < row.size() && problem.empty(); ++i)
     if (!std::isfinite(std::get<double>(row[i])))
       problem = fmt::format("{} overflowed ({})", i == static_cast<size_t>(sample.size()) + 1 ? std::string("the energy") : "a sampled value",
@@ -103,7 +104,7 @@ std::optional<std::vector<Cell>> TrajectoryRows::stop_row(const Measured& m, dou
 }
 
 std::optional<double> TrajectoryRows::constraint_drift() const {
-  if (!model_.summary_names().empty() || !model_.as<DistanceConstraints>()) return std::nullopt;
+  if (!constraints_) return std::nullopt;
   return drift_;
 }
 

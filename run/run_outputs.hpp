@@ -19,6 +19,8 @@
 
 namespace stepwise {
 
+struct DistanceConstraints;
+
 // the trajectory's columns and rows: trajectory.csv's, and the Python module's run() (python/module.cpp) holds the
 // same numbers
 class TrajectoryRows {
@@ -39,6 +41,7 @@ class TrajectoryRows {
   const Model& model_;
   std::vector<std::string> columns_;
   bool with_energy_ = false;
+  const DistanceConstraints* constraints_ = nullptr;  // the model's, where its rows are its state
   mutable double drift_ = 0;
 };
 
