@@ -5,6 +5,7 @@
 #include "solvers/capabilities/second_order.hpp"
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/capabilities/cloth_grid.hpp"
+#include "solvers/capabilities/distance_constraints.hpp"
 #include "solvers/capabilities/imex_split.hpp"
 
 #include "particle_common.hpp"
@@ -215,6 +216,22 @@ class Cloth final : public Model {
       force_jacobians(t, y, false, dfdx, dfdv, Forces::stiff);
       mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
     };
+    // the springs read as compliant distance constraints (alpha = 1 / stiffness: the same material), which the
+    // position-based methods, RATTLE and IDA step; the other forces (wind, the pick, drag, gravity) are their
+    // external acceleration, and the springs' Voigt damping is left out (XPBD damps by itself). A stiffness
+    // taken to infinity (--set stiffness=1e12) is the inextensible cloth
+    constraints_.dimension = 3;
+    constraints_.inverse_mass.assign(static_cast<size_t>(free_), 1 / node_mass_);
+    for (const Spring& s : view_.springs) {
+      if (!(s.stiffness > 0)) continue;
+      if (s.a < 0) constraints_.constraints.push_back({s.b, -1, s.anchor, s.rest, 1 / s.stiffness});
+      else constraints_.constraints.push_back({s.a, s.b, Eigen::Vector3d::Zero(), s.rest, 1 / s.stiffness});
+    }
+    constraints_.external = [this](double t, const double* x, const double* v, double* a) {
+      Eigen::VectorXd y(6 * free_);
+      y << Eigen::Map<const Eigen::VectorXd>(x, 3 * free_), Eigen::Map<const Eigen::VectorXd>(v, 3 * free_);
+      acceleration(t, y, Eigen::Map<Eigen::VectorXd>(a, 3 * free_), Forces::nonstiff);
+    };
   }
   Cloth(const Cloth&) = delete;  // its capabilities hold `this`
   Cloth& operator=(const Cloth&) = delete;
@@ -241,7 +258,7 @@ class Cloth final : public Model {
   }
   int size() const override { return 6 * free_; }
   bool autonomous() const override { return gust_ == 0 || wind_k_ == 0; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, grid_, split_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, grid_, split_, constraints_); }
   std::vector<std::string> state_names() const override { return particle_state_names(free_); }
   Eigen::VectorXd initial_state() const override {
     Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
@@ -413,6 +430,7 @@ class Cloth final : public Model {
   MassSpringView view_;
   ClothGridView grid_;
   ImexSplit split_;
+  DistanceConstraints constraints_;  // the springs as compliant constraints
   std::unique_ptr<BlockPattern> pattern_;
   std::vector<std::array<BlockPattern::Slot, 4>> spring_slots_;
   std::vector<BlockPattern::Slot> diagonal_slots_;

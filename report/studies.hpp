@@ -112,6 +112,7 @@ Study cloth_realtime_study();
 Study fluid_study();
 Study scaling_study();
 Study advice_study();
+Study constraints_study();
 
 // a sweep's layers (rows of method, mode and status): `layer` once for the fixed-step rows, drawn solid, once for
 // the adaptive ones, dashed; failed rows as crosses; the setting and the calls of f on hover

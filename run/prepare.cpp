@@ -197,7 +197,7 @@ void make_model(const RunOptions& o, PreparedRun& p, Values v) {
   // --constraint baumgarte: the constrained models' own flag (models/pendulum_cartesian.hpp, models/chain.hpp)
   if (o.constraint == "baumgarte") {
     if (!info || std::none_of(info->params.begin(), info->params.end(), [](const ParamSpec& q) { return q.key == "baumgarte"; }))
-      throw InputError(fmt::format("--constraint: the scene has no constraints to keep (model {}; pendulum-cartesian and chain have)", s.model));
+      throw InputError(fmt::format("--constraint: the scene has no rigid constraints to keep (model {}; pendulum-cartesian and chain have)", s.model));
     v.values["baumgarte"] = 1;
     v.set_origin["baumgarte"] = "--constraint baumgarte";
   }
@@ -308,8 +308,9 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   choose_method(o, p);
   if (o.constraint) {
     // an ODE method kept on a constrained scene's constraints; the constrained methods keep them themselves
-    if (!p.model->as<DistanceConstraints>())
-      throw InputError(fmt::format("--constraint: the scene has no constraints to keep (model {}; pendulum-cartesian and chain have)", p.scene.model));
+    if (const auto* c = p.model->as<DistanceConstraints>(); !c || c->rigid().constraints.empty())
+      throw InputError(fmt::format("--constraint: the scene has no rigid constraints to keep (model {}; pendulum-cartesian and chain have; "
+                                   "a compliant constraint is a spring)", p.scene.model));
     if (find_method(p.method)->needs.type == &typeid(DistanceConstraints))
       throw InputError(fmt::format("--constraint: {} keeps the constraints itself", p.method));
     if (*o.constraint == "project") p.model = projected(std::move(p.model));

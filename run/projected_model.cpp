@@ -7,7 +7,7 @@ namespace {
 
 class ProjectedModel final : public Model {
  public:
-  explicit ProjectedModel(std::unique_ptr<Model> model) : m_(std::move(model)), c_(*m_->as<DistanceConstraints>()) {}
+  explicit ProjectedModel(std::unique_ptr<Model> model) : m_(std::move(model)), c_(m_->as<DistanceConstraints>()->rigid()) {}
 
   bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
     // a solver a call: a sweep's threads share the model, and the solver keeps its factorisation
@@ -44,7 +44,7 @@ class ProjectedModel final : public Model {
 
  private:
   std::unique_ptr<Model> m_;
-  const DistanceConstraints& c_;
+  DistanceConstraints c_;  // the rigid constraints, met after each step
 };
 
 }  // namespace

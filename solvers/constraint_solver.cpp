@@ -72,6 +72,7 @@ void ConstraintSolver::tangent(double* v) {
 // (G(u) W G(w)^T) z = r, G's rows the constraints' directions u and w (+ at a, - at b): a constraint couples only
 // the constraints sharing a particle with it, a pattern that never changes (analysed once)
 Eigen::VectorXd ConstraintSolver::solve(const Directions& u, const Directions& w, const Eigen::VectorXd& r) {
+  if (m_ == 0) return r;  // no constraints: nothing to solve
   std::vector<Eigen::Triplet<double>> entries;
   for (size_t p = 0; p < touching_.size(); ++p) {
     const double inverse_mass = c_.inverse_mass[p];

@@ -1,6 +1,7 @@
 #include "method.hpp"
 
 #include "capabilities/contact_bodies.hpp"
+#include "capabilities/distance_constraints.hpp"
 #include "capabilities/mass_spring.hpp"
 
 #include <fmt/format.h>
@@ -57,8 +58,11 @@ double dense_matrix_bytes(const Method& method, const OdeSystem& system) {
       if (system.as<MassSpringView>()) return 0;
       break;
     case DenseMatrices::always: break;
+    case DenseMatrices::constrained_dae: break;
   }
-  const double n = system.size();
+  // the unknowns: the state, and for a DAE two multipliers a constraint
+  const auto* constraints = method.dense == DenseMatrices::constrained_dae ? system.as<DistanceConstraints>() : nullptr;
+  const double n = system.size() + (constraints ? 2.0 * double(constraints->constraints.size()) : 0.0);
   // the Jacobian, the Newton matrix and (GSL's implicit steppers, Bulirsch-Stoer) one more: peak resident size
   // measured on the water drop at 30 x 30 and 40 x 40 (1 800 and 3 200 unknowns) above the run's baseline,
   // 2.0-2.2 n^2 doubles for implicit-euler and 2.9-3.05 for gsl-bsimp; the larger rounded up is the rule

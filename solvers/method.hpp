@@ -26,6 +26,7 @@ enum class DenseMatrices {
   always,                  // every system
   unless_sparse_jacobian,  // KLU on the system's fixed sparse pattern when it has one (CVODE BDF)
   unless_mass_spring,      // CHOLMOD on a mass-spring system's pattern (the hand-written backward Euler)
+  constrained_dae,         // every system, of its size plus two multipliers a distance constraint (IDA)
 };
 
 // the documented order range; text as `stepwise methods` shows it ("4", "1-12", "variable")

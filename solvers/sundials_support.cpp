@@ -4,8 +4,16 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
+#include <cstdlib>
 
 namespace stepwise::sundials {
+
+std::string return_flag_name(char* (*name_of)(long), long flag) {
+  char* name = name_of(flag);
+  std::string s = name ? name : "unknown";
+  std::free(name);
+  return s;
+}
 namespace {
 
 Eigen::Map<const Eigen::VectorXd> view(N_Vector v) {
@@ -126,7 +134,7 @@ void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double 
                  const StepControl& control, RunResult& result) {
   const auto events = callbacks.system->events();
   std::vector<int> found(events.size());
-  const auto n = static_cast<Eigen::Index>(N_VGetLength(y));
+  const auto n = static_cast<Eigen::Index>(callbacks.system->size());  // the state, leading y (IDA's unknowns go on)
   Eigen::Map<Eigen::VectorXd> ym(N_VGetArrayPointer(y), n);
   const double bound = divergence_bound(control, ym);
   double t = t0;

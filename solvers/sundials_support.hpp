@@ -1,6 +1,6 @@
-// What the two SUNDIALS adapters (methods/cvode.cpp, methods/arkode.cpp) share: RAII handles, the C
+// What the SUNDIALS adapters (methods/cvode.cpp, methods/arkode.cpp, methods/ida.cpp) share: RAII handles, the C
 // callbacks that reach the counted system, and the loop over output times with events. SUNDIALS' types
-// appear only here, in those two files and in distributed_lines.cpp (the same methods on the parallel vector).
+// appear only here, in those three files and in distributed_lines.cpp (the same methods on the parallel vector).
 #pragma once
 
 #include "capabilities/imex_split.hpp"
@@ -41,6 +41,9 @@ struct ArkodeTables {
   ARKODE_DIRKTableID dirk;
 };
 std::optional<ArkodeTables> arkode_tables(std::string_view method);
+
+// a return flag's name by a module's *GetReturnFlagName (which allocates it), "unknown" where it has none
+std::string return_flag_name(char* (*name_of)(long), long flag);
 
 // what the C callbacks reach through user_data
 struct Callbacks {

@@ -5,6 +5,7 @@
 #include "report/studies.hpp"
 
 #include "models/model.hpp"
+#include "solvers/capabilities/distance_constraints.hpp"
 #include "solvers/capabilities/imex_split.hpp"
 #include "solvers/capabilities/mass_spring.hpp"
 #include "solvers/wave_step.hpp"
@@ -115,9 +116,11 @@ inline constexpr std::string_view dense_note =
     "cloth, GSL's implicit steppers (a dense Jacobian by differences every step: 3-4 s a point at rtol 1e-6) are left out too; "
     "implicit-euler on CHOLMOD and fast-mass-spring join cvode-bdf there.\n\n";
 
+// the constrained methods (xpbd, rattle, ida: a cloth's springs are compliant constraints too) are measured in the
+// constraints study, at their own settings (substeps and iterations), not in these sweeps of steps and tolerances
 inline bool in_sweep(const Method& method, const Model& model, bool dense) {
   const double bytes = dense_matrix_bytes(method, model);
-  return method_applies(method, model) && bytes <= dense_matrix_budget && (dense || bytes == 0);
+  return method_applies(method, model) && bytes <= dense_matrix_budget && (dense || bytes == 0) && method.needs.type != &typeid(DistanceConstraints);
 }
 
 // the methods of a scene's sweeps, fixed-step ones only if asked

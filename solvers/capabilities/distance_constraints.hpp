@@ -47,9 +47,31 @@ struct DistanceConstraints {
     return r - c.length;
   }
 
+  // the rigid constraints alone (compliance 0), the ones a method must meet exactly (RATTLE's SHAKE, the
+  // projection); the compliant ones are springs, whose forces compliant_forces() gives
+  DistanceConstraints rigid() const {
+    DistanceConstraints r{dimension, inverse_mass, {}, external};
+    for (const auto& c : constraints)
+      if (c.compliance == 0) r.constraints.push_back(c);
+    return r;
+  }
+  // a += W (the compliant constraints' forces): constraint j pulls with lambda_j = -C_j / alpha_j along its
+  // direction (Hooke's law, stiffness 1 / alpha); the rigid ones add nothing
+  void add_compliant_forces(const double* x, double* a) const {
+    double n[3] = {0, 0, 0};
+    for (const auto& c : constraints) {
+      if (c.compliance == 0) continue;
+      const double lambda = -violation(c, x, n) / c.compliance;
+      for (int k = 0; k < dimension; ++k) {
+        a[c.a * dimension + k] += inverse_mass[static_cast<size_t>(c.a)] * lambda * n[k];
+        if (c.b >= 0) a[c.b * dimension + k] -= inverse_mass[static_cast<size_t>(c.b)] * lambda * n[k];
+      }
+    }
+  }
+
   // the largest |C_j(x)| / length_j: the drift from the constraint manifold (summary.json's constraint_drift)
   double drift(const double* x) const {
-    double worst = 0, direction[3];
+    double worst = 0, direction[3] = {0, 0, 0};
     for (const auto& c : constraints) worst = std::max(worst, std::abs(violation(c, x, direction)) / c.length);
     return worst;
   }

@@ -23,7 +23,6 @@
 #include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
-#include <cstdlib>
 
 namespace stepwise {
 namespace {
@@ -96,12 +95,7 @@ SUNLinearSolver embedded_solver(EmbeddedSolve* content, SUNContext context) {
   return s;
 }
 
-std::string flag_name(long flag) {
-  char* name = ARKStepGetReturnFlagName(flag);
-  std::string s = name ? name : "unknown";
-  std::free(name);
-  return s;
-}
+std::string flag_name(long flag) { return return_flag_name(ARKStepGetReturnFlagName, flag); }
 
 class ArkodeIntegrator final : public Integrator {
  public:

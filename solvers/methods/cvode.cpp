@@ -22,7 +22,6 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <algorithm>
-#include <cstdlib>
 
 namespace stepwise {
 namespace {
@@ -32,12 +31,7 @@ using namespace sundials;
 struct CvodeFree { void operator()(void* mem) const { CVodeFree(&mem); } };
 using CvodePtr = std::unique_ptr<void, CvodeFree>;
 
-std::string flag_name(long flag) {
-  char* name = CVodeGetReturnFlagName(flag);
-  std::string s = name ? name : "unknown";
-  std::free(name);
-  return s;
-}
+std::string flag_name(long flag) { return return_flag_name(CVodeGetReturnFlagName, flag); }
 
 // CVODE's projection: corr takes ycur onto the system's manifold (the error estimate is not projected)
 int cvode_projection(sunrealtype, N_Vector ycur, N_Vector corr, sunrealtype, N_Vector, void* user_data) {

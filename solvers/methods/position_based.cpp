@@ -61,7 +61,7 @@ class PositionBased final : public PlainStepping<PositionBased> {
   // constraint j on the predicted positions, in place
   void project(size_t j, double hs) {
     const DistanceConstraint& c = c_.constraints[j];
-    double n[3];
+    double n[3] = {0, 0, 0};  // the constraint direction (dimension entries set)
     const double C = c_.violation(c, p_.data(), n);
     const double wa = c_.inverse_mass[static_cast<size_t>(c.a)], wb = c.b < 0 ? 0.0 : c_.inverse_mass[static_cast<size_t>(c.b)];
     const double alpha = c.compliance / (hs * hs), w = wa + wb;

@@ -5,7 +5,8 @@
 //   v+ = v0 + h/2 (a(x0) + w G(x0)^T lambda),  x1 = x0 + h v+,   g(x1) = 0         (SHAKE: lambda)
 //   v1 = v+ + h/2 (a(x1) + w G(x1)^T mu),                        G(x1) v1 = 0      (mu)
 // lambda by Newton's method on g(x1) = 0, mu by one linear solve (solvers/constraint_solver.hpp: Gauss-Seidel
-// sweeps over a chain's links would take ~N^2 sweeps to settle what an LU does at once).
+// sweeps over a chain's links would take ~N^2 sweeps to settle what an LU does at once). A compliant constraint
+// (alpha > 0) is a spring: its force joins a's, and SHAKE meets the rigid ones alone.
 #include "solvers/constraint_solver.hpp"
 #include "solvers/fixed_step.hpp"
 #include "solvers/method_table.hpp"
@@ -23,7 +24,8 @@ class Rattle final : public PlainStepping<Rattle> {
  public:
   static constexpr int size = 0;  // PlainStepping: no advance(), the state of a run-time size
 
-  explicit Rattle(const CountedSystem& s) : system_(s), c_(*s.as<DistanceConstraints>()), solver_(c_), n_(s.size() / 2), a_(n_) {}
+  explicit Rattle(const CountedSystem& s)
+      : system_(s), c_(*s.as<DistanceConstraints>()), rigid_(c_.rigid()), solver_(rigid_), n_(s.size() / 2), a_(n_) {}
 
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& message) override {
     y_next = y;
@@ -46,9 +48,11 @@ class Rattle final : public PlainStepping<Rattle> {
   }
 
  private:
-  // v += dt a(x, v), on the particles that move
+  // v += dt a(x, v), on the particles that move: the external acceleration and the compliant constraints'
+  // springs (Störmer-Verlet's kick)
   void kick(double t, double dt, const double* x, double* v) {
     c_.external(t, x, v, a_.data());
+    c_.add_compliant_forces(x, a_.data());
     ++system_.stats().rhs_evals;
     for (Eigen::Index i = 0; i < n_; ++i)
       if (c_.inverse_mass[static_cast<size_t>(i / c_.dimension)] > 0) v[i] += dt * a_[i];
@@ -56,6 +60,7 @@ class Rattle final : public PlainStepping<Rattle> {
 
   const CountedSystem& system_;
   const DistanceConstraints& c_;
+  DistanceConstraints rigid_;  // the constraints SHAKE and the tangent step meet; the compliant ones are forces
   ConstraintSolver solver_;
   Eigen::Index n_;
   Eigen::VectorXd a_;

@@ -41,7 +41,9 @@ CHOSEN_BY_TIME = {"recommendations.csv", "work_precision_pareto.csv", "cloth_rea
                   # its verdicts rank the methods by CPU time
                   "advice_sweep.csv", "advice_summary.csv", "advice_candidates.csv",
                   # the side-by-side videos: each method's step is the one its measured CPU time a step fits in the budget
-                  "side_by_side.csv", "side_by_side_frames.csv"}
+                  "side_by_side.csv", "side_by_side_frames.csv",
+                  # the constrained methods' cheapest setting for an error
+                  "constraints_cheapest.csv"}
 # tables of implicit-euler's cloth, and the rows of implicit-euler's methods elsewhere, reproducible to its
 # kept-factor residual
 KEPT_FACTOR = {"cloth_families.csv", "cloth_momentum.csv", "cloth_realtime.csv"}

@@ -147,6 +147,22 @@ TEST(Rattle, KeepsTheEnergyBoundedOverTenThousandPeriods) {
   EXPECT_LE(off, 3 * tolerance::shake_converged);  // L + 2 |x|
 }
 
+// a compliant constraint is a spring in RATTLE's kicks (Störmer-Verlet on it), not a rod to meet: on the Cartesian
+// pendulum with a rod of compliance 1e-3 m/N it converges at second order to the spring pendulum's answer (verner98
+// at rtol 1e-11 on the model's own equations), where meeting |x| = L would leave an error of the stretch's size
+TEST(Rattle, StepsACompliantConstraintAsASpringAtSecondOrder) {
+  const auto spring = cartesian(1.0, 1e-3);
+  const Measured reference = run_and_measure(*spring, "verner98", StepControl::adaptive(1e-11, 1e-13), 1.0, 1.0);
+  ASSERT_EQ(reference.result.status, Status::ok);
+  std::vector<double> errors;
+  for (const double dt : {2e-4, 1e-4, 5e-5}) {
+    const Measured m = run_and_measure(*spring, "rattle", StepControl::fixed(dt), 1.0, 1.0);
+    ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+    errors.push_back(max_norm_error(m.result.y_stop, reference.result.y_stop));
+  }
+  for (size_t k = 1; k < errors.size(); ++k) EXPECT_NEAR(std::log2(errors[k - 1] / errors[k]), 2.0, tolerance::order_band) << k;
+}
+
 // the chain of 20 links released from the horizontal has no closed form: its reference at t = 1 s is verner98 on
 // its constrained equations at rtol 1e-10, and RATTLE converges to it at second order (so the two agree to the
 // digits RATTLE's finest step reaches, and each run keeps its links at their length to rounding)
@@ -204,10 +220,39 @@ TEST(Projection, BaumgarteHoldsTheChainsDriftDown) {
   EXPECT_LE(drift_pulled, tolerance::baumgarte_drift_share * drift_plain);
 }
 
+// IDA on the constrained scenes as DAEs (solvers/methods/ida.cpp): the same variable-order BDF and error control
+// as CVODE's on the scenes' ODE form, so its error at t_end (against the reduced pendulum's exact answer, the
+// chain's reference) is no worse than CVODE BDF's at the same tolerances and falls as they tighten; the
+// constraints, equations of the DAE, are held to the tolerance
+TEST(Ida, SolvesTheConstrainedScenesLikeCvodeBdfOnTheirOdeForm) {
+  const auto pendulum = cartesian(1.0, 0.0);
+  const auto chain = make_model("chain", {});
+  const Measured reference = run_and_measure(*chain, "verner98", StepControl::adaptive(1e-10, 1e-12), 1.0, 1.0);
+  ASSERT_EQ(reference.result.status, Status::ok);
+  const auto* rod = pendulum->as<DistanceConstraints>();
+  const auto* links = chain->as<DistanceConstraints>();
+  std::vector<double> pendulum_errors, chain_errors;
+  for (const double rtol : {1e-6, 1e-9}) {
+    const StepControl control = StepControl::adaptive(rtol, rtol);
+    const Measured p = run_and_measure(*pendulum, "ida", control, 10.0, 0.1), pb = run_and_measure(*pendulum, "cvode-bdf", control, 10.0, 0.1);
+    const Measured c = run_and_measure(*chain, "ida", control, 1.0, 0.05), cb = run_and_measure(*chain, "cvode-bdf", control, 1.0, 0.05);
+    for (const Measured* m : {&p, &pb, &c, &cb}) ASSERT_EQ(m->result.status, Status::ok) << m->result.message;
+    pendulum_errors.push_back(*p.error);
+    chain_errors.push_back(max_norm_error(c.result.y_stop, reference.result.y_stop));
+    EXPECT_LE(pendulum_errors.back(), tolerance::bdf_peer_factor * *pb.error) << "rtol " << rtol;
+    EXPECT_LE(chain_errors.back(), tolerance::bdf_peer_factor * max_norm_error(cb.result.y_stop, reference.result.y_stop)) << "rtol " << rtol;
+    for (const auto& y : p.result.trajectory.y) EXPECT_LE(rod->drift(y.data()), tolerance::adaptive_agreement_factor * rtol) << "rtol " << rtol;
+    for (const auto& y : c.result.trajectory.y) EXPECT_LE(links->drift(y.data()), tolerance::adaptive_agreement_factor * rtol) << "rtol " << rtol;
+  }
+  // 1000 times tighter: at least 1000^(p/(p+1)) smaller for the lowest order, p = 1
+  EXPECT_GE(std::log10(pendulum_errors[0] / pendulum_errors[1]) / 3, tolerance::min_tolerance_slope(1));
+  EXPECT_GE(std::log10(chain_errors[0] / chain_errors[1]) / 3, tolerance::min_tolerance_slope(1));
+}
+
 // a scene without constraints refuses the constrained methods, naming what they need
 TEST(PositionBased, AModelWithoutConstraintsIsRefused) {
   const auto pendulum = make_model("pendulum", {});
-  for (const char* name : {"pbd", "xpbd", "rattle"}) {
+  for (const char* name : {"pbd", "xpbd", "rattle", "ida"}) {
     const Method& method = *find_method(name);
     EXPECT_FALSE(method_applies(method, *pendulum));
     EXPECT_NE(method_requirement(method, *pendulum).find("distance constraints"), std::string::npos);
