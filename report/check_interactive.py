@@ -14,6 +14,7 @@ chromium-driver).
 Screenshots (the top of the page, a figure after the clicks) go to SHOTS_DIR (default DIR). Exit 0 when all
 hold, 1 when not, 77 (CTest's skip) where Chromium, its driver or Selenium is missing, saying which.
 """
+import csv
 import os
 import re
 import shutil
@@ -137,7 +138,11 @@ def main():
                 else:
                     print(f"check_interactive: the legend's entry '{name}' hid its method and showed it again")
 
-        # the side-by-side videos play in the page: Chromium decodes each one's first frame at its size
+        # the side-by-side videos play in the page: Chromium decodes each one's first frame at its size (the CSV's)
+        sizes = {}
+        if os.path.exists(os.path.join(directory, "side_by_side.csv")):
+            for row in csv.DictReader(open(os.path.join(directory, "side_by_side.csv"))):
+                sizes[row["video"]] = [int(row["width"]), int(row["height"])]
         for video in browser.find_elements(By.TAG_NAME, "video"):
             source = video.get_attribute("src")
             browser.execute_script("arguments[0].scrollIntoView(); arguments[0].preload = 'auto'; arguments[0].load()", video)
@@ -146,11 +151,12 @@ def main():
                 time.sleep(0.05)
             state = browser.execute_script("return [arguments[0].readyState, arguments[0].videoWidth, arguments[0].videoHeight, "
                                            "arguments[0].error && arguments[0].error.code]", video)
-            if state[0] < 2 or state[1:] != [1280, 720, None]:
+            size = next((v for k, v in sizes.items() if source.endswith(k)), None)
+            if state[0] < 2 or state[1:] != [*(size or [-1, -1]), None]:
                 problems.append(f"{source}: not playable in the page (readyState, width, height, error: {state})")
         if videos := browser.find_elements(By.TAG_NAME, "video"):
             browser.save_screenshot(os.path.join(shots, "browser_video.png"))
-            print(f"check_interactive: {len(videos)} side-by-side videos decoded in the page at 1280 x 720")
+            print(f"check_interactive: {len(videos)} side-by-side videos decoded in the page at their sizes")
 
         # a table-of-contents link brings its section to the top
         link = browser.find_elements(By.CSS_SELECTOR, "nav a[href^='#']")[3]

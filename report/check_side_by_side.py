@@ -68,8 +68,10 @@ def main():
         if (codec, width, height, count) != ("h264", *want):
             problems.append(f"{video}: {codec} {width} x {height}, {count} frames; the CSV says h264 {want}")
             continue
-        if (width, height) != (1280, 720):
-            problems.append(f"{video}: {width} x {height}, not 1280 x 720")
+        # 640 x 360 panels, two a row
+        expected = (1280, 360 * ((len(rows) + 1) // 2))
+        if (width, height) != expected:
+            problems.append(f"{video}: {width} x {height}, not {expected[0]} x {expected[1]} ({len(rows)} panels of 640 x 360, two a row)")
         # the same simulated time in every panel of a frame, the reference's; a panel that stopped holds its last
         by_frame = {}
         for f in (f for f in frames if f["scene"] == scene):

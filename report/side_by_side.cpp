@@ -22,7 +22,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// a method of a clip and the step its calibration starts from
+// a method of a clip and the step its calibration starts from (a position-based method's: the substep, its step
+// being the frame)
 struct Contender {
   const char* method;
   double dt;
@@ -50,9 +51,10 @@ const std::vector<Clip>& clips() {
       // rk4 in place of tsitouras54, which is stability-bound here (1 s of CPU a simulated second at any loose
       // tolerance) and takes no fixed step for the frames to fall on
       {"flag", {}, 2.0, 0.5, 1.0, {"", 0}, "real time: 1 s of CPU per simulated second", 0.25,
-       {{"implicit-euler", 1.0 / 60}, {"fast-mass-spring", 1.0 / 240}, {"rk4", 1e-3}}, {"rk4", 2.5e-4},
+       {{"implicit-euler", 1.0 / 60}, {"fast-mass-spring", 1.0 / 240}, {"rk4", 1e-3}, {"xpbd", 1.0 / 1200}}, {"rk4", 2.5e-4},
        "The seeds' 32 x 32 flag: the implicit methods take large steps and damp the billowing out; rk4 affords steps "
-       "far below its stability limit.",
+       "far below its stability limit; xpbd (its springs as compliant constraints) steps each frame in as many substeps "
+       "as the budget buys.",
        5},
       // released at 170 degrees, near the top: a small energy error changes the swing's period, or sends it over
       {"pendulum", {"theta0=2.9670597283903604"}, 10.0, 5.0, std::nullopt, {"rk4", 1.0 / 30}, "rk4's CPU time at one step a frame", 1,
@@ -78,21 +80,28 @@ double timed_span(const Clip& clip, double t_end, double interval) {
   return std::min(t_end, interval * std::max(4.0, std::floor(t_end * clip.timed_share / interval)));
 }
 
+std::string step_text(double dt) {
+  const double per_second = 1 / dt;
+  return std::abs(per_second - std::round(per_second)) < 1e-6 * per_second ? fmt::format("dt 1/{:.0f} s", per_second) : fmt::format("dt {:.3g} s", dt);
+}
+
+// `method` at n steps a frame of `interval`: n steps of interval / n, or a position-based method's one step a
+// frame in n substeps (of one iteration: Macklin et al.'s small steps)
+Panel panel_at(const char* method, int n, double interval) {
+  if (find_method(method)->substepped) return {method, interval, fmt::format("{} in {} substeps", step_text(interval), n), n};
+  return {method, interval / n, step_text(interval / n)};
+}
+
 // the steps a frame that keep `method`'s CPU time within `budget` over t_end, at least one: its CPU time over
 // the span, c(n) = a + b n at n steps a frame (a: the run's fixed costs and outputs, b: the steps), measured at
 // two step counts, scaled to the run and solved for the budget
 int steps_within(const RunOptions& scene, const char* method, double dt, int fps, double t_end, double span, double budget) {
   const double interval = 1.0 / fps;
   const int n1 = static_cast<int>(std::lround(interval / on_frames(dt, interval))), n2 = 2 * n1;
-  const auto cost = [&](int n) { return panel_cpu_seconds(scene, {method, interval / n, ""}, fps, span) * t_end / span; };
+  const auto cost = [&](int n) { return panel_cpu_seconds(scene, panel_at(method, n, interval), fps, span) * t_end / span; };
   const double c1 = cost(n1), c2 = cost(n2);
   const double b = std::max(c2 - c1, 1e-3 * c2) / (n2 - n1), a = std::max(0.0, c1 - b * n1);
   return static_cast<int>(std::clamp(std::floor((budget - a) / b), 1.0, 1e6));
-}
-
-std::string step_text(double dt) {
-  const double per_second = 1 / dt;
-  return std::abs(per_second - std::round(per_second)) < 1e-6 * per_second ? fmt::format("dt 1/{:.0f} s", per_second) : fmt::format("dt {:.3g} s", dt);
 }
 
 struct Shot {
@@ -152,9 +161,10 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
                                   : panel_cpu_seconds(o.run, {clip.anchor.method, on_frames(clip.anchor.dt, interval), ""}, fps, span) * t_end / span;
     for (const Contender& c : clip.methods) {
       // the method that sets the budget takes its own step
-      const double dt = c.method == std::string_view(clip.anchor.method) ? on_frames(clip.anchor.dt, interval)
-                                                                        : interval / steps_within(o.run, c.method, c.dt, fps, t_end, span, shot.budget);
-      o.panels.push_back({c.method, dt, step_text(dt)});
+      const bool anchor = c.method == std::string_view(clip.anchor.method);
+      const int n = anchor ? static_cast<int>(std::lround(interval / on_frames(clip.anchor.dt, interval)))
+                           : steps_within(o.run, c.method, c.dt, fps, t_end, span, shot.budget);
+      o.panels.push_back(panel_at(c.method, n, interval));
     }
     const double reference_dt = on_frames(clip.reference.dt, interval);
     o.panels.push_back({clip.reference.method, reference_dt, step_text(reference_dt)});
@@ -195,7 +205,7 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
       low = std::min(low, std::get<double>(cell_of(panels, panels.rows[k], "cpu_over_budget")));
       high = std::max(high, std::get<double>(cell_of(panels, panels.rows[k], "cpu_over_budget")));
     }
-    body += fmt::format("### {}\n\n{} The budget: {}, {} here; each method's step is the longest whole fraction of a frame that its "
+    body += fmt::format("### {}\n\n{} The budget: {}, {} here; each method's step is the longest whole fraction of a frame (xpbd's: the most substeps of a frame) that its "
                         "CPU time, measured at two steps beforehand, keeps within it (at least one step a frame). Filmed, they took "
                         "{:.2f} to {:.2f} of the budget (whole steps a frame, and CPU times that vary from run to run). The last panel "
                         "is the reference.\n\n",

@@ -82,6 +82,7 @@ PreparedRun prepare_panel(const RunOptions& scene, const Panel& panel, double in
   RunOptions run = scene;
   run.method = panel.method;
   run.dt = panel.dt;
+  if (panel.substeps > 0) run.substeps = panel.substeps, run.iterations = 1;
   PreparedRun p = prepare_run(run);
   const double steps = interval / panel.dt;
   if (!(std::abs(steps - std::round(steps)) <= 1e-9 * steps))
