@@ -22,6 +22,8 @@ namespace stepwise {
 namespace {
 
 constexpr double frame = 1.0 / 60;  // an engine's frame step (s), which position-based methods divide into substeps
+// the stiffness table's rod (m/N), and Hooke's stretch of a 1 kg mass hanging on it (m)
+constexpr double rod_compliance = 1e-3, hooke_stretch = 9.81 * rod_compliance;
 
 // how an ODE method is kept on the constraints ("" plain, "projection", "baumgarte"), or which of a position-based
 // method's knobs a sweep turns ("small steps": substeps of one iteration; "iterations": one substep)
@@ -233,7 +235,7 @@ Table substeps_table(const StudyContext& ctx, const std::vector<SubstepSubject>&
 // substep, for 1 s: its mean stretch over the last half against Hooke's m g alpha, for pbd and xpbd at each
 // iteration count
 Table stiffness_table(const StudyContext& ctx) {
-  const double alpha = 1e-3, hooke = 9.81 * alpha;
+  const double alpha = rod_compliance, hooke = hooke_stretch;
   std::vector<Setting> settings;
   for (int i = 1; i <= 64; i *= 2)
     for (const char* method : {"pbd", "xpbd"}) settings.push_back({0, method, "", position_based(frame, 1, i)});
@@ -376,28 +378,39 @@ std::vector<Figure> figures_of(std::string& md, const std::string& stiffness_cap
   return figures;
 }
 
-StudyOutput constraints(const StudyContext& ctx) {
+// what the study measures: its tables, and the numbers its text names
+struct Measurements {
+  Table wp, cheapest, long_run, long_run_ends, damping, substeps, stiffness, sag;
+  double spring_sag = NAN;
+  int periods = 0;
+};
+
+constexpr double target = 1e-3;           // the error the cheapest table is for
+constexpr double pendulum_t_end = 10.0;  // s: the Cartesian pendulum's run in the work-precision sweep
+
+Measurements measure(const StudyContext& ctx) {
   const bool quick = ctx.quick;
-  const std::vector<ConstrainedScene> scenes{{"pendulum-cartesian", "pendulum-cartesian", {{"theta0", 1.0}}, 10.0, 0.02},
+  Measurements t;
+  const std::vector<ConstrainedScene> scenes{{"pendulum-cartesian", "pendulum-cartesian", {{"theta0", 1.0}}, pendulum_t_end, 0.02},
                                              {"chain", "chain", {{"links", 20}}, 1.0, 0.004}};
   std::vector<Eigen::VectorXd> truths;
   for (const auto& s : scenes) truths.push_back(truth_of(s));
   std::vector<Setting> settings;
   for (size_t k = 0; k < scenes.size(); ++k)
     for (auto& s : work_precision_settings(k, scenes[k].dt0, quick)) settings.push_back(std::move(s));
-  Table wp = work_precision_table(ctx, scenes, truths, std::move(settings));
-  const double target = 1e-3;
-  Table cheapest = cheapest_table(wp, target);
-  const int periods = quick ? 100 : 1000;
-  Table long_run_ends;
-  Table long_run = long_run_table(ctx, 1.0, periods, long_run_ends);
-  Table damping = damping_table(ctx, quick);
-  Table substeps = substeps_table(ctx, {{scenes[1], truths[1], quick ? std::vector<int>{8, 64} : std::vector<int>{8, 64, 512}}, flag_subject(quick)});
-  Table stiffness = stiffness_table(ctx);
-  double spring_sag = NAN;
-  Table sag = sag_table(ctx, quick, spring_sag);
-  const double hooke = 9.81e-3;
+  t.wp = work_precision_table(ctx, scenes, truths, std::move(settings));
+  t.cheapest = cheapest_table(t.wp, target);
+  t.periods = quick ? 100 : 1000;
+  t.long_run = long_run_table(ctx, 1.0, t.periods, t.long_run_ends);
+  t.damping = damping_table(ctx, quick);
+  t.substeps = substeps_table(ctx, {{scenes[1], truths[1], quick ? std::vector<int>{8, 64} : std::vector<int>{8, 64, 512}}, flag_subject(quick)});
+  t.stiffness = stiffness_table(ctx);
+  t.sag = sag_table(ctx, quick, t.spring_sag);
+  return t;
+}
 
+// the section's text and tables, then its figures
+std::string section(const Measurements& t, bool quick, std::vector<Figure>& figures) {
   std::string md = fmt::format(
       "The Cartesian pendulum (theta0 = 1 rad, {} s; its answer the reduced pendulum's exact theta(t)) and a chain of 20 rigid links "
       "released from the horizontal (1 s; its reference verner98 at rtol 1e-10, to which RATTLE converges at second order). The ODE "
@@ -405,47 +418,51 @@ StudyOutput constraints(const StudyContext& ctx) {
       "projected back after every step (`--constraint project`) or Baumgarte-stabilised (`--constraint baumgarte`); RATTLE is symplectic "
       "on the constraint manifold; xpbd (Macklin, Mueller & Chentanez 2016) steps a 1/60 s frame in substeps of Gauss-Seidel iterations.\n\n"
       "**The cheapest setting of each to reach a max-norm error of {:.0e} at t_end:**\n\n",
-      scenes[0].t_end, target);
-  md += markdown_table(cheapest, {{"scene", "scene"}, {"method", "method"}, {"variant", "kept by"}, {"setting", "setting"},
+      pendulum_t_end, target);
+  md += markdown_table(t.cheapest, {{"scene", "scene"}, {"method", "method"}, {"variant", "kept by"}, {"setting", "setting"},
                                   {"error", "error", shown_as("sci")}, {"cpu_seconds", "CPU (s)", shown_as("sci")}});
   md += fmt::format("\nOver {} periods at dt = T/100 (or until the run diverged), the drift from |x| = L and the energy error at the "
-                    "last sample:\n\n", periods);
-  md += markdown_table(long_run_ends, {{"method", "method"}, {"variant", "kept by"}, {"status", "run"}, {"periods", "periods"},
+                    "last sample:\n\n", t.periods);
+  md += markdown_table(t.long_run_ends, {{"method", "method"}, {"variant", "kept by"}, {"status", "run"}, {"periods", "periods"},
                                        {"drift", "drift", shown_as("sci")}, {"relative_energy_error", "energy error", shown_as("sci")}});
   md += fmt::format("\nMacklin et al. (2019)'s claim: a frame's budget of constraint sweeps spent as substeps of fewer iterations, on the "
                     "chain (against its reference at 1 s) and on the seeds' 32 x 32 flag (its springs as compliant constraints; against xpbd's own "
                     "answer at {} substeps of one iteration, at {} s):\n\n", flag_reference, quick ? 0.25 : 1.0);
-  md += markdown_table(substeps, {{"scene", "scene"}, {"budget", "sweeps a frame"}, {"substeps", "substeps"}, {"iterations", "iterations"},
+  md += markdown_table(t.substeps, {{"scene", "scene"}, {"budget", "sweeps a frame"}, {"substeps", "substeps"}, {"iterations", "iterations"},
                                   {"error", "error", shown_as("sci")}, {"drift", "drift", shown_as("sci")}, {"cpu_seconds", "CPU (s)", shown_as("sci")}});
   md += "\nArtificial damping, the energy above the bottom lost per period over 10 periods:\n\n";
-  md += markdown_table(damping, {{"method", "method"}, {"variant", "kept by"}, {"step", "(sub)step (s)", shown_as("{:.3g}")},
+  md += markdown_table(t.damping, {{"method", "method"}, {"variant", "kept by"}, {"step", "(sub)step (s)", shown_as("{:.3g}")},
                                  {"energy_loss_per_period", "lost per period", shown_as("sci")}});
   md += fmt::format("\nA 1 kg mass hanging on a rod of compliance 1e-3 m/N (Hooke's stretch m g alpha = {:.3g} m), one substep of "
-                    "1/60 s: its mean stretch over the last half second against the iterations a frame:\n\n", hooke);
-  md += markdown_table(stiffness, {{"method", "method"}, {"iterations", "iterations"}, {"stretch", "stretch (m)", shown_as("{:.4g}")}});
+                    "1/60 s: its mean stretch over the last half second against the iterations a frame:\n\n", hooke_stretch);
+  md += markdown_table(t.stiffness, {{"method", "method"}, {"iterations", "iterations"}, {"stretch", "stretch (m)", shown_as("{:.4g}")}});
   md += fmt::format("\nThe hanging cloth (24 x 24, its springs read as compliant constraints of the same stiffness), one substep of 1/60 s: "
-                    "its sag over the third second against the iterations a frame, beside the spring model's at rest ({:.4g} m):\n\n", spring_sag);
-  md += markdown_table(sag, {{"method", "method"}, {"iterations", "iterations"}, {"sag", "sag (m)", shown_as("{:.4g}")}});
+                    "its sag over the third second against the iterations a frame, beside the spring model's at rest ({:.4g} m):\n\n", t.spring_sag);
+  md += markdown_table(t.sag, {{"method", "method"}, {"iterations", "iterations"}, {"sag", "sag (m)", shown_as("{:.4g}")}});
   md += "\n";
-  std::vector<Figure> figures = figures_of(md, "The hanging mass's stretch against the iterations a frame (compliance 1e-3 m/N)", hooke, spring_sag);
+  figures = figures_of(md, "The hanging mass's stretch against the iterations a frame (compliance 1e-3 m/N)", hooke_stretch, t.spring_sag);
+  return md;
+}
 
+// what the section found, for the report's opening: a sentence each, its numbers as the tables show them
+std::vector<std::string> findings_of(const Measurements& t, bool quick) {
   std::vector<std::string> findings;
   const auto end_of = [&](const char* method, const char* variant, const char* column) {
-    const auto* row = row_where(long_run_ends, {{"method", std::string(method)}, {"variant", std::string(variant)}});
-    return row ? shown_as("sci")(cell_of(long_run_ends, *row, column)) : std::string("-");
+    const auto* row = row_where(t.long_run_ends, {{"method", std::string(method)}, {"variant", std::string(variant)}});
+    return row ? shown_as("sci")(cell_of(t.long_run_ends, *row, column)) : std::string("-");
   };
-  const auto* plain = row_where(long_run_ends, {{"method", std::string("rk4")}, {"variant", std::string()}});
-  const std::string plain_end = plain && text(long_run_ends, *plain, "status") != "ok"
-                                    ? fmt::format("drifts {} off its rod by period {} and then diverges", end_of("rk4", "", "drift"), number(long_run_ends, *plain, "periods"))
+  const auto* plain = row_where(t.long_run_ends, {{"method", std::string("rk4")}, {"variant", std::string()}});
+  const std::string plain_end = plain && text(t.long_run_ends, *plain, "status") != "ok"
+                                    ? fmt::format("drifts {} off its rod by period {} and then diverges", end_of("rk4", "", "drift"), number(t.long_run_ends, *plain, "periods"))
                                     : fmt::format("ends {} off its rod", end_of("rk4", "", "drift"));
   findings.push_back(fmt::format("**A constraint left to an ODE method drifts; kept, it does not**: over {} periods of the Cartesian pendulum at "
                                  "dt = T/100, rk4 on the constrained equations {}; with Baumgarte stabilisation it ends {} off, projected "
                                  "after each step {} and RATTLE {}, while xpbd at the same step keeps its rod and loses its swing (energy error {}: at rest).",
-                                 periods, plain_end, end_of("rk4", "baumgarte", "drift"), end_of("rk4", "projection", "drift"), end_of("rattle", "", "drift"),
+                                 t.periods, plain_end, end_of("rk4", "baumgarte", "drift"), end_of("rk4", "projection", "drift"), end_of("rattle", "", "drift"),
                                  end_of("xpbd", "small steps", "relative_energy_error")));
   const auto substep_error = [&](const char* scene, long budget, long s) {
-    const auto* row = row_where(substeps, {{"scene", std::string(scene)}, {"budget", budget}, {"substeps", s}});
-    return row ? number(substeps, *row, "error") : std::numeric_limits<double>::quiet_NaN();
+    const auto* row = row_where(t.substeps, {{"scene", std::string(scene)}, {"budget", budget}, {"substeps", s}});
+    return row ? number(t.substeps, *row, "error") : std::numeric_limits<double>::quiet_NaN();
   };
   findings.push_back(fmt::format("**Small steps win (Macklin et al. 2019), measured**: on the 20-link chain at a budget of 64 constraint sweeps a "
                                  "1/60 s frame, xpbd's error at 1 s is {} as 64 substeps of one iteration and {} as one substep of 64 iterations; "
@@ -453,33 +470,40 @@ StudyOutput constraints(const StudyContext& ctx) {
                                  sci(substep_error("chain", 64, 64)), sci(substep_error("chain", 64, 1)), sci(substep_error("flag", 16, 16)),
                                  sci(substep_error("flag", 16, 1))));
   const auto damping_at = [&](const char* method, double step) {
-    for (const auto& row : damping.rows)
-      if (text(damping, row, "method") == method && std::abs(number(damping, row, "step") / step - 1) < 1e-9) return number(damping, row, "energy_loss_per_period");
+    for (const auto& row : t.damping.rows)
+      if (text(t.damping, row, "method") == method && std::abs(number(t.damping, row, "step") / step - 1) < 1e-9) return number(t.damping, row, "energy_loss_per_period");
     return std::numeric_limits<double>::quiet_NaN();
   };
   findings.push_back(fmt::format("**XPBD damps what it steps**: the Cartesian pendulum loses {} of its energy a period under xpbd at one 1/60 s "
                                  "substep, {} at 32 substeps, and {} under implicit Euler at 1/60 s; RATTLE loses {}.",
                                  sci(damping_at("xpbd", frame)), sci(damping_at("xpbd", frame / 32)), sci(damping_at("implicit-euler", frame)), sci(damping_at("rattle", frame))));
   const auto stretch_at = [&](const char* method, long iterations) {
-    const auto* row = row_where(stiffness, {{"method", std::string(method)}, {"iterations", iterations}});
-    return row ? number(stiffness, *row, "stretch") : std::numeric_limits<double>::quiet_NaN();
+    const auto* row = row_where(t.stiffness, {{"method", std::string(method)}, {"iterations", iterations}});
+    return row ? number(t.stiffness, *row, "stretch") : std::numeric_limits<double>::quiet_NaN();
   };
   const auto sag_at = [&](const char* method, long iterations) {
-    const auto* row = row_where(sag, {{"method", std::string(method)}, {"iterations", iterations}});
-    return row ? number(sag, *row, "sag") : std::numeric_limits<double>::quiet_NaN();
+    const auto* row = row_where(t.sag, {{"method", std::string(method)}, {"iterations", iterations}});
+    return row ? number(t.sag, *row, "sag") : std::numeric_limits<double>::quiet_NaN();
   };
   const long most = quick ? 8 : 64;
   findings.push_back(fmt::format("**PBD's stiffness is its iteration count; XPBD's is the material's, once its iterations converge**: a mass on a rod "
                                  "of compliance 1e-3 m/N stretches {:.4g} m under xpbd at 1 and at 64 iterations a 1/60 s frame (Hooke: {:.3g} m) and "
                                  "under pbd from {:.4g} m to {:.4g} m; the 24 x 24 hanging cloth, whose {} constraints one sweep does not settle, "
                                  "sags {:.4g} m under xpbd at 1 iteration and {:.4g} m at {}, against the spring model's {:.4g} m at rest (pbd: {:.4g} m).",
-                                 stretch_at("xpbd", 64), hooke, stretch_at("pbd", 1), stretch_at("pbd", 64),
+                                 stretch_at("xpbd", 64), hooke_stretch, stretch_at("pbd", 1), stretch_at("pbd", 64),
                                  make_model("cloth", hanging_cloth)->as<DistanceConstraints>()->constraints.size(), sag_at("xpbd", 1), sag_at("xpbd", most), most,
-                                 spring_sag, sag_at("pbd", most)));
-  return {{{"constraints_cheapest", std::move(cheapest)}, {"constraints_work_precision", std::move(wp)}, {"constraints_long_run", std::move(long_run)},
-           {"constraints_long_run_ends", std::move(long_run_ends)},
-           {"constraints_substeps", std::move(substeps)}, {"constraints_damping", std::move(damping)}, {"constraints_stiffness", std::move(stiffness)},
-           {"constraints_sag", std::move(sag)}},
+                                 t.spring_sag, sag_at("pbd", most)));
+  return findings;
+}
+
+StudyOutput constraints(const StudyContext& ctx) {
+  Measurements t = measure(ctx);
+  std::vector<Figure> figures;
+  std::string md = section(t, ctx.quick, figures);
+  std::vector<std::string> findings = findings_of(t, ctx.quick);
+  return {{{"constraints_cheapest", std::move(t.cheapest)}, {"constraints_work_precision", std::move(t.wp)}, {"constraints_long_run", std::move(t.long_run)},
+           {"constraints_long_run_ends", std::move(t.long_run_ends)}, {"constraints_substeps", std::move(t.substeps)},
+           {"constraints_damping", std::move(t.damping)}, {"constraints_stiffness", std::move(t.stiffness)}, {"constraints_sag", std::move(t.sag)}},
           md, figures, findings};
 }
 
