@@ -17,6 +17,11 @@ struct Scene {
   double t_end;
   double time_scale;  // fastest time scale (s), for the coarsest step
 };
+// how gtest and CTest's listing print a scene: its model and parameters, not its bytes
+void PrintTo(const Scene& s, std::ostream* os) {
+  *os << s.model;
+  for (const auto& [key, value] : s.params) *os << ' ' << key << '=' << value;
+}
 
 // orders above 5, and the 5(4) pairs (Dormand-Prince, Tsitouras), whose small principal error coefficient leaves the sixth-order
 // term competing over the scenes above (slopes 4.7 to 5.2 measured): each on a run long enough for its
