@@ -201,37 +201,8 @@ class Cloth final : public Model {
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
     view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                                    Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
-    // IMEX: x' = v and the springs' forces implicit, the rest explicit
-    split_.stiff = "the springs and their damping";
-    split_.implicit_part = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
-      f.head(3 * free_) = y.tail(3 * free_);
-      acceleration(t, y, f.tail(3 * free_), Forces::stiff);
-    };
-    split_.explicit_part = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
-      f.head(3 * free_).setZero();
-      acceleration(t, y, f.tail(3 * free_), Forces::nonstiff);
-    };
-    split_.implicit_jacobian = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) {
-      Eigen::SparseMatrix<double> dfdx, dfdv;
-      force_jacobians(t, y, false, dfdx, dfdv, Forces::stiff);
-      mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
-    };
-    // the springs read as compliant distance constraints (alpha = 1 / stiffness: the same material), which the
-    // position-based methods, RATTLE and IDA step; the other forces (wind, the pick, drag, gravity) are their
-    // external acceleration, and the springs' Voigt damping is left out (XPBD damps by itself). A stiffness
-    // taken to infinity (--set stiffness=1e12) is the inextensible cloth
-    constraints_.dimension = 3;
-    constraints_.inverse_mass.assign(static_cast<size_t>(free_), 1 / node_mass_);
-    for (const Spring& s : view_.springs) {
-      if (!(s.stiffness > 0)) continue;
-      if (s.a < 0) constraints_.constraints.push_back({s.b, -1, s.anchor, s.rest, 1 / s.stiffness});
-      else constraints_.constraints.push_back({s.a, s.b, Eigen::Vector3d::Zero(), s.rest, 1 / s.stiffness});
-    }
-    constraints_.external = [this](double t, const double* x, const double* v, double* a) {
-      Eigen::VectorXd y(6 * free_);
-      y << Eigen::Map<const Eigen::VectorXd>(x, 3 * free_), Eigen::Map<const Eigen::VectorXd>(v, 3 * free_);
-      acceleration(t, y, Eigen::Map<Eigen::VectorXd>(a, 3 * free_), Forces::nonstiff);
-    };
+    set_up_split();
+    read_springs_as_constraints();
   }
   Cloth(const Cloth&) = delete;  // its capabilities hold `this`
   Cloth& operator=(const Cloth&) = delete;
@@ -391,6 +362,43 @@ class Cloth final : public Model {
   }
 
  private:
+  // IMEX: x' = v and the springs' forces implicit, the rest explicit
+  void set_up_split() {
+    split_.stiff = "the springs and their damping";
+    split_.implicit_part = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+      f.head(3 * free_) = y.tail(3 * free_);
+      acceleration(t, y, f.tail(3 * free_), Forces::stiff);
+    };
+    split_.explicit_part = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+      f.head(3 * free_).setZero();
+      acceleration(t, y, f.tail(3 * free_), Forces::nonstiff);
+    };
+    split_.implicit_jacobian = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) {
+      Eigen::SparseMatrix<double> dfdx, dfdv;
+      force_jacobians(t, y, false, dfdx, dfdv, Forces::stiff);
+      mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
+    };
+  }
+
+  // the springs read as compliant distance constraints (alpha = 1 / stiffness: the same material), which the
+  // position-based methods, RATTLE and IDA step; the other forces (wind, the pick, drag, gravity) are their
+  // external acceleration, and the springs' Voigt damping is left out (XPBD damps by itself). A stiffness
+  // taken to infinity (--set stiffness=1e12) is the inextensible cloth
+  void read_springs_as_constraints() {
+    constraints_.dimension = 3;
+    constraints_.inverse_mass.assign(static_cast<size_t>(free_), 1 / node_mass_);
+    for (const Spring& s : view_.springs) {
+      if (!(s.stiffness > 0)) continue;
+      if (s.a < 0) constraints_.constraints.push_back({s.b, -1, s.anchor, s.rest, 1 / s.stiffness});
+      else constraints_.constraints.push_back({s.a, s.b, Eigen::Vector3d::Zero(), s.rest, 1 / s.stiffness});
+    }
+    constraints_.external = [this](double t, const double* x, const double* v, double* a) {
+      Eigen::VectorXd y(6 * free_);
+      y << Eigen::Map<const Eigen::VectorXd>(x, 3 * free_), Eigen::Map<const Eigen::VectorXd>(v, 3 * free_);
+      acceleration(t, y, Eigen::Map<Eigen::VectorXd>(a, 3 * free_), Forces::nonstiff);
+    };
+  }
+
   // at most 1024 a side: a million nodes, whose sparse factor already takes gigabytes
   static int grid_size(const Params& p, const char* key) { return grid_index(p, key, 2, 1024, false); }
   Eigen::Vector3d wind_at(double t) const { return wind_ * (1 + gust_ * std::sin(2 * std::numbers::pi * gust_frequency_ * t)); }
