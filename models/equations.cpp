@@ -763,15 +763,24 @@ class Equations final : public Model {
   Equations& operator=(const Equations&) = delete;
 
   std::string_view name() const override { return "equations"; }
-  int size() const override { return static_cast<int>(names_.size()); }
+  // the variables, then a resting flag for each event with a rest rule
+  int size() const override { return static_cast<int>(names_.size() + flag_names_.size()); }
   bool autonomous() const override { return autonomous_; }
-  std::vector<std::string> state_names() const override { return names_; }
+  std::vector<std::string> state_names() const override {
+    std::vector<std::string> names = names_;
+    names.insert(names.end(), flag_names_.begin(), flag_names_.end());
+    return names;
+  }
   Eigen::VectorXd initial_state() const override { return y0_; }
+  std::span<const Event> events() const override { return events_; }
 
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
-    if (const NativeFn native = native_rhs_.load(std::memory_order_acquire)) return native(t, y.data(), p_.data(), dydt.data());
-    double* stack = scratch(depth_);
-    for (size_t i = 0; i < rhs_.size(); ++i) dydt[static_cast<Eigen::Index>(i)] = run(rhs_[i], t, y.data(), p_.data(), stack);
+    if (const NativeFn native = native_rhs_.load(std::memory_order_acquire)) native(t, y.data(), p_.data(), dydt.data());
+    else {
+      double* stack = scratch(depth_);
+      for (size_t i = 0; i < rhs_.size(); ++i) dydt[static_cast<Eigen::Index>(i)] = run(rhs_[i], t, y.data(), p_.data(), stack);
+    }
+    if (!flag_names_.empty()) hold(y, [&](int variable) { dydt[variable] = 0; });
   }
 
   bool has_jacobian() const override { return true; }
@@ -781,21 +790,28 @@ class Equations final : public Model {
     values.resize(J.rows.size());
     jacobian_values(t, y.data(), values.data());
     dfdy.setZero();
-    for (Eigen::Index c = 0; c < size(); ++c)
-      for (int k = J.columns[static_cast<size_t>(c)]; k < J.columns[static_cast<size_t>(c) + 1]; ++k) dfdy(J.rows[static_cast<size_t>(k)], c) = values[static_cast<size_t>(k)];
+    for (size_t c = 0; c < names_.size(); ++c)
+      for (int k = J.columns[c]; k < J.columns[c + 1]; ++k) dfdy(J.rows[static_cast<size_t>(k)], static_cast<Eigen::Index>(c)) = values[static_cast<size_t>(k)];
+    if (!flag_names_.empty()) hold(y, [&](int variable) { dfdy.row(variable).setZero(); });
   }
   bool has_sparse_jacobian() const override { return true; }
   void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
     const JacobianTapes& J = jacobian_tapes();
     if (dfdy.rows() != size() || dfdy.cols() != size() || dfdy.nonZeros() != static_cast<Eigen::Index>(J.rows.size()) || !dfdy.isCompressed()) {
       std::vector<Eigen::Triplet<double>> pattern;
-      for (int c = 0; c < size(); ++c)
-        for (int k = J.columns[static_cast<size_t>(c)]; k < J.columns[static_cast<size_t>(c) + 1]; ++k) pattern.emplace_back(J.rows[static_cast<size_t>(k)], c, 1.0);
+      for (size_t c = 0; c < names_.size(); ++c)
+        for (int k = J.columns[c]; k < J.columns[c + 1]; ++k) pattern.emplace_back(J.rows[static_cast<size_t>(k)], static_cast<int>(c), 1.0);
       dfdy.resize(size(), size());
       dfdy.setFromTriplets(pattern.begin(), pattern.end());
       dfdy.makeCompressed();
     }
     jacobian_values(t, y.data(), dfdy.valuePtr());
+    if (!flag_names_.empty())
+      hold(y, [&](int variable) {
+        for (Eigen::Index c = 0; c < dfdy.outerSize(); ++c)
+          for (Eigen::SparseMatrix<double>::InnerIterator it(dfdy, c); it; ++it)
+            if (it.row() == variable) it.valueRef() = 0;
+      });
   }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
@@ -805,11 +821,13 @@ class Equations final : public Model {
   bool has_exact() const override { return !exact_.empty() && evaluation_.exact_note.empty(); }
   Eigen::VectorXd exact(double t) const override {
     if (exact_.empty()) return Model::exact(t);
-    Eigen::VectorXd y(size());
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
     for (size_t i = 0; i < exact_.size(); ++i) y[static_cast<Eigen::Index>(i)] = run(exact_[i], t, nullptr, p_.data(), scratch(depth_));
     return y;
   }
   const void* capability(const std::type_info& type) const override {
+    // a resting flag is held by rhs(): the inline f and the (x, v) layout would pass it by
+    if (!flag_names_.empty()) return nullptr;
     if (second_order_.positions > 0 && inline_rhs_) return offer(type, second_order_, *inline_rhs_);
     if (second_order_.positions > 0) return offer(type, second_order_);
     return inline_rhs_ ? offer(type, *inline_rhs_) : nullptr;
@@ -834,6 +852,25 @@ class Equations final : public Model {
   }
   void make_jacobian(bool ginac_held) const;
 
+  // the scene's events: g, its rate along the solution, the action's formulas, the rest rule's two sides
+  struct EventTapes {
+    Tape g, rate;
+    std::vector<std::pair<int, Tape>> action;  // the variable set, and its formula
+    std::optional<std::pair<Tape, Tape>> rest; // left, right
+    std::string comparison;                    // "<", "<=", ">", ">="
+    int flag = -1;                             // where its resting flag is in the state, or -1 (no rest rule)
+  };
+  void make_events(const EquationsSpec& spec);
+  std::string fire(const EventTapes& e, double t, Eigen::VectorXd& y) const;
+  // calls held(variable) for each variable an event's rest rule holds at 0 in the state y
+  template <class Held>
+  void hold(const Eigen::Ref<const Eigen::VectorXd>& y, Held&& held) const {
+    for (const EventTapes& e : event_tapes_)
+      if (e.flag >= 0 && y[e.flag] != 0)
+        for (const auto& [variable, tape] : e.action) held(variable);
+    for (size_t k = 0; k < flag_names_.size(); ++k) held(static_cast<int>(names_.size() + k));
+  }
+
   // build's steps, in order
   void build(const EquationsSpec& spec, const Params& values, const EquationsOptions& options);
   void make_symbols(const EquationsSpec& spec, const Params& parameters, const Params& initial);
@@ -845,6 +882,9 @@ class Equations final : public Model {
   NativeSource native_source(const EquationsOptions& options);
 
   std::vector<std::string> names_;
+  std::vector<std::string> flag_names_;  // "NAME.resting", one for each event with a rest rule
+  std::vector<EventTapes> event_tapes_;
+  std::vector<Event> events_;
   Eigen::VectorXd y0_;
   std::vector<double> p_;
   std::vector<Tape> rhs_, exact_;
@@ -913,14 +953,111 @@ std::vector<const Formula*> Equations::make_tapes(const EquationsSpec& spec) {
     exact_[i] = TapeBuilder(s, derived, formula.where(), &formula).build(parse(formula, s, false, true));
   }
   if (spec.energy) energy_ = TapeBuilder(s, derived, spec.energy->where(), &*spec.energy).build(parse(*spec.energy, s, true, false));
+  make_events(spec);
   // the derived slots, from the parameters (each reads parameters and numbers only)
   for (const Tape& t : derived.tapes) depth_ = std::max(depth_, t.depth);
   for (const Tape& t : derived.tapes) p_.push_back(run(t, 0, nullptr, p_.data(), scratch(depth_)));
   for (const auto* tapes : {&rhs_, &exact_})
     for (const Tape& t : *tapes) depth_ = std::max(depth_, t.depth);
   if (energy_) depth_ = std::max(depth_, energy_->depth);
+  for (const EventTapes& e : event_tapes_) {
+    depth_ = std::max({depth_, e.g.depth, e.rate.depth});
+    for (const auto& [variable, tape] : e.action) depth_ = std::max(depth_, tape.depth);
+    if (e.rest) depth_ = std::max({depth_, e.rest->first.depth, e.rest->second.depth});
+  }
 
   return formula_of;
+}
+
+// the rest rule's comparison: where it splits the text, and which it is ("abs(v) < 1e-3": at 7, "<")
+std::pair<size_t, std::string> comparison_in(const Formula& f) {
+  for (size_t i = 0; i < f.text.size(); ++i)
+    if (f.text[i] == '<' || f.text[i] == '>') return {i, f.text.substr(i, i + 1 < f.text.size() && f.text[i + 1] == '=' ? 2 : 1)};
+  throw BadEquations(fmt::format("{}: a rest rule compares two formulas (\"abs(v) < 1e-3\"; <, <=, > or >=)", f.where()));
+}
+
+// the events' tapes (before the derived slots are valued: their parameter parts join them), their resting flags
+// and the Events the integrators see
+void Equations::make_events(const EquationsSpec& spec) {
+  Symbols& s = work_->symbols;
+  Derived& derived = work_->derived;
+  const auto variable_of = [&](const Formula& f) {
+    const auto it = std::find(names_.begin(), names_.end(), f.name);
+    if (it == names_.end())
+      throw BadEquations(fmt::format("{}: '{}' is not a variable, so an action cannot set it (variables: {})", f.where(), f.name, fmt::join(names_, ", ")));
+    return static_cast<int>(it - names_.begin());
+  };
+  const auto tape = [&](const Formula& f) { return TapeBuilder(s, derived, f.where(), &f).build(parse(f, s, true, true)); };
+  std::set<std::string, std::less<>> seen;
+  for (const EventSpec& spec_event : spec.events) {
+    if (!identifier(spec_event.name))
+      throw BadEquations(fmt::format("{}: '{}' is not an event's name (a letter, then letters, digits or _)", spec_event.where, spec_event.name));
+    EventTapes e;
+    const GiNaC::ex g = parse(spec_event.when, s, true, true);
+    e.g = TapeBuilder(s, derived, spec_event.when.where(), &spec_event.when).build(g);
+    // dg/dt along the solution: its partial in t, and in each variable times that variable's equation
+    GiNaC::ex rate = g.diff(s.t);
+    for (size_t i = 0; i < names_.size(); ++i) rate += g.diff(s.variables[i]) * work_->f[i];
+    e.rate = TapeBuilder(s, derived, spec_event.when.where() + " (its rate along the solution)").build(rate);
+    for (const Formula& f : spec_event.action) e.action.emplace_back(variable_of(f), tape(f));
+    if (spec_event.rest) {
+      const Formula& rule = *spec_event.rest;
+      if (spec_event.action.empty())
+        throw BadEquations(fmt::format("{}: a rest rule needs an action (the variables it holds at 0 when the event comes to rest)", rule.where()));
+      const auto [at, comparison] = comparison_in(rule);
+      Formula left = rule, right = rule;
+      left.text = rule.text.substr(0, at);
+      right.text = rule.text.substr(at + comparison.size());
+      if (right.column > 0) right.column += static_cast<int>(at + comparison.size());
+      e.rest = std::pair{tape(left), tape(right)};
+      e.comparison = comparison;
+      e.flag = static_cast<int>(names_.size() + flag_names_.size());
+      flag_names_.push_back(spec_event.name + ".resting");
+    }
+    event_tapes_.push_back(std::move(e));
+    Event event{.name = spec_event.name, .direction = spec_event.direction};
+    event.surface = false;
+    event.terminal = spec_event.terminal;
+    event.keeps_state = true;
+    event.may_rest = spec_event.rest.has_value();
+    events_.push_back(std::move(event));
+  }
+  // the Events read the tapes by index, once the vector no longer moves
+  for (size_t k = 0; k < events_.size(); ++k) {
+    events_[k].g = [this, k](double t, const Eigen::VectorXd& y) {
+      const EventTapes& e = event_tapes_[k];
+      if (e.flag >= 0 && y[e.flag] != 0) return 1.0;  // disarmed: at rest
+      return run(e.g, t, y.data(), p_.data(), scratch(depth_));
+    };
+    events_[k].rate = [this, k](double t, const Eigen::VectorXd& y) {
+      const EventTapes& e = event_tapes_[k];
+      if (e.flag >= 0 && y[e.flag] != 0) return 0.0;
+      return run(e.rate, t, y.data(), p_.data(), scratch(depth_));
+    };
+    events_[k].apply = [this, k](double t, Eigen::VectorXd& y) { return fire(event_tapes_[k], t, y); };
+  }
+  y0_.conservativeResize(static_cast<Eigen::Index>(names_.size() + flag_names_.size()));
+  y0_.tail(static_cast<Eigen::Index>(flag_names_.size())).setZero();
+}
+
+// an event's handler: its rest rule tested and its action's formulas all evaluated on the state at the event,
+// then written
+std::string Equations::fire(const EventTapes& e, double t, Eigen::VectorXd& y) const {
+  double* stack = scratch(depth_);
+  if (e.rest) {
+    const double left = run(e.rest->first, t, y.data(), p_.data(), stack), right = run(e.rest->second, t, y.data(), p_.data(), stack);
+    const bool rests = e.comparison == "<" ? left < right : e.comparison == "<=" ? left <= right : e.comparison == ">" ? left > right : left >= right;
+    if (rests) {
+      for (const auto& [variable, tape] : e.action) y[variable] = 0;
+      y[e.flag] = 1;
+      return "rest";
+    }
+  }
+  thread_local std::vector<double> values;
+  values.clear();
+  for (const auto& [variable, tape] : e.action) values.push_back(run(tape, t, y.data(), p_.data(), stack));
+  for (size_t i = 0; i < values.size(); ++i) y[e.action[i].first] = values[i];
+  return "crossing";
 }
 
 // x' = v: the first half of the variables' equations are the second half's names
@@ -928,7 +1065,7 @@ void Equations::find_second_order() {
   const size_t n = names_.size();
   const auto& f = work_->f;
   const auto& s = work_->symbols;
-  if (n % 2 == 0) {
+  if (n % 2 == 0 && flag_names_.empty()) {  // a resting flag is held by rhs(), which the (x, v) layout's steppers pass by
     const size_t half = n / 2;
     bool pairs = true;
     for (size_t i = 0; i < half && pairs; ++i) pairs = f[i].is_equal(s.variables[half + i]);

@@ -35,6 +35,20 @@ struct Formula {
   std::string where(int column_in_text = 0) const;
 };
 
+// an event of the scene file ([events.NAME], docs/scenes.md): where `when` crosses zero in `direction`, the
+// variables of `action` are set by formulas of the state just before it (all from that one state); `terminal`
+// ends the run there; where `rest` holds at the event, the action's variables are set to 0 and held there, and
+// the event is disarmed (the state gains a flag NAME.resting, 0 or 1, that says so)
+struct EventSpec {
+  std::string name;
+  std::string where;        // "file:line: events.NAME"
+  Formula when;
+  int direction = 0;        // +1 rising, -1 falling, 0 either
+  std::vector<Formula> action;  // each named by its variable
+  bool terminal = false;
+  std::optional<Formula> rest;  // "LEFT < RIGHT" (or <=, >, >=), each side a formula
+};
+
 // the scene file's equations, as written (checked for names and shape on making the model)
 struct EquationsSpec {
   std::string file;
@@ -44,6 +58,7 @@ struct EquationsSpec {
   Params parameters;            // [parameters]
   std::vector<Formula> equations, exact;
   std::optional<Formula> energy;
+  std::vector<EventSpec> events;
 };
 
 // the largest system and formula the equations model takes: hand-written equations are far below both, and a

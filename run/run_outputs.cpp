@@ -29,7 +29,7 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
   j["status"] = std::string(to_string(r.status));
   j["message"] = r.message.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.message);
   j["t_end"] = p.t_end;
-  j["t_stop"] = r.status == Status::ok ? p.t_end : r.t_stop;
+  j["t_stop"] = r.status == Status::ok && !r.terminated ? p.t_end : r.t_stop;
   if (p.control.dt) j["dt"] = *p.control.dt;
   else { j["rtol"] = p.control.rtol; j["atol"] = p.control.atol; }
   j["steps"] = r.stats.steps;
@@ -53,8 +53,22 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
   }
   j["events"] = nlohmann::json::array();
   const auto events = p.model->events();
-  for (const auto& e : r.events)
-    j["events"].push_back({{"t", e.t}, {"kind", e.kind}, {"event", e.event < events.size() ? events[e.event].name : "contacts"}});
+  const auto state_names = p.model->state_names();
+  const auto state = [&](const Eigen::VectorXd& y) {
+    nlohmann::json s = nlohmann::json::object();
+    for (size_t i = 0; i < state_names.size() && i < static_cast<size_t>(y.size()); ++i) s[state_names[i]] = y[static_cast<Eigen::Index>(i)];
+    return s;
+  };
+  for (const auto& e : r.events) {
+    nlohmann::json event = {{"t", e.t}, {"kind", e.kind}, {"event", e.event < events.size() ? events[e.event].name : "contacts"}};
+    // a scene's own events: the state where it was found, and after its action
+    if (e.before.size() > 0) {
+      event["state"] = state(e.before);
+      event["state_after"] = state(e.after);
+    }
+    j["events"].push_back(std::move(event));
+  }
+  if (r.terminated && !r.events.empty()) j["terminal_event"] = events[r.events.back().event].name;
   j["parameters"] = nlohmann::json::object();
   for (const auto& [key, value] : p.params) j["parameters"][key] = value;
   if (!p.method_choice.empty()) j["method_choice"] = p.method_choice;
@@ -127,6 +141,10 @@ std::string RunOutputs::sample(double t, const Eigen::VectorXd& sample) {
 }
 
 void RunOutputs::finish(const Measured& m) {
+  // the states before and after the events after the last output (a terminal event's)
+  for (size_t k = m.result.events_written; k < m.result.events.size(); ++k)
+    if (const EventRecord& e = m.result.events[k]; e.before.size() > 0)
+      for (const Eigen::VectorXd* state : {&e.before, &e.after}) (void)sample(e.t, p_.model->summary(*state));
   // a run that stopped between output times ends its trajectory where it stopped
   if (const auto last = rows_.stop_row(m, last_t_)) trajectory_.write(csv_row(*last));
   std::error_code ignored;

@@ -166,7 +166,7 @@ std::vector<GridNode> pins_table(const toml::node& node, Scene& scene) {
 }
 
 // the keys of an equations scene (model = "equations"), each a table or value of its own
-constexpr std::array<std::string_view, 5> equations_keys{"variables", "initial", "equations", "exact", "energy"};
+constexpr std::array<std::string_view, 6> equations_keys{"variables", "initial", "equations", "exact", "energy", "events"};
 bool equations_key(std::string_view key) {
   const std::string_view top = key.substr(0, key.find('.'));
   return std::find(equations_keys.begin(), equations_keys.end(), top) != equations_keys.end();
@@ -179,7 +179,49 @@ Formula formula_of(const toml::node& node, const Scene& scene, const std::string
   return Formula{name, text->get(), scene.file, key, line_of(node), static_cast<int>(node.source().begin.column) + 1};
 }
 
-// the equations model's tables: variables, [initial], [equations], [exact], energy
+// an [events.NAME] table: InputError naming the file, line and key for an unknown key, a direction not one of
+// the three, a missing `when`, a value of the wrong kind
+EventSpec event_spec(const std::string& name, const toml::node& node, const std::string& file) {
+  const std::string key = "events." + name;
+  const auto* table = node.as_table();
+  if (!table) throw InputError(fmt::format("{}:{}: {}: expected a table (when = \"...\", direction, action, terminal, rest)", file, line_of(node), key));
+  Scene scene;
+  scene.file = file;
+  EventSpec e;
+  e.name = name;
+  e.where = fmt::format("{}:{}: {}", file, line_of(node), key);
+  bool has_when = false;
+  for (auto&& [k, value] : *table) {
+    const std::string sub(k.str()), full = key + "." + sub;
+    if (sub == "when") {
+      e.when = formula_of(value, scene, full, name);
+      has_when = true;
+    } else if (sub == "direction") {
+      const auto* s = value.as_string();
+      const std::string d = s ? s->get() : "";
+      if (d != "rising" && d != "falling" && d != "either")
+        throw InputError(fmt::format("{}:{}: {}: expected \"rising\", \"falling\" or \"either\"{}", file, line_of(value), full, s ? fmt::format(", not \"{}\"", d) : ""));
+      e.direction = d == "rising" ? 1 : d == "falling" ? -1 : 0;
+    } else if (sub == "action") {
+      const auto* action = value.as_table();
+      if (!action) throw InputError(fmt::format("{}:{}: {}: expected a table of variable = \"formula\" ({{ v = \"-e*v\" }})", file, line_of(value), full));
+      for (auto&& [variable, formula] : *action)
+        e.action.push_back(formula_of(formula, scene, full + "." + std::string(variable.str()), std::string(variable.str())));
+    } else if (sub == "terminal") {
+      const auto* b = value.as_boolean();
+      if (!b) throw InputError(fmt::format("{}:{}: {}: expected true or false", file, line_of(value), full));
+      e.terminal = b->get();
+    } else if (sub == "rest") {
+      e.rest = formula_of(value, scene, full, "rest");
+    } else {
+      throw InputError(fmt::format("{}:{}: {}: unknown key (an event has when, direction, action, terminal, rest)", file, line_of(value), full));
+    }
+  }
+  if (!has_when) throw InputError(fmt::format("{}: needs when = \"formula\" (the event is where it crosses zero)", e.where));
+  return e;
+}
+
+// the equations model's tables: variables, [initial], [equations], [exact], energy, [events.NAME]
 void equations_entry(const std::string& key, const toml::node& node, Scene& scene) {
   if (!scene.equations) scene.equations.emplace();
   EquationsSpec& spec = *scene.equations;
@@ -200,6 +242,12 @@ void equations_entry(const std::string& key, const toml::node& node, Scene& scen
   }
   if (key == "energy") {
     spec.energy = formula_of(node, scene, key, key);
+    return;
+  }
+  if (key == "events") {
+    const auto* events = node.as_table();
+    if (!events) throw InputError(fmt::format("{}:{}: events: expected tables [events.NAME]", scene.file, line_of(node)));
+    for (auto&& [k, value] : *events) spec.events.push_back(event_spec(std::string(k.str()), value, scene.file));
     return;
   }
   const auto* table = node.as_table();
@@ -238,6 +286,23 @@ Scene load_scene(const std::string& file) {
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (in.bad()) throw InputError(fmt::format("{}: cannot read the scene file", file));
   return load_scene_text(text, file);
+}
+
+std::vector<EventSpec> events_from_toml(std::string_view text, const std::string& file) {
+  toml::table root;
+  try {
+    root = toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    throw InputError(fmt::format("{}:{}:{}: malformed TOML: {}", file, e.source().begin.line, e.source().begin.column, e.description()));
+  }
+  std::vector<EventSpec> events;
+  for (auto&& [k, node] : root) {
+    if (k.str() != "events") throw InputError(fmt::format("{}:{}: {}: unknown key (expected [events.NAME] tables)", file, line_of(node), k.str()));
+    const auto* table = node.as_table();
+    if (!table) throw InputError(fmt::format("{}:{}: events: expected tables [events.NAME]", file, line_of(node)));
+    for (auto&& [name, value] : *table) events.push_back(event_spec(std::string(name.str()), value, file));
+  }
+  return events;
 }
 
 Scene load_scene_text(std::string_view text, const std::string& file) {

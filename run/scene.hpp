@@ -57,6 +57,11 @@ Scene load_scene(const std::string& file);
 // the same from the file's text (`file` names it in messages): what load_scene does once the file is read
 Scene load_scene_text(std::string_view text, const std::string& file);
 
+// [events.NAME] tables from TOML text, read as a scene file's are (Python's Equations(events=...) writes its dict
+// so): InputError naming the file, line and key for an unknown key, a direction not one of the three, a missing
+// `when`, a value of the wrong kind
+std::vector<EventSpec> events_from_toml(std::string_view text, const std::string& file);
+
 // where the scene files are: $STEPWISE_SCENES, else ./scenes, else the source tree's scenes/
 std::string scenes_directory();
 

@@ -28,7 +28,7 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
     Eigen::VectorXd probe = y0;
     return system.project(probe);
   }();
-  Eigen::VectorXd g_start = event_values(events, t, y);
+  EventWatch g_start = start_watch(events, t, y);
   // re-steps from the step's start to a fraction of it, for locating an event
   const Restep restep = [&](double s, Eigen::VectorXd& ys) { return stepper->restep(t_start, s * taken, y_start, ys); };
   // the outputs are recorded as steps pass them: at a step's end, or, with dense output, interpolated inside it
@@ -57,18 +57,27 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
       break;
     }
     // an event inside the accepted step: locate it, apply its handler, restart the stepper there
+    bool stop = false;  // a terminal event or Zeno ended the run
     if (watch_events) {
       taken = t - t_start;
-      if (const auto t_event = settle_step_events(events, g_start, t_start, taken, y_start, y, control_.event_location, restep, result)) {
-        t = *t_event;
+      if (const auto settled = settle_step_events(events, g_start, t_start, taken, y_start, y, control_.event_location, restep, result)) {
+        t = settled->t;
+        stop = !settled->go_on;
         stepper->reset();
       }
     }
-    for (; next < t_out.size() && t_out[next] <= t; ++next) {
+    for (; next < t_out.size() && t_out[next] <= t && result.status == Status::ok; ++next) {
+      if (stop && t_out[next] == t) break;  // the event's time is recorded below, where steps are
       if (t_out[next] != t) stepper->interpolate(t_out[next], y_out);
       if (!record_output(result, control_, t_out[next], t_out[next] == t ? y : y_out)) break;
     }
     if (result.status != Status::ok) break;
+    if (control_.record_steps && (result.trajectory.t.empty() || result.trajectory.t.back() < t) && !record_output(result, control_, t, y)) break;
+    if (stop) {
+      result.t_stop = t;
+      result.y_stop = y;
+      break;
+    }
   }
   if (result.status != Status::ok) result.y_stop = y_start;  // the last finite state: the start of the step that failed
   return result;

@@ -5,6 +5,13 @@
 // vanishes, s = g0 / (g0 - g1), and the state is carried there by one step of h s from the step's start
 // (the model's handler then moves the particle onto the surface). The refinement repeats such steps,
 // s found by the Illinois variant of regula falsi on g, until g is zero to round-off.
+//
+// A user's event (Event::surface false) is always refined so, on the method's own solution: the re-step
+// is the stepper's interpolant where it has dense output, else a step of h s from the step's start. Where
+// g has the same sign at both ends but its rate dg/dt changes sign, the extremum between is found (the root
+// of the rate, refined the same way) and tested: a pair of roots inside one step (a graze, a flight shorter
+// than the step) is seen. Several extrema inside one step are not (the rates at the ends agree): the step
+// must be shorter than the time between them (max_step).
 #pragma once
 
 #include "integrator.hpp"
@@ -17,29 +24,36 @@ namespace stepwise {
 // g_i(t, y) for every event
 Eigen::VectorXd event_values(std::span<const Event> events, double t, const Eigen::VectorXd& y);
 
-struct Crossing {
-  size_t index;     // which event
-  double fraction;  // where in the step the linear interpolant of its g vanishes, in [0, 1]: 1 when g
-                    // starts at zero (a flight shorter than the step left the surface and came back), 0
-                    // when the state is already behind the surface of a directed event
+// what the event pass keeps between steps: g at the step's start, and the level each event's g is measured from.
+// That is 0, but for a user's event just handled it is g right after the handler: the state sits on the
+// event's zero to the root's precision (a ball at y = -1e-15), and its next crossing is of that level (a
+// flight of 1e-22 m above it is still a flight)
+struct EventWatch {
+  Eigen::VectorXd g, zero;
+  std::optional<size_t> fired;  // the user's event handled at the step's start
+  double fired_rate = 0;        // its g's rate just before its handler
 };
-
-// the earliest event whose g crosses zero in its direction between g0 (step start) and g1 (step end)
-std::optional<Crossing> first_crossing(std::span<const Event> events, const Eigen::VectorXd& g0, const Eigen::VectorXd& g1);
+EventWatch start_watch(std::span<const Event> events, double t, const Eigen::VectorXd& y);
 
 // recomputes the state at fraction s of the step from its start; false when the step fails
 using Restep = std::function<bool(double s, Eigen::VectorXd& y)>;
 
-// the time and state of the crossing in the step (t, y0) -> (t + h, y1)
-std::pair<double, Eigen::VectorXd> locate_event(const Event& event, const Crossing& crossing, double t, double h,
-                                                const Eigen::VectorXd& y0, const Eigen::VectorXd& y1,
-                                                EventLocation location, const Restep& restep);
+// where an event fired inside a step, and whether the run goes on after it
+struct Settled {
+  double t;
+  bool go_on;  // false: a terminal event, or Zeno (the result says which)
+};
 
-// After a step (t, y_start) -> (t + h, y): if an event fired inside it, carry y to it, apply its handler
-// (recording what happened in result) and return the event's time; either way g_start becomes g at the
-// new end of the step. The one event pass of every integrator that steps by itself (fixed-step, GSL).
-std::optional<double> settle_step_events(std::span<const Event> events, Eigen::VectorXd& g_start, double t, double h,
-                                         const Eigen::VectorXd& y_start, Eigen::VectorXd& y, EventLocation location,
-                                         const Restep& restep, RunResult& result);
+// After a step (t, y_start) -> (t + h, y): if an event fired inside it (the earliest, where several did), carry
+// y to it, apply its handler (recording what happened in result) and return the event's time; either way
+// the watch moves to the new end of the step. The one event pass of every integrator that steps by itself
+// (fixed-step, GSL, the hand-written adaptive pairs).
+std::optional<Settled> settle_step_events(std::span<const Event> events, EventWatch& watch, double t, double h,
+                                          const Eigen::VectorXd& y_start, Eigen::VectorXd& y, EventLocation location,
+                                          const Restep& restep, RunResult& result);
+
+// whether g going from a to b crosses zero in the direction (+1 rising, -1 falling, 0 either): strictly from
+// one side, to zero or the other (so never from g = 0: an event at t0, or one just handled)
+bool crosses(double a, double b, int direction);
 
 }  // namespace stepwise

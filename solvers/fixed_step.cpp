@@ -34,14 +34,15 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
     Eigen::VectorXd probe = y0;
     return system.project(probe);
   }();
-  Eigen::VectorXd g_start = event_values(events, t, y);
+  EventWatch g_start = start_watch(events, t, y);
   // re-steps from the step's start to a fraction of it, for locating an event
   const Restep restep = [&](double s, Eigen::VectorXd& ys) {
     stepper->reset();
     return stepper->step(t, s * h, y, ys, failure);
   };
   // a run with none of these may have the stepper take its full steps itself (FixedStepper::plain_steps)
-  const bool plain = !watch_events && !method_events && !projects;
+  const bool plain = !watch_events && !method_events && !projects && !control_.record_steps;
+  bool stop = false;  // a terminal event or Zeno ended the run
   for (const double target : t_out) {
     while (t < target) {
       if (plain) {
@@ -75,13 +76,20 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
       }
       // an event inside the step: move to it, apply its handler, and go on from there afresh
       if (watch_events) {
-        if (const auto t_event = settle_step_events(events, g_start, t, h, y, y_next, control_.event_location, restep, result)) {
+        if (const auto settled = settle_step_events(events, g_start, t, h, y, y_next, control_.event_location, restep, result)) {
           stepper->reset();
-          t_next = *t_event;
+          t_next = settled->t;
+          stop = !settled->go_on;
         }
       }
       t = t_next;
       y.swap(y_next);
+      if (stop) break;
+      if (control_.record_steps && t < target && !record_output(result, control_, t, y)) break;
+    }
+    if (stop) {
+      if (control_.record_steps && result.status == Status::ok) (void)record_output(result, control_, t, y);
+      break;
     }
     result.y_stop = y;
     if (result.status != Status::ok || !record_output(result, control_, t, y)) break;

@@ -42,6 +42,8 @@ struct StepControl {
   // held): called with each output time and sample; a non-empty return ends the run diverged there, for that
   // reason (the sample's energy overflowed)
   std::function<std::string(double t, const Eigen::VectorXd& sample)> sink;
+  // the trajectory holds every accepted step's end (SciPy's solve_ivp without t_eval) besides the output times
+  bool record_steps = false;
 
   static StepControl fixed(double dt) {
     StepControl c;
@@ -90,7 +92,8 @@ struct EventRecord {
   size_t event = 0;  // which of the system's events; none of them (by_method) for what the method handled
                      // itself (a contact method's impacts)
   static constexpr size_t by_method = static_cast<size_t>(-1);
-  static auto fields(auto& s) { return std::tie(s.t, s.kind, s.event); }
+  Eigen::VectorXd before, after;  // the state just before and after the handler, for an event that keeps them
+  static auto fields(auto& s) { return std::tie(s.t, s.kind, s.event, s.before, s.after); }
 };
 
 struct RunResult {
@@ -101,7 +104,9 @@ struct RunResult {
   Trajectory trajectory;
   Stats stats;
   std::vector<EventRecord> events;
-  static auto fields(auto& s) { return std::tie(s.status, s.message, s.t_stop, s.y_stop, s.trajectory, s.stats, s.events); }
+  bool terminated = false;  // ended ok at a terminal event (t_stop), before the last output time
+  size_t events_written = 0;  // events whose states went to the control's sink (record_output)
+  static auto fields(auto& s) { return std::tie(s.status, s.message, s.t_stop, s.y_stop, s.trajectory, s.stats, s.events, s.terminated); }
 };
 
 // this machine's physical memory, the bound memory checks (a method's dense matrices, a particle count) are made against

@@ -28,6 +28,18 @@ struct Event {
   // write it ("impact", "rest"), or an empty string when nothing did (a crossing estimated too early,
   // where the state is still in front of the surface and moving away)
   std::function<std::string(double t, Eigen::VectorXd& y)> apply;
+  // how a crossing is read: a surface (a built-in collision: a directed event is a wall the state may not end a
+  // step behind, and a state found behind it fires at once), or a sign change (a user's event: it fires only
+  // where g goes from one side of zero to the other in its direction, never from g = 0, so an event at t0 or
+  // one just handled does not fire again)
+  bool surface = true;
+  // optional dg/dt along the solution (a sign-change event): where it changes sign within a step, g has an
+  // extremum there, found and tested, so a step over a pair of roots (a graze, a flight shorter than the step)
+  // still finds the first of them
+  std::function<double(double t, const Eigen::VectorXd& y)> rate;
+  bool terminal = false;     // the run ends at this event (with the state after its handler)
+  bool keeps_state = false;  // the state just before and after the handler is kept (summary.json, trajectory.csv)
+  bool may_rest = false;     // its handler can end the bouncing ("rest"): without one, it firing without bound is Zeno
 };
 
 class OdeSystem {

@@ -138,23 +138,37 @@ void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double 
   Eigen::Map<Eigen::VectorXd> ym(N_VGetArrayPointer(y), n);
   const double bound = divergence_bound(control, ym);
   double t = t0;
+  bool stop = false;  // a terminal event or Zeno ended the run
   for (const double target : t_out) {
     int code = 0;
     while (true) {
-      code = driver.evolve(target, y, t);
-      if (code != driver.root_return) break;
+      code = driver.evolve(target, y, t, control.record_steps);
+      if (code < 0) break;
+      if (code != driver.root_return) {
+        // one step at a time: each step's end joins the trajectory until the output time is reached
+        if (!control.record_steps || t >= target) break;
+        if (has_diverged(ym, bound) || !record_output(result, control, t, ym)) break;
+        continue;
+      }
       driver.root_info(found.data());
       const auto hit = std::find_if(found.begin(), found.end(), [](int r) { return r != 0; });
       Eigen::VectorXd y_event = ym;
-      handle_event(result, events, static_cast<size_t>(hit - found.begin()), t, y_event);
+      stop = !handle_event(result, events, static_cast<size_t>(hit - found.begin()), t, y_event);
       ym = y_event;
+      if (stop) break;
       driver.add_counters();
       if (const int re = driver.reinit(t, y)) {
         code = re;
         break;
       }
       if (t >= target) break;
+      if (control.record_steps && !record_output(result, control, t, ym)) break;
     }
+    if (stop) {
+      if (control.record_steps && result.status == Status::ok) (void)record_output(result, control, t, ym);
+      break;
+    }
+    if (result.status != Status::ok) break;
     if (code < 0) {
       if (callbacks.non_finite || has_diverged(ym, bound)) mark_diverged(result, t);
       else mark_failed(result, t, fmt::format("{}: {} returned {} ({}) at t = {:.9g}: {}", driver.method, driver.evolve_call, code,

@@ -81,7 +81,8 @@ struct Driver {
   std::string_view method;       // the method's name, for messages
   std::string_view evolve_call;  // "CVode", "ARKStepEvolve", ...
   int root_return = 0;           // the code the evolve call returns at a root
-  std::function<int(double target, N_Vector y, double& t)> evolve;
+  // to the target (one_step: one step toward it, not past it: the steps a trajectory of steps records)
+  std::function<int(double target, N_Vector y, double& t, bool one_step)> evolve;
   std::function<void(int* found)> root_info;
   std::function<int(double t, N_Vector y)> reinit;  // restart at (t, y) after an event changed y
   std::function<void()> add_counters;               // the solver's counters into the result (before a reinit resets them)

@@ -545,3 +545,18 @@ inline constexpr double chain_link_roundoff = 1e-12;
 inline constexpr double bdf_peer_factor = 2.0;
 
 }  // namespace stepwise::tolerance
+
+namespace stepwise::tolerance {
+
+// ---- events in a scene's own equations (test_equation_events.cpp)
+// an impact time's error is the height's error over the impact speed: a tolerance-proportional global error of
+// a few rtol x h0 (1 m), over the slowest impact's speed (rest_speed / e = 0.0125 m/s), is a few hundred rtol;
+// 1000 rtol bounds it (measured: 1e-12 to 2e-11 at rtol 1e-10 for the one-step codes, 4.6e-8 for GSL's msbdf)
+inline constexpr double event_time_per_rtol = 1e3;
+// a fixed-step method of order >= 2 steps the ball's parabola exactly, and its events are located to round-off
+// on it (measured: 9e-15 for rk4 at dt 1e-3): a few hundred ulps of the 4 s run
+inline constexpr double event_time_exact_steps = 1e-12;
+// a root refined to round-off in the step's fraction s (1e-15) of a step h: where the event's time is exact
+inline double event_time_located(double h) { return 1e-13 + 1e-14 * h; }
+
+}  // namespace stepwise::tolerance

@@ -202,9 +202,9 @@ class ArkodeIntegrator final : public Integrator {
         .method = name,
         .evolve_call = "ARKStepEvolve",
         .root_return = ARK_ROOT_RETURN,
-        .evolve = [&](double target, N_Vector v, double& t) {
+        .evolve = [&](double target, N_Vector v, double& t, bool one_step) {
           if (const int code = ARKStepSetStopTime(m, target)) return code;
-          return ARKStepEvolve(m, target, v, &t, ARK_NORMAL);
+          return ARKStepEvolve(m, target, v, &t, one_step ? ARK_ONE_STEP : ARK_NORMAL);
         },
         .root_info = [&](int* found) { ARKStepGetRootInfo(m, found); },
         .reinit = [&](double t, N_Vector v) { return ARKStepReInit(m, fe, fi, t, v); },

@@ -142,7 +142,11 @@ class CvodeIntegrator final : public Integrator {
         .method = method_,
         .evolve_call = "CVode",
         .root_return = CV_ROOT_RETURN,
-        .evolve = [&](double target, N_Vector v, double& t) { return CVode(mem.get(), target, v, &t, CV_NORMAL); },
+        .evolve = [&](double target, N_Vector v, double& t, bool one_step) {
+          if (!one_step) return CVode(mem.get(), target, v, &t, CV_NORMAL);
+          if (const int code = CVodeSetStopTime(mem.get(), target)) return code;
+          return CVode(mem.get(), target, v, &t, CV_ONE_STEP);
+        },
         .root_info = [&](int* found) { CVodeGetRootInfo(mem.get(), found); },
         .reinit = [&](double t, N_Vector v) { return CVodeReInit(mem.get(), t, v); },
         .add_counters = add_counters,

@@ -129,8 +129,11 @@ class GslFixedStepper final : public FixedStepper {
 class GslAdaptiveStepper final : public AdaptiveStepper {
  public:
   GslAdaptiveStepper(const CountedSystem& system, std::string method, const gsl_odeiv2_step_type* type, const StepControl& control, double h0)
-      : session_(system, type, h0, control), method_(std::move(method)) {}
+      : session_(system, type, h0, control), method_(std::move(method)),
+        multistep_(type == gsl_odeiv2_step_msadams || type == gsl_odeiv2_step_msbdf) {}
   bool step(double& t, double t_limit, double& h, Eigen::VectorXd& y, long& rejected, std::string& failure) override {
+    if (history_spent_) reset();
+    history_spent_ = false;
     gsl_odeiv2_driver* d = session_.driver();
     const unsigned long failed_before = d->e->failed_steps;
     const int code = gsl_odeiv2_evolve_apply(d->e, d->c, d->s, session_.sys(), &t, t_limit, &h, y.data());
@@ -140,10 +143,20 @@ class GslAdaptiveStepper final : public AdaptiveStepper {
     if (code != GSL_EBADFUNC) failure = fmt::format("{}: gsl_odeiv2_evolve_apply returned {} ({}) at t = {:.9g}", method_, code, gsl_strerror(code), t);
     return false;
   }
+  // a one-step method: one step of h from the start. A multistep one restarts at order 1, so one step would
+  // place an event to first order: it is integrated to t + h under its own error control instead, which spends
+  // its history (the next step() starts afresh)
   bool restep(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_out) override {
-    gsl_odeiv2_step_reset(session_.driver()->s);
+    gsl_odeiv2_driver* d = session_.driver();
+    gsl_odeiv2_step_reset(d->s);
     y_out = y;
-    return gsl_odeiv2_step_apply(session_.driver()->s, t, h, y_out.data(), session_.yerr(), nullptr, nullptr, session_.sys()) == GSL_SUCCESS;
+    if (!multistep_) return gsl_odeiv2_step_apply(d->s, t, h, y_out.data(), session_.yerr(), nullptr, nullptr, session_.sys()) == GSL_SUCCESS;
+    history_spent_ = true;
+    gsl_odeiv2_evolve_reset(d->e);
+    double at = t, trial = h;
+    while (at < t + h)
+      if (gsl_odeiv2_evolve_apply(d->e, d->c, d->s, session_.sys(), &at, t + h, &trial, y_out.data()) != GSL_SUCCESS) return false;
+    return true;
   }
   // a changed state (an event) invalidates the multistep history and the control's memory
   void reset() override {
@@ -154,6 +167,8 @@ class GslAdaptiveStepper final : public AdaptiveStepper {
  private:
   GslSession session_;
   std::string method_;
+  bool multistep_;
+  bool history_spent_ = false;  // a restep integrated past the last step's history
 };
 
 // one integrator of GSL's stepper `type`: fixed step when control.dt is set, else adaptive to rtol/atol

@@ -207,7 +207,11 @@ class IdaIntegrator final : public Integrator {
         .method = "ida",
         .evolve_call = "IDASolve",
         .root_return = IDA_ROOT_RETURN,
-        .evolve = [&](double target, N_Vector v, double& t) { return IDASolve(mem.get(), target, &t, v, yp.get(), IDA_NORMAL); },
+        .evolve = [&](double target, N_Vector v, double& t, bool one_step) {
+          if (!one_step) return IDASolve(mem.get(), target, &t, v, yp.get(), IDA_NORMAL);
+          if (const int code = IDASetStopTime(mem.get(), target)) return code;
+          return IDASolve(mem.get(), target, &t, v, yp.get(), IDA_ONE_STEP);
+        },
         .root_info = [&](int* found) { IDAGetRootInfo(mem.get(), found); },
         .reinit = [&](double t, N_Vector v) { return IDAReInit(mem.get(), t, v, yp.get()); },
         .add_counters = add_counters,

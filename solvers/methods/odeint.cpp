@@ -66,6 +66,8 @@ class OdeintControlled final : public AdaptiveStepper {
     return false;
   }
   bool restep(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_out) override {
+    // a first-same-as-last stepper keeps f at its last step's end: from another state, stale
+    if constexpr (requires { plain_.reset(); }) plain_.reset();
     plain_.do_step(rhs_, y, t, y_out, h);
     return true;
   }
