@@ -145,11 +145,78 @@ class ReleasedSystem final : public OdeSystem {
     if (sign_ < 0) dfdy = -dfdy;
   }
   const void* capability(const std::type_info& type) const override { return sign_ > 0 ? inner_.capability(type) : nullptr; }
+  std::span<const Event> events() const override { return inner_.events(); }
 
  private:
   const OdeSystem& inner_;
   double sign_;
   mutable long calls_ = 0;
+};
+
+// SciPy's events: callables g(t, y) with optional `terminal` and `direction` attributes, watched beside the
+// system's own (an Equations' [events]): each a sign-change event that keeps its state, read in s = sign t (so a
+// rising event in t is a falling one in s when integrating backwards)
+class EventfulSystem final : public OdeSystem {
+ public:
+  EventfulSystem(const OdeSystem& inner, const py::list& events, double sign, bool released) : inner_(inner) {
+    for (const Event& e : inner.events()) {
+      Event mapped = e;
+      mapped.g = [g = e.g, sign](double s, const Eigen::VectorXd& y) { return g(sign * s, y); };
+      if (e.rate) mapped.rate = [rate = e.rate, sign](double s, const Eigen::VectorXd& y) { return sign * rate(sign * s, y); };
+      mapped.apply = [apply = e.apply, sign](double s, Eigen::VectorXd& y) { return apply(sign * s, y); };
+      mapped.direction = static_cast<int>(sign) * e.direction;
+      events_.push_back(std::move(mapped));
+    }
+    own_ = events_.size();
+    const int n = inner.size();
+    for (size_t k = 0; k < events.size(); ++k) {
+      py::object g = events[k];
+      if (!PyCallable_Check(g.ptr())) throw py::type_error(fmt::format("events[{}] must be a callable g(t, y)", k));
+      Event e;
+      e.name = fmt::format("events[{}]", k);
+      e.surface = false;
+      e.keeps_state = true;
+      e.terminal = py::hasattr(g, "terminal") && py::cast<bool>(py::bool_(g.attr("terminal")));
+      const double direction = py::hasattr(g, "direction") ? py::cast<double>(g.attr("direction")) : 0.0;
+      e.direction = static_cast<int>(sign) * (direction > 0 ? 1 : direction < 0 ? -1 : 0);
+      e.g = [g, n, sign, released, k](double s, const Eigen::VectorXd& y) {
+        std::optional<py::gil_scoped_acquire> gil;
+        if (released) gil.emplace();
+        py::array_t<double> ya(n);
+        std::copy(y.data(), y.data() + n, ya.mutable_data());
+        const double t = sign * s;
+        try {
+          const double v = py::cast<double>(g(t, ya));
+          if (!std::isfinite(v)) throw py::value_error(fmt::format("events[{}] returned a value that is not finite ({}) at t = {}", k, v, t));
+          return v;
+        } catch (py::error_already_set& e) {
+          if (py::hasattr(e.value(), "add_note")) e.value().attr("add_note")(fmt::format("(raised by events[{}] at t = {}, inside stepwise.solve_ivp)", k, t));
+          throw;
+        }
+      };
+      e.apply = [](double, Eigen::VectorXd&) { return std::string("crossing"); };
+      events_.push_back(std::move(e));
+    }
+  }
+  // which of the events are the system's own (they come first)
+  size_t own() const { return own_; }
+
+  int size() const override { return inner_.size(); }
+  bool autonomous() const override { return inner_.autonomous(); }
+  void rhs(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override { inner_.rhs(s, y, dydt); }
+  bool has_jacobian() const override { return inner_.has_jacobian(); }
+  void jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override { inner_.jacobian(s, y, dfdy); }
+  bool has_sparse_jacobian() const override { return inner_.has_sparse_jacobian(); }
+  void sparse_jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
+    inner_.sparse_jacobian(s, y, dfdy);
+  }
+  std::span<const Event> events() const override { return events_; }
+  const void* capability(const std::type_info& type) const override { return inner_.capability(type); }
+
+ private:
+  const OdeSystem& inner_;
+  std::vector<Event> events_;
+  size_t own_ = 0;
 };
 
 // a system of equations written as text (models/equations.hpp), parsed, differentiated and compiled once when
@@ -176,8 +243,30 @@ Formula formula(const std::string& name, const std::string& text, const std::str
 
 // Equations(equations={"x": "v", "v": "-g*sin(x)"}, parameters={"g": 9.81}, ...): the variables in the order
 // the equations are given
+// a Python value of an event's table as TOML: a formula's text, a direction's word, terminal's boolean, or an
+// action's table of formulas
+std::string toml_value(const py::handle& value, const std::string& key) {
+  if (py::isinstance<py::bool_>(value)) return py::cast<bool>(value) ? "true" : "false";
+  if (py::isinstance<py::str>(value)) {
+    std::string out = "\"";
+    for (const char c : py::cast<std::string>(value)) {
+      if (c == '"' || c == '\\') out += '\\';
+      if (static_cast<unsigned char>(c) < 0x20) out += fmt::format("\\u{:04x}", static_cast<int>(c));
+      else out += c;
+    }
+    return out + "\"";
+  }
+  if (py::isinstance<py::dict>(value)) {
+    std::string out = "{ ";
+    for (const auto& [k, v] : py::cast<py::dict>(value)) out += fmt::format("{}{} = {}", out.size() > 2 ? ", " : "", toml_value(k, key), toml_value(v, key));
+    return out + " }";
+  }
+  throw py::type_error(fmt::format("stepwise.Equations: {}: expected a formula, a word, true/false or a dict of formulas", key));
+}
+
 Equations make_python_equations(const py::dict& equations, const std::map<std::string, double>& parameters, const std::optional<std::map<std::string, double>>& initial,
-                                const std::optional<std::string>& energy, const std::optional<std::map<std::string, std::string>>& exact, bool compile) {
+                                const std::optional<std::string>& energy, const std::optional<std::map<std::string, std::string>>& exact,
+                                const std::optional<py::dict>& events, bool compile) {
   EquationsSpec spec;
   spec.file = "stepwise.Equations";
   spec.variables_where = "stepwise.Equations: equations";
@@ -196,6 +285,19 @@ Equations make_python_equations(const py::dict& equations, const std::map<std::s
   if (energy) spec.energy = formula("energy", *energy, "energy");
   if (exact)
     for (const auto& [name, text] : *exact) spec.exact.push_back(formula(name, text, "exact"));
+  // the events as the scene file's [events.NAME] tables, read by the scene's reader
+  if (events) {
+    std::string toml;
+    for (const auto& [name, table] : *events) {
+      if (!py::isinstance<py::dict>(table)) throw py::type_error(fmt::format("stepwise.Equations: events.{}: expected a dict (when, direction, action, terminal, rest)", std::string(py::str(name))));
+      toml += fmt::format("[events.{}]\n", toml_value(name, "events"));
+      for (const auto& [key, value] : py::cast<py::dict>(table)) {
+        const std::string k = py::cast<std::string>(key);
+        toml += fmt::format("{} = {}\n", toml_value(key, k), toml_value(value, "events." + k));
+      }
+    }
+    spec.events = events_from_toml(toml, "stepwise.Equations");
+  }
   return Equations(std::move(spec), {}, compile);
 }
 
@@ -233,7 +335,8 @@ py::dict stats_dict(const Stats& s) {
 // would add ~1 us a solve): `fun` a Python callable or an Equations; t_eval, where given, sorted in the direction
 // of integration and within t_span (checked here, SciPy's messages)
 py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<double, py::array::c_style | py::array::forcecast>& y0_array, const std::string& method_name, double rtol, double atol,
-               std::optional<double> dt, double max_step, std::optional<std::vector<double>> t_eval, const py::object& jac, std::optional<double> max_steps) {
+               std::optional<double> dt, double max_step, std::optional<std::vector<double>> t_eval, const py::object& jac, std::optional<double> max_steps,
+               const py::list& events, bool record_steps) {
   const Method* method = find_method(method_name);
   if (!method) throw BadMethod(fmt::format("unknown method \"{}\" (stepwise.methods() lists them)", method_name));
   if (!std::isfinite(t0) || !std::isfinite(t1)) throw py::value_error(fmt::format("t_span must be finite, not ({}, {})", t0, t1));
@@ -248,11 +351,15 @@ py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<do
   const Equations* equations = py::isinstance<Equations>(fun) ? &py::cast<const Equations&>(fun) : nullptr;
   if (!equations && !PyCallable_Check(fun.ptr())) throw py::type_error("fun must be a callable f(t, y) or a stepwise.Equations");
   if (equations && !jac.is_none()) throw py::value_error("jac: an Equations system has its exact Jacobian already");
-  if (equations && equations->model().size() != n)
-    throw py::value_error(fmt::format("y0 has {} values; the equations have {} variables ({})", n, equations->model().size(), fmt::join(equations->spec().variables, ", ")));
-  std::unique_ptr<OdeSystem> system;
-  if (equations) system = std::make_unique<ReleasedSystem>(equations->model(), sign);
-  else system = std::make_unique<PythonSystem>(fun, jac, n, sign);
+  if (equations && equations->spec().variables.size() != static_cast<size_t>(n))
+    throw py::value_error(fmt::format("y0 has {} values; the equations have {} variables ({})", n, equations->spec().variables.size(), fmt::join(equations->spec().variables, ", ")));
+  std::unique_ptr<OdeSystem> inner;
+  if (equations) inner = std::make_unique<ReleasedSystem>(equations->model(), sign);
+  else inner = std::make_unique<PythonSystem>(fun, jac, n, sign);
+  const auto system = std::make_unique<EventfulSystem>(*inner, events, sign, equations != nullptr);
+  // an Equations' state goes on past its variables with a flag for each event with a rest rule (0 at the start)
+  Eigen::VectorXd state0 = Eigen::VectorXd::Zero(system->size());
+  state0.head(n) = y0;
   if (!method_applies(*method, *system)) throw BadMethod(fmt::format("{}: {}", method->name, method_requirement(*method, *system)));
 
   StepControl control;
@@ -290,6 +397,8 @@ py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<do
     t_done.push_back(t0);
     y_done.push_back(y0);
   }
+  control.record_steps = record_steps;
+  control.sink_events = false;
   control.sink = [&t_done, &y_done, sign, released = equations != nullptr, check = SignalCheck()](double s, const Eigen::VectorXd& y) mutable {
     if (released) check();
     else raise_if_signalled();
@@ -303,16 +412,26 @@ py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<do
     r.y_stop = y0;
   } else if (equations) {
     py::gil_scoped_release released;
-    r = make_integrator(method->name, control)->solve(*system, sign * t0, y0, s_out);
+    r = make_integrator(method->name, control)->solve(*system, sign * t0, state0, s_out);
   } else {
-    r = make_integrator(method->name, control)->solve(*system, sign * t0, y0, s_out);
+    r = make_integrator(method->name, control)->solve(*system, sign * t0, state0, s_out);
   }
+  // each event: which (the system's own first), when, and the state there
+  py::list fired;
+  for (const EventRecord& e : r.events)
+    if (e.before.size() > 0) {
+      const Eigen::VectorXd y = e.before.head(n);
+      fired.append(py::make_tuple(e.event, sign * e.t, vector_array(std::vector<double>(y.data(), y.data() + n))));
+    }
   py::dict d;
   d["t"] = vector_array(t_done);
   d["y"] = columns_array(y_done, n);
   d["status"] = std::string(to_string(r.status));
   d["message"] = r.message;
   d["t_stop"] = sign * r.t_stop;
+  d["events"] = fired;
+  d["own_events"] = system->own();
+  d["terminated"] = r.terminated;
   d["stats"] = stats_dict(r.stats);
   d["method"] = std::string(method->name);
   return d;
@@ -473,14 +592,14 @@ PYBIND11_MODULE(_stepwise, m) {
   m.def("version", [] { return std::string(version()); });
   m.def("methods", &method_list);
   m.def("solve", &solve, py::arg("fun"), py::arg("t0"), py::arg("t1"), py::arg("y0"), py::arg("method"), py::arg("rtol"), py::arg("atol"), py::arg("dt"),
-        py::arg("max_step"), py::arg("t_eval"), py::arg("jac"), py::arg("max_steps"));
+        py::arg("max_step"), py::arg("t_eval"), py::arg("jac"), py::arg("max_steps"), py::arg("events") = py::list(), py::arg("record_steps") = false);
   m.def("run", &run, py::arg("scene"), py::arg("method"), py::arg("dt"), py::arg("rtol"), py::arg("atol"), py::arg("t_end"), py::arg("output_dt"), py::arg("set"),
         py::arg("max_steps"));
   m.def("advise", &advise_scene, py::arg("scene"), py::arg("error"), py::arg("budget"), py::arg("set"), py::arg("threads"));
   m.def("study", &study_scene, py::arg("name"), py::arg("scene"), py::arg("set"), py::arg("quick"), py::arg("threads"));
   py::class_<Equations>(m, "Equations", "a system written as equations: parsed, differentiated and compiled once (models/equations.hpp)")
       .def(py::init(&make_python_equations), py::arg("equations"), py::arg("parameters") = std::map<std::string, double>{}, py::arg("initial") = py::none(),
-           py::arg("energy") = py::none(), py::arg("exact") = py::none(), py::arg("compile") = true)
+           py::arg("energy") = py::none(), py::arg("exact") = py::none(), py::arg("events") = py::none(), py::arg("compile") = true)
       .def_static("from_scene", &equations_from_scene, py::arg("file"), py::arg("compile") = true)
       .def_property_readonly("variables", [](const Equations& e) { return e.spec().variables; })
       .def_property_readonly("parameters", [](const Equations& e) { return std::map<std::string, double>(e.spec().parameters.begin(), e.spec().parameters.end()); })

@@ -35,6 +35,7 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
   const bool dense = stepper->dense();
   Eigen::VectorXd y_out;
   size_t next = 0;
+  double last_recorded = t0;  // the latest time the trajectory holds (outputs and, recording steps, step ends)
   while (next < t_out.size()) {
     const double target = dense ? t_out.back() : t_out[next];
     y_start = y;
@@ -70,9 +71,13 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
       if (stop && t_out[next] == t) break;  // the event's time is recorded below, where steps are
       if (t_out[next] != t) stepper->interpolate(t_out[next], y_out);
       if (!record_output(result, control_, t_out[next], t_out[next] == t ? y : y_out)) break;
+      last_recorded = t_out[next];
     }
     if (result.status != Status::ok) break;
-    if (control_.record_steps && (result.trajectory.t.empty() || result.trajectory.t.back() < t) && !record_output(result, control_, t, y)) break;
+    if (control_.record_steps && t > last_recorded) {
+      if (!record_output(result, control_, t, y)) break;
+      last_recorded = t;
+    }
     if (stop) {
       result.t_stop = t;
       result.y_stop = y;

@@ -44,6 +44,8 @@ struct StepControl {
   std::function<std::string(double t, const Eigen::VectorXd& sample)> sink;
   // the trajectory holds every accepted step's end (SciPy's solve_ivp without t_eval) besides the output times
   bool record_steps = false;
+  // the sink also gets the states just before and after each event that keeps them (trajectory.csv's rows)
+  bool sink_events = true;
 
   static StepControl fixed(double dt) {
     StepControl c;

@@ -165,7 +165,7 @@ inline double zeno_span(double t) { return 1e-4 * std::max(1.0, std::abs(t)); }
     return true;
   }
   // the states just before and after each event up to t go first, in time order
-  for (; result.events_written < result.events.size() && result.events[result.events_written].t <= t; ++result.events_written) {
+  for (; control.sink_events && result.events_written < result.events.size() && result.events[result.events_written].t <= t; ++result.events_written) {
     const EventRecord& e = result.events[result.events_written];
     if (e.before.size() == 0) continue;
     for (const Eigen::VectorXd* state : {&e.before, &e.after})

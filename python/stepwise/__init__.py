@@ -122,21 +122,89 @@ def _number(name, value):
         raise TypeError(f"{name} must be a real number, not {value!r}") from e
 
 
+class StepSolution:
+    """``sol.sol`` of a ``solve_ivp(..., dense_output=True)``, like SciPy's ``OdeSolution``: ``sol(t)`` for a
+    number (shape (n,)) or an array of times (shape (n, len(t))) within the steps taken (``ts``, ``t_min``,
+    ``t_max``). Each value is the method's own solution there: integrated by the same method and tolerance from
+    the start of the step that holds it, so it carries the method's error, not an interpolant's."""
+
+    def __init__(self, ts, ys, resolve):
+        self.ts = np.asarray(ts, dtype=float)
+        self._ys = np.asarray(ys, dtype=float)
+        self._resolve = resolve
+        self.t_min, self.t_max = float(min(self.ts[0], self.ts[-1])), float(max(self.ts[0], self.ts[-1]))
+        self.n_segments = max(len(self.ts) - 1, 0)
+        self._ascending = len(self.ts) < 2 or self.ts[-1] >= self.ts[0]
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=float)
+        scalar = t.ndim == 0
+        ts = np.atleast_1d(t).ravel()
+        out = np.empty((self._ys.shape[0], ts.size))
+        key = self.ts if self._ascending else -self.ts
+        q = ts if self._ascending else -ts
+        # the step each time falls in: [ts[k], ts[k + 1]), the last step closed at its end
+        k = np.clip(np.searchsorted(key, q, side="right") - 1, 0, max(self.n_segments - 1, 0))
+        exact = key[k] == q
+        out[:, exact] = self._ys[:, k[exact]]
+        for step in np.unique(k[~exact]):
+            picked = np.flatnonzero((k == step) & ~exact)
+            order = picked[np.argsort(q[picked])]
+            y = self._resolve(self.ts[step], self.ts[min(step + 1, len(self.ts) - 1)], self._ys[:, step], ts[order])
+            out[:, order] = y
+        return out[:, 0] if scalar else out.reshape((self._ys.shape[0],) + t.shape)
+
+
+def _event_attributes(events):
+    """SciPy's events: a callable or a list of them, each with optional ``terminal`` (bool) and ``direction``
+    attributes, checked here with SciPy's rules."""
+    if events is None:
+        return []
+    try:
+        events = [events] if callable(events) else list(events)
+    except TypeError as e:
+        raise TypeError(f"events must be a callable g(t, y) or a list of them, not {events!r}") from e
+    for k, e in enumerate(events):
+        if not callable(e):
+            raise TypeError(f"events[{k}] must be a callable g(t, y)")
+        terminal = getattr(e, "terminal", False)
+        if not isinstance(terminal, (bool, np.bool_)) and not (isinstance(terminal, (int, np.integer)) and terminal in (0, 1)):
+            raise ValueError(f"events[{k}].terminal: stepwise ends at the first occurrence (True) or never (False), not {terminal!r}")
+    return events
+
+
 def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=False, events=None, vectorized=False, args=None, **options):
     """``scipy.integrate.solve_ivp``'s signature and result, stepped by a stepwise method.
 
     fun: ``fun(t, y)`` returning dy/dt (shape (n,)), or a ``stepwise.Equations`` (compiled, no Python in
-    the loop). method: any of ``methods()`` (default verner98); SciPy's "RK45", "RK23" and "BDF" name the
-    same methods here. Options: rtol (1e-3), atol (1e-6, a number), jac (callable or matrix), max_step,
-    and stepwise's dt (a fixed step, which the fixed-step methods need) and max_steps. Without t_eval the
-    result holds t_span's two ends (stepwise does not report its internal steps). A reversed t_span
-    integrates backwards. dense_output and events are not offered (a ValueError says so)."""
+    the loop; its own ``events`` are watched too). method: any of ``methods()`` (default verner98); SciPy's
+    "RK45", "RK23" and "BDF" name the same methods here. Options: rtol (1e-3), atol (1e-6, a number or one
+    per component), jac (callable or matrix), max_step, and stepwise's dt (a fixed step, which the fixed-step
+    methods need) and max_steps. Without t_eval the result holds the steps taken, as SciPy's does. events:
+    callables g(t, y) with SciPy's ``terminal`` and ``direction`` attributes, located on the method's solution
+    (``t_events``, ``y_events``). dense_output: ``sol`` (a StepSolution). vectorized: fun is called with
+    y of shape (n, 1). A reversed t_span integrates backwards."""
     options = dict(options)
     rtol = _number("rtol", options.pop("rtol", 1e-3))
     atol = options.pop("atol", 1e-6)
+    scale = None  # atol per component: the system is solved in z = y / scale, with one atol (see below)
     if type(atol) is not float and not np.isscalar(atol):
-        raise ValueError("atol: stepwise's tolerance is one number for every component, not an array")
-    atol = _number("atol", atol)
+        atol_array = np.asarray(atol, dtype=float)
+        if atol_array.ndim != 1 or atol_array.shape != np.shape(y0):
+            raise ValueError("`atol` has wrong shape.")
+        if np.any(atol_array < 0):
+            raise ValueError("`atol` must be positive.")
+        if np.all(atol_array == atol_array.flat[0]):
+            atol = float(atol_array.flat[0])
+        else:
+            if np.any(atol_array == 0):
+                raise ValueError("atol: a component of 0 (a purely relative tolerance) is not supported with the others nonzero")
+            if isinstance(fun, Equations):
+                raise ValueError("atol: one number for a stepwise.Equations (its compiled system is not rescaled); per component with a Python fun")
+            scale = atol_array / atol_array.min()
+            atol = float(atol_array.min())
+    else:
+        atol = _number("atol", atol)
     jac = options.pop("jac", None)
     dt = options.pop("dt", None)
     dt = None if dt is None else _number("dt", dt)
@@ -151,10 +219,7 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
         if unknown:
             raise TypeError(f"solve_ivp() got unexpected keyword arguments: {', '.join(unknown)}")
         warnings.warn(f"The following arguments have no effect for a chosen solver: {', '.join(ignored)}.", stacklevel=2)
-    if dense_output:
-        raise ValueError("dense_output: not offered by stepwise.solve_ivp; pass t_eval for the times you need")
-    if events is not None:
-        raise ValueError("events: not offered by stepwise.solve_ivp (a scene file's models have events: stepwise.run)")
+    events = _event_attributes(events)
     if not isinstance(method, str):
         raise TypeError("method must be a method's name (stepwise.methods() lists them)")
     if method in _SCIPY_CLOSEST:
@@ -174,6 +239,11 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
                 jac = lambda t, y: user_jac(t, y, *args)  # noqa: E731
         if jac is not None and not callable(jac):
             jac = np.asarray(jac, dtype=float)
+        if args is not None:
+            events = [_with_args(e, args) for e in events]
+        if vectorized:
+            user_vectorized = fun
+            fun = lambda t, y: np.asarray(user_vectorized(t, y[:, None]), dtype=float).reshape(-1)  # noqa: E731
     elif args is not None:
         raise ValueError("args: an Equations system takes its parameters when it is made (Equations(..., parameters=...))")
 
@@ -196,13 +266,81 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
         if t_eval.ndim != 1:
             raise ValueError("`t_eval` must be 1-dimensional.")
         t_eval = t_eval.tolist()
+    if scale is not None:
+        if scale.shape != y0.shape:
+            raise ValueError("`atol` has wrong shape.")
+        fun, jac, events, y0 = _rescaled(fun, jac, events, y0, scale)
 
-    out = _stepwise.solve(fun, t0, t1, y0, method, rtol, atol, dt, max_step, t_eval, jac, max_steps)
+    def solve(ta, tb, ya, times, record_steps, with_events):
+        return _stepwise.solve(fun, ta, tb, ya, method, rtol, atol, dt, max_step, times, jac, max_steps,
+                               events if with_events else [], record_steps)
+
+    out = solve(t0, t1, y0, t_eval, t_eval is None, True)
+    sol = None
+    if dense_output:
+        steps = out if t_eval is None else solve(t0, t1, y0, None, True, True)
+        unscale = (lambda y: y) if scale is None else (lambda y: y * scale[:, None])
+        sol = StepSolution(steps["t"], unscale(steps["y"]),
+                           lambda ta, tb, ya, times: unscale(_segment(solve, ta, tb, ya / (1 if scale is None else scale), times)))
+    y = out["y"] if scale is None else out["y"] * scale[:, None]
+    # t_events and y_events: one array for each of the events given, in their order (the system's own first in
+    # the solver's list, so those given are counted after them)
+    own = out["own_events"]
+    t_events = [[] for _ in events]
+    y_events = [[] for _ in events]
+    for index, t, y_event in out["events"]:
+        if index >= own:
+            t_events[index - own].append(t)
+            y_events[index - own].append(y_event if scale is None else y_event * scale)
+    n = len(y0)
+    t_events = [np.asarray(ts, dtype=float) for ts in t_events] if events else None
+    y_events = [np.asarray(ys, dtype=float).reshape(-1, n) for ys in y_events] if events else None
     ok = out["status"] == "ok"
     stats = out["stats"]
+    status = (1 if out["terminated"] else 0) if ok else -1
+    message = ("A termination event occurred." if out["terminated"] else
+               "The solver successfully reached the end of the integration interval.") if ok else out["message"]
     return OdeResult(
-        t=out["t"], y=out["y"], sol=None, t_events=None, y_events=None,
+        t=out["t"], y=y, sol=sol, t_events=t_events, y_events=y_events,
         nfev=stats["rhs_evals"], njev=stats["jac_evals"], nlu=stats["factorizations"],
-        status=0 if ok else -1,
-        message="The solver successfully reached the end of the integration interval." if ok else out["message"],
-        success=ok, method=out["method"], stats=stats)
+        status=status, message=message, success=ok, method=out["method"], stats=stats)
+
+
+def _with_args(event, args):
+    wrapped = lambda t, y: event(t, y, *args)  # noqa: E731
+    for attribute in ("terminal", "direction"):
+        if hasattr(event, attribute):
+            setattr(wrapped, attribute, getattr(event, attribute))
+    return wrapped
+
+
+def _rescaled(fun, jac, events, y0, scale):
+    """The system in z = y / scale, so one atol (the smallest) on z is SciPy's atol per component on y: the
+    error weight 1 / (rtol |y_i| + atol_i) is 1 / (scale_i (rtol |z_i| + atol)). f, its Jacobian and the events
+    are read through y = scale z."""
+    user_fun = fun
+    z_fun = lambda t, z: np.asarray(user_fun(t, z * scale), dtype=float) / scale  # noqa: E731
+    z_jac = jac
+    if callable(jac):
+        user_jac = jac
+        z_jac = lambda t, z: np.asarray(user_jac(t, z * scale), dtype=float) * scale[None, :] / scale[:, None]  # noqa: E731
+    elif jac is not None:
+        z_jac = np.asarray(jac, dtype=float) * scale[None, :] / scale[:, None]
+    z_events = []
+    for event in events:
+        wrapped = (lambda e: lambda t, z: e(t, z * scale))(event)
+        for attribute in ("terminal", "direction"):
+            if hasattr(event, attribute):
+                setattr(wrapped, attribute, getattr(event, attribute))
+        z_events.append(wrapped)
+    return z_fun, z_jac, z_events, y0 / scale
+
+
+def _segment(solve, ta, tb, ya, times):
+    """The method's solution at `times` (sorted, within [ta, tb]), integrated from (ta, ya) without events."""
+    if ta == tb:
+        return np.repeat(np.asarray(ya, dtype=float)[:, None], len(times), axis=1)
+    out = solve(ta, tb, np.asarray(ya, dtype=float), list(times), False, False)
+    if out["status"] != "ok":
+        raise RuntimeError(f"sol({times[0]}): the re-integration from t = {ta} failed: {out['message']}")
+    return out["y"]

@@ -165,7 +165,8 @@ def test_gil_is_released_while_compiled_equations_run():
     (dict(method="DOP853"), ValueError, "gsl-rk8pd"),
     (dict(rtol=-1.0), ValueError, "rtol"),
     (dict(rtol=float("nan")), ValueError, "rtol"),
-    (dict(atol=[1e-6, 1e-6]), ValueError, "atol"),
+    (dict(atol=[1e-6, 1e-6, 1e-6]), ValueError, "`atol` has wrong shape"),
+    (dict(atol=[-1e-6, 1e-6]), ValueError, "`atol` must be positive"),
     (dict(t_span=(1.0, 1.0)), ValueError, "zero length"),
     (dict(method="rk4"), ValueError, "dt="),
     (dict(t_eval=[0.5, 0.2]), ValueError, "sorted"),
@@ -175,7 +176,7 @@ def test_gil_is_released_while_compiled_equations_run():
     (dict(fun=lambda t, y: "no"), TypeError, "real numbers"),
     (dict(fun=42), TypeError, "callable"),
     (dict(y0=[1j, 0]), TypeError, "complex"),
-    (dict(dense_output=True), ValueError, "t_eval"),
+    (dict(events=42), TypeError, "callable"),
     (dict(max_step=-1.0), ValueError, "`max_step` must be positive"),  # SciPy's rule: not a backwards solve that diverges
     (dict(max_step=0), ValueError, "`max_step` must be positive"),
     (dict(nonsense=1), TypeError, "nonsense"),
@@ -232,3 +233,101 @@ def test_ctrl_c_stops_a_compiled_solve():
         stepwise.solve_ivp(eq, (0, 1e9), [2.9, 0.0], rtol=1e-13, atol=1e-15)
     # a hang bound, not a speed: without the interruption the solve would run for hours
     assert time.monotonic() - start < 60
+
+
+# ---- events, the steps taken, dense output and atol per component (issue 51)
+
+def falling_ball(t, y):
+    return [y[1], -9.81]
+
+
+def _floor(t, y):
+    return y[0]
+
+
+def _apex(t, y):
+    return y[1]
+
+
+_floor.direction = -1
+_apex.direction = -1
+
+
+def test_t_events_and_y_events_are_scipys_within_both_tolerances():
+    import scipy.integrate as si
+    ball = lambda t, y: [y[1], -9.81 - 0.1 * y[1]]  # noqa: E731  (with drag: no closed form in the test's head)
+    for method in ["verner98", "tsitouras54", "cvode-bdf", "RK45", "rodas5"]:
+        for rtol in (1e-6, 1e-9):
+            ours = stepwise.solve_ivp(ball, (0, 3), [1.0, 2.0], method=method, rtol=rtol, atol=rtol * 1e-2, events=[_floor, _apex])
+            theirs = si.solve_ivp(ball, (0, 3), [1.0, 2.0], method="DOP853", rtol=rtol, atol=rtol * 1e-2, events=[_floor, _apex])
+            for k in range(2):
+                assert len(ours.t_events[k]) == len(theirs.t_events[k]) == 1, (method, k)
+                # each within its tolerance of the truth: within both of each other (times of order 1 s)
+                assert abs(ours.t_events[k][0] - theirs.t_events[k][0]) < 100 * rtol, (method, k)
+                assert np.allclose(ours.y_events[k][0], theirs.y_events[k][0], rtol=100 * rtol, atol=100 * rtol)
+
+
+def test_a_terminal_event_ends_the_solve_there_with_scipys_status():
+    floor = lambda t, y: y[0]  # noqa: E731
+    floor.terminal = True
+    floor.direction = -1
+    t_eval = np.linspace(0, 2, 21)
+    sol = stepwise.solve_ivp(falling_ball, (0, 2), [1.0, 0.0], rtol=1e-10, atol=1e-12, events=floor, t_eval=t_eval)
+    t_hit = np.sqrt(2 / 9.81)
+    assert sol.status == 1 and sol.success and "termination" in sol.message
+    assert abs(sol.t_events[0][0] - t_hit) < 1e-9
+    assert np.array_equal(sol.t, t_eval[t_eval <= t_hit])
+
+
+def test_without_t_eval_t_and_y_are_the_accepted_steps():
+    for method in ["verner98", "cvode-adams"]:
+        sol = stepwise.solve_ivp(oscillator, (0, 10), [1.0, 0.0], method=method, rtol=1e-8, atol=1e-10)
+        assert sol.t[0] == 0 and sol.t[-1] == 10
+        assert len(sol.t) == sol.stats["steps"] + 1, method  # t0 and each accepted step's end
+        assert np.all(np.diff(sol.t) > 0)
+        assert np.allclose(sol.y[0], np.cos(sol.t), atol=1e-6)
+
+
+def test_dense_output_is_within_the_methods_error_at_any_time():
+    rtol = 1e-8
+    for method in ["verner98", "tsitouras54", "cvode-bdf"]:
+        sol = stepwise.solve_ivp(oscillator, (0, 10), [1.0, 0.0], method=method, rtol=rtol, atol=rtol * 1e-2, dense_output=True)
+        t = np.linspace(0, 10, 997)
+        y = sol.sol(t)
+        assert y.shape == (2, t.size)
+        # the method's own error at its tolerance: a tolerance-proportional global error over 10/(2 pi) periods
+        assert np.max(np.abs(y[0] - np.cos(t))) < 1e3 * rtol, method
+        assert np.allclose(sol.sol(sol.t[3]), sol.y[:, 3])  # at a step, the step's own value
+        assert sol.sol(2.5).shape == (2,)
+
+
+def test_atol_per_component_is_scipys_error_weight():
+    # a component 1e6 times larger, with an atol 1e6 times larger: the same relative accuracy as the scaled-down
+    # problem with one atol, to round-off
+    big = lambda t, y: [y[1] * 1e6, -y[0] * 1e-6]  # noqa: E731  (x = 1e6 cos t, v = -sin t)
+    sol = stepwise.solve_ivp(big, (0, 5), [1e6, 0.0], rtol=1e-9, atol=[1e-6, 1e-12], t_eval=[5.0])
+    small = stepwise.solve_ivp(oscillator, (0, 5), [1.0, 0.0], rtol=1e-9, atol=1e-12, t_eval=[5.0])
+    assert np.allclose(sol.y[0] / 1e6, small.y[0], rtol=1e-12, atol=1e-15)
+    assert abs(sol.y[0, -1] / 1e6 - np.cos(5)) < 1e-7
+
+
+def test_vectorized_fun_is_called_with_a_column():
+    calls = []
+
+    def fun(t, y):
+        calls.append(y.shape)
+        return np.vstack([y[1], -y[0]])
+
+    sol = stepwise.solve_ivp(fun, (0, 1), [1.0, 0.0], vectorized=True, rtol=1e-8, t_eval=[1.0])
+    assert calls[0] == (2, 1) and abs(sol.y[0, -1] - np.cos(1)) < 1e-7
+
+
+def test_equations_take_events_in_the_scene_files_layout():
+    ball = stepwise.Equations({"y": "vy", "vy": "-g"}, parameters={"g": 9.81, "e": 0.8}, initial={"y": 1.0},
+                              events={"floor": {"when": "y", "direction": "falling", "action": {"vy": "-e*vy"},
+                                                "rest": "e*abs(vy) < 0.01"}})
+    sol = stepwise.solve_ivp(ball, (0, 5), [1.0, 0.0], rtol=1e-10, atol=1e-12, t_eval=[5.0])
+    assert sol.success and sol.stats["events"] == 28
+    assert sol.y[1, -1] == 0.0 and abs(sol.y[0, -1]) < 1e-9  # at rest on the floor
+    with pytest.raises(ValueError, match="direction"):
+        stepwise.Equations({"y": "1"}, events={"e": {"when": "y", "direction": "down"}})
