@@ -146,6 +146,81 @@ for name, fun, jac, equations, t_end, y0, ours, theirs, ref_method in PROBLEMS:
         print(f"{e:7.0e} | {sm:>10} {sc * 1e3:9.3f} ms | {pm or '-':>12} {(pc or 0) * 1e3:8.3f} ms {pr} {share:>9} | {cm or '-':>12} {(cc or 0) * 1e3:8.4f} ms {cr}")
         summary.append((name, e, sc / pc if pc else None, sc / cc if cc else None))
 
+
+# ---- events: a ball with quadratic drag bouncing off the floor (restitution 0.8) to its fifth impact. SciPy has
+# no state change at an event: its loop restarts solve_ivp at each impact with the rebound (a terminal event), and
+# so does stepwise's with a Python fun and event; stepwise.Equations bounces inside one compiled solve (an
+# [events] action). The error is the largest impact-time error against the same loop with DOP853 at rtol 1e-13.
+G, DRAG, E, BOUNCES = 9.81, 0.1, 0.8, 5
+
+
+def dragged_ball(t, y):
+    return np.array([y[1], -G - DRAG * y[1] * abs(y[1])])
+
+
+def floor_event(t, y):
+    return y[0]
+
+
+floor_event.terminal = True
+floor_event.direction = -1
+
+
+def bounce_loop(solve_ivp, method, rtol):
+    t, y, impacts = 0.0, [1.0, 0.0], []
+    while len(impacts) < BOUNCES:
+        sol = solve_ivp(dragged_ball, (t, t + 10), y, method=method, rtol=rtol, atol=rtol * 1e-3, events=floor_event)
+        if not sol.success or not len(sol.t_events[0]):
+            return None
+        t = float(sol.t_events[0][0])
+        impacts.append(t)
+        y = [0.0, -E * float(sol.y_events[0][0][1])]
+    return impacts
+
+
+ball_equations = stepwise.Equations({"y": "v", "v": "-g - c*v*abs(v)"}, parameters={"g": G, "c": DRAG, "e": E}, initial={"y": 1.0},
+                                    events={"floor": {"when": "y", "direction": "falling", "action": {"v": "-e*v"}}})
+
+
+class Impacts:
+    """a sweep point's result, shaped as sweep() reads a solution: success, y[:, -1] the impact times, nfev"""
+
+    def __init__(self, times, nfev=0):
+        self.success = times is not None and len(times) >= BOUNCES
+        self.y = np.array(times[:BOUNCES] if self.success else [np.nan] * BOUNCES)[:, None]
+        self.nfev = nfev
+
+
+def compiled_impacts(method, rtol):
+    # the run ends at the fifth impact's time plus a little: the impact times come from the solve's own events
+    sol = stepwise.solve_ivp(ball_equations, (0, reference_impacts[-1] + 0.05), [1.0, 0.0], method=method, rtol=rtol, atol=rtol * 1e-3,
+                             t_eval=[reference_impacts[-1] + 0.05])
+    return Impacts(list(sol.equation_events["floor"][0]), sol.nfev)
+
+
+reference_impacts = bounce_loop(scipy.integrate.solve_ivp, "DOP853", 1e-13)
+ref = np.array(reference_impacts)
+scipy_curves = {m: sweep(lambda rtol, m=m: Impacts(bounce_loop(scipy.integrate.solve_ivp, m, rtol)), ref) for m in ["RK45", "DOP853", "LSODA"]}
+python_curves = {m: sweep(lambda rtol, m=m: Impacts(bounce_loop(stepwise.solve_ivp, m, rtol)), ref) for m in ["verner98", "tsitouras54"]}
+compiled_curves = {m: sweep(lambda rtol, m=m: compiled_impacts(m, rtol), ref) for m in ["verner98", "tsitouras54"]}
+print(f"\nbouncing ball with drag, {BOUNCES} impacts: the largest impact-time error")
+print(f"{'error':>7} | {'SciPy best':>22} | {'stepwise, Python fun':>24} {'ratio':>6} | {'stepwise, compiled':>24} {'ratio':>7}")
+event_ratios = []
+for e in ERRORS:
+    sm, sc = best(scipy_curves, e)
+    pm, pc = best(python_curves, e)
+    cm, cc = best(compiled_curves, e)
+    if sc is None:
+        print(f"{e:7.0e} | SciPy's methods did not reach it")
+        continue
+    pr = f"{sc / pc:6.1f}" if pc else "     -"
+    cr = f"{sc / cc:7.0f}" if cc else "      -"
+    print(f"{e:7.0e} | {sm:>10} {sc * 1e3:9.3f} ms | {pm or '-':>12} {(pc or 0) * 1e3:8.3f} ms {pr} | {cm or '-':>12} {(cc or 0) * 1e3:8.4f} ms {cr}")
+    event_ratios.append((sc / pc if pc else None, sc / cc if cc else None))
+print(f"events, at equal impact-time error, SciPy's best / stepwise's best: Python fun "
+      f"{min(r for r, _ in event_ratios if r):.1f}-{max(r for r, _ in event_ratios if r):.1f}x, compiled "
+      f"{min(r for _, r in event_ratios if r):.0f}-{max(r for _, r in event_ratios if r):.0f}x")
+
 python_ratios = [r for _, _, r, _ in summary if r]
 compiled_ratios = [r for _, _, _, r in summary if r]
 print(f"\nat equal error, SciPy's best / stepwise's best: Python fun {min(python_ratios):.1f}-{max(python_ratios):.1f}x, "

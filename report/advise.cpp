@@ -3,6 +3,7 @@
 #include "report/cost_model.hpp"
 #include "report/report.hpp"
 #include "report/studies.hpp"
+#include "report/studies/study_scenes.hpp"
 #include "report/user_scene.hpp"
 #include "run/atomic_write.hpp"
 #include "run/csv.hpp"
@@ -38,8 +39,24 @@ constexpr int finest_rtol_exponent = 13, finest_halving = 26;
 
 std::string fmt_seconds(double s) { return fmt::format("{:.3g} s", s); }
 
+// what a run's error is measured against: the reference state at t_end (none: the exact solution), and where the
+// scene has events of its own, the reference's event times
+struct AdviseReference {
+  std::optional<Eigen::VectorXd> y;
+  std::optional<std::vector<double>> event_times;
+};
+
+// the larger of the state's error at t_end and the event times' (each found against the reference's n-th; a run
+// that found a different number of events has not met any error)
+double with_event_error(double state_error, const RunResult& r, const std::vector<double>& reference) {
+  if (r.events.size() != reference.size()) return std::numeric_limits<double>::infinity();
+  double error = state_error;
+  for (size_t n = 0; n < reference.size(); ++n) error = std::max(error, std::abs(r.events[n].t - reference[n]));
+  return error;
+}
+
 // the scene's error at t_end: against the exact solution where the model has one, else the reference state
-AdvisePoint measure(const Model& model, const Method& method, const StepControl& control, double t_end, const Eigen::VectorXd* reference) {
+AdvisePoint measure(const Model& model, const Method& method, const StepControl& control, double t_end, const AdviseReference& reference) {
   AdvisePoint p;
   p.method = std::string(method.name);
   p.dt = control.dt;
@@ -58,13 +75,14 @@ AdvisePoint measure(const Model& model, const Method& method, const StepControl&
   p.cpu_seconds = best.result.stats.cpu_seconds;
   p.rhs_evals = static_cast<double>(best.result.stats.rhs_evals);
   p.steps = best.result.stats.steps;
-  if (p.status == Status::ok) p.error = reference ? max_norm_error(best.result.y_stop, *reference) : best.error;
+  if (p.status == Status::ok) p.error = reference.y ? max_norm_error(best.result.y_stop, *reference.y) : best.error;
+  if (p.error && reference.event_times) p.error = with_event_error(*p.error, best.result, *reference.event_times);
   return p;
 }
 
 // one method's sweep: coarse to fine until it first meets the target, then the two settings between its last two
 // (a third of the way each, geometrically), under its allowance of CPU seconds and the sweep's deadline
-std::vector<AdvisePoint> sweep_method(const StudyScene& scene, const Method& method, double target, const Eigen::VectorXd* reference,
+std::vector<AdvisePoint> sweep_method(const StudyScene& scene, const Method& method, double target, const AdviseReference& reference,
                                       Clock::time_point deadline, double allowance, int stride = 3) {
   const auto model = scene_model(scene);
   std::vector<AdvisePoint> points;
@@ -145,7 +163,9 @@ void spectrum_along_run(const StudyScene& scene, Advice& advice) {
 
 }  // namespace
 
-std::vector<AdvisePoint> full_sweep(const StudyScene& scene, const Method& method, double target, const Eigen::VectorXd* reference, double seconds) {
+std::vector<AdvisePoint> full_sweep(const StudyScene& scene, const Method& method, double target, const Eigen::VectorXd* reference_state, double seconds) {
+  AdviseReference reference;
+  if (reference_state) reference.y = *reference_state;
   return sweep_method(scene, method, target, reference, Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds)),
                       seconds, 1);
 }
@@ -159,14 +179,24 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
   const auto model = scene_model(scene);
 
   // what the errors are measured against
-  std::optional<Eigen::VectorXd> reference;
+  AdviseReference reference;
   if (model->has_exact()) {
     advice.reference = "the exact solution";
   } else {
     const Reference r = converged_reference(*model, scene.t_end);
-    reference = r.y;
+    reference.y = r.y;
     advice.reference = r.methods;
     advice.reference_agreement = r.agreement;
+  }
+  // a scene's own events: a ball that bounces at the wrong time is wrong, so their times count in the error
+  if (std::any_of(model->events().begin(), model->events().end(), [](const Event& e) { return !e.surface; })) {
+    const std::vector<double> t_out{scene.t_end};
+    const RunResult r = make_integrator(reference_method, StepControl::adaptive(reference_rtol, 1e-3 * reference_rtol))
+                            ->integrate(*model, 0, model->initial_state(), t_out);
+    if (r.status != Status::ok) throw std::runtime_error(fmt::format("advise: the reference run for the event times ({}) failed: {}", reference_method, r.message));
+    reference.event_times.emplace();
+    for (const auto& e : r.events) reference.event_times->push_back(e.t);
+    advice.event_count = reference.event_times->size();
   }
   spectrum_along_run(scene, advice);
   // the worst-case spectrum for the stability predictions: the eigenvalues at the start and the fastest decay seen
@@ -200,7 +230,7 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
     costs.push_back((advice.stiff && solves_newton_systems(*m) ? 1e6 : 1.0) / expected);
   }
   const auto sweeps = ctx.sweep<std::vector<AdvisePoint>>(labels, [&](size_t i) {
-    return sweep_method(scene, *candidates[i], target, reference ? &*reference : nullptr, deadline, allowance);
+    return sweep_method(scene, *candidates[i], target, reference, deadline, allowance);
   }, costs);
 
   const auto search_deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(0.9 * budget_seconds));
@@ -272,7 +302,7 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
     }
     // the advised setting run again as `stepwise run` runs it: the same model, method and step control
     StepControl control = best.cheapest->dt ? StepControl::fixed(*best.cheapest->dt) : StepControl::adaptive(best.cheapest->rtol, best.cheapest->atol);
-    advice.reproduced = measure(*scene_model(scene), *find_method(best.method), control, scene.t_end, reference ? &*reference : nullptr);
+    advice.reproduced = measure(*scene_model(scene), *find_method(best.method), control, scene.t_end, reference);
   }
   advice.elapsed_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return advice;
@@ -319,6 +349,10 @@ std::string advice_markdown(const Advice& a, const std::string& command, const s
                                           "while an implicit one's steps follow the accuracy",
                                           stiffness_threshold, a.fastest_decay)
                             : fmt::format(" (below {}): explicit methods are limited by accuracy, not stability", stiffness_threshold));
+  if (a.event_count)
+    md += fmt::format("The scene has events ({} in the reference run): a run's error is the larger of its state's at t_end and its "
+                      "event times' (s), each against the reference's; a run that finds a different number of events meets no error.\n\n",
+                      *a.event_count);
   md += fmt::format("Errors are max-norm at t_end against {}{}. The sweep ran every method that applies, coarse to fine until it met the error "
                     "(then between its last two settings), each within its share of a {} budget: {} in all.\n\n",
                     a.reference, a.reference_agreement > 0 ? fmt::format(" (their runs agree to {:.2e})", a.reference_agreement) : "",

@@ -47,6 +47,7 @@ struct Advice {
   double budget_seconds = 0;
   double elapsed_seconds = 0;  // the advice's wall clock, all of it
   std::string reference;       // what the errors are measured against
+  std::optional<size_t> event_count;  // a scene with events of its own: how many the reference run found (their times count in the error)
   double reference_agreement = 0;  // the two reference runs' difference (0 against an exact solution)
   // the spectrum of the exact Jacobian along the reference run
   double fastest_decay = 0;    // max over the run of -Re(lambda) (1/s)

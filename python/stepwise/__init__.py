@@ -83,7 +83,8 @@ def study(name, scene, set=None, quick=True, threads=0):
 
 class OdeResult(dict):
     """SciPy's result: t, y, sol, t_events, y_events, nfev, njev, nlu, status, message, success; and
-    stepwise's own: method, stats (every counter: steps, rejected, rhs_evals, ...)."""
+    stepwise's own: method, stats (every counter: steps, rejected, rhs_evals, ...), equation_events (an
+    Equations' own events: {name: (times, states just before its action)})."""
 
     def __getattr__(self, name):
         try:
@@ -283,18 +284,11 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
         sol = StepSolution(steps["t"], unscale(steps["y"]),
                            lambda ta, tb, ya, times: unscale(_segment(solve, ta, tb, ya / (1 if scale is None else scale), times)))
     y = out["y"] if scale is None else out["y"] * scale[:, None]
-    # t_events and y_events: one array for each of the events given, in their order (the system's own first in
-    # the solver's list, so those given are counted after them)
-    own = out["own_events"]
-    t_events = [[] for _ in events]
-    y_events = [[] for _ in events]
-    for index, t, y_event in out["events"]:
-        if index >= own:
-            t_events[index - own].append(t)
-            y_events[index - own].append(y_event if scale is None else y_event * scale)
-    n = len(y0)
-    t_events = [np.asarray(ts, dtype=float) for ts in t_events] if events else None
-    y_events = [np.asarray(ys, dtype=float).reshape(-1, n) for ys in y_events] if events else None
+    # t_events and y_events: one array for each of the events given, in their order; an Equations' own by name
+    t_events = out["t_events"] if events else None
+    y_events = out["y_events"] if events else None
+    if events and scale is not None:
+        y_events = [ys * scale for ys in y_events]
     ok = out["status"] == "ok"
     stats = out["stats"]
     status = (1 if out["terminated"] else 0) if ok else -1
@@ -303,7 +297,7 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
     return OdeResult(
         t=out["t"], y=y, sol=sol, t_events=t_events, y_events=y_events,
         nfev=stats["rhs_evals"], njev=stats["jac_evals"], nlu=stats["factorizations"],
-        status=status, message=message, success=ok, method=out["method"], stats=stats)
+        status=status, message=message, success=ok, method=out["method"], stats=stats, equation_events=out["own_events"])
 
 
 def _with_args(event, args):

@@ -327,7 +327,21 @@ def test_equations_take_events_in_the_scene_files_layout():
                               events={"floor": {"when": "y", "direction": "falling", "action": {"vy": "-e*vy"},
                                                 "rest": "e*abs(vy) < 0.01"}})
     sol = stepwise.solve_ivp(ball, (0, 5), [1.0, 0.0], rtol=1e-10, atol=1e-12, t_eval=[5.0])
-    assert sol.success and sol.stats["events"] == 28
+    assert sol.success and sol.stats["events"] == 28 and len(sol.equation_events["floor"][0]) == 28
     assert sol.y[1, -1] == 0.0 and abs(sol.y[0, -1]) < 1e-9  # at rest on the floor
     with pytest.raises(ValueError, match="direction"):
         stepwise.Equations({"y": "1"}, events={"e": {"when": "y", "direction": "down"}})
+
+
+def test_a_scene_runs_events_into_its_summary_and_trajectory():
+    r = stepwise.run("bouncing-ball-equations")
+    events = r.summary["events"]
+    assert len(events) == 28 and events[-1]["kind"] == "rest"
+    for e in events:
+        assert set(e["state"]) == {"y", "vy", "floor.resting"}
+        # trajectory.csv holds the states just before and after, two rows at the event's time
+        rows = np.flatnonzero(r.t == e["t"])
+        assert len(rows) == 2
+        assert r.y[r.names.index("vy"), rows[0]] == e["state"]["vy"]
+        assert r.y[r.names.index("vy"), rows[1]] == e["state_after"]["vy"]
+    assert np.all(np.diff(r.t) >= 0)
