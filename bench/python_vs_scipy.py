@@ -106,6 +106,18 @@ def best(curves, target):
     return min(costs.items(), key=lambda mc: mc[1]) if costs else (None, None)
 
 
+def compare(e, scipy_curves, python_curves, compiled_curves):
+    """each side's best method and cost at error e, and the two ratios as printed; None (said) where SciPy's
+    methods did not reach it"""
+    sm, sc = best(scipy_curves, e)
+    pm, pc = best(python_curves, e)
+    cm, cc = best(compiled_curves, e)
+    if sc is None:
+        print(f"{e:7.0e} | SciPy's methods did not reach it")
+        return None
+    return sm, sc, pm, pc, cm, cc, f"{sc / pc:6.1f}" if pc else "     -", f"{sc / cc:7.0f}" if cc else "      -"
+
+
 def per_call(fun, y0):
     n = 20000
     y = np.array(y0, dtype=float)
@@ -129,20 +141,16 @@ for name, fun, jac, equations, t_end, y0, ours, theirs, ref_method in PROBLEMS:
     print(f"\n{name} (t_end {t_end}; the Python fun costs {call * 1e6:.2f} us a call)")
     print(f"{'error':>7} | {'SciPy best':>22} | {'stepwise, Python fun':>24} {'ratio':>6} {'fun share':>9} | {'stepwise, compiled':>24} {'ratio':>7}")
     for e in ERRORS:
-        sm, sc = best(scipy_curves, e)
-        pm, pc = best(python_curves, e)
-        cm, cc = best(compiled_curves, e)
-        if sc is None:
-            print(f"{e:7.0e} | SciPy's methods did not reach it")
+        row = compare(e, scipy_curves, python_curves, compiled_curves)
+        if row is None:
             continue
+        sm, sc, pm, pc, cm, cc, pr, cr = row
         share = ""
         if pm:
             # the calls stepwise's best made near this error: interpolated like the cost
             pts = python_curves[pm]
             nfev = next((n for err, _, n in pts if err <= e), pts[-1][2])
             share = f"{nfev * call / pc:9.0%}"
-        pr = f"{sc / pc:6.1f}" if pc else "     -"
-        cr = f"{sc / cc:7.0f}" if cc else "      -"
         print(f"{e:7.0e} | {sm:>10} {sc * 1e3:9.3f} ms | {pm or '-':>12} {(pc or 0) * 1e3:8.3f} ms {pr} {share:>9} | {cm or '-':>12} {(cc or 0) * 1e3:8.4f} ms {cr}")
         summary.append((name, e, sc / pc if pc else None, sc / cc if cc else None))
 
@@ -207,14 +215,10 @@ print(f"\nbouncing ball with drag, {BOUNCES} impacts: the largest impact-time er
 print(f"{'error':>7} | {'SciPy best':>22} | {'stepwise, Python fun':>24} {'ratio':>6} | {'stepwise, compiled':>24} {'ratio':>7}")
 event_ratios = []
 for e in ERRORS:
-    sm, sc = best(scipy_curves, e)
-    pm, pc = best(python_curves, e)
-    cm, cc = best(compiled_curves, e)
-    if sc is None:
-        print(f"{e:7.0e} | SciPy's methods did not reach it")
+    row = compare(e, scipy_curves, python_curves, compiled_curves)
+    if row is None:
         continue
-    pr = f"{sc / pc:6.1f}" if pc else "     -"
-    cr = f"{sc / cc:7.0f}" if cc else "      -"
+    sm, sc, pm, pc, cm, cc, pr, cr = row
     print(f"{e:7.0e} | {sm:>10} {sc * 1e3:9.3f} ms | {pm or '-':>12} {(pc or 0) * 1e3:8.3f} ms {pr} | {cm or '-':>12} {(cc or 0) * 1e3:8.4f} ms {cr}")
     event_ratios.append((sc / pc if pc else None, sc / cc if cc else None))
 print(f"events, at equal impact-time error, SciPy's best / stepwise's best: Python fun "
