@@ -331,6 +331,32 @@ py::dict stats_dict(const Stats& s) {
   return d;
 }
 
+// each event's times and the states there (of the variables), as arrays: the Python events' in their order
+// (SciPy's t_events, and y_events one row an event), the system's own by name (own_events: name -> (t, y))
+void put_events(py::dict& d, const EventfulSystem& system, const RunResult& r, double sign, int n) {
+  const auto all = system.events();
+  std::vector<std::vector<double>> times(all.size());
+  std::vector<std::vector<Eigen::VectorXd>> states(all.size());
+  for (const EventRecord& e : r.events)
+    if (e.before.size() > 0 && e.event < all.size()) {
+      times[e.event].push_back(sign * e.t);
+      states[e.event].push_back(e.before.head(n));
+    }
+  py::list t_events, y_events;
+  py::dict own_events;
+  for (size_t k = 0; k < all.size(); ++k) {
+    py::object rows = columns_array(states[k], n).attr("T");
+    if (k < system.own()) own_events[py::str(all[k].name)] = py::make_tuple(vector_array(times[k]), rows);
+    else {
+      t_events.append(vector_array(times[k]));
+      y_events.append(rows);
+    }
+  }
+  d["t_events"] = t_events;
+  d["y_events"] = y_events;
+  d["own_events"] = own_events;
+}
+
 // solve_ivp's compiled half (the untimed solve(): a caller times it as it likes; the thread CPU clock's two reads
 // would add ~1 us a solve): `fun` a Python callable or an Equations; t_eval, where given, sorted in the direction
 // of integration and within t_span (checked here, SciPy's messages)
@@ -416,41 +442,13 @@ py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<do
   } else {
     r = make_integrator(method->name, control)->solve(*system, sign * t0, state0, s_out);
   }
-  // each event's times and the states there (of the variables), in arrays: the Python events' in their order
-  // (SciPy's t_events and y_events), the system's own by name
-  const auto all = system->events();
-  std::vector<std::vector<double>> event_times(all.size());
-  std::vector<std::vector<Eigen::VectorXd>> states(all.size());
-  for (const EventRecord& e : r.events)
-    if (e.before.size() > 0 && e.event < all.size()) {
-      event_times[e.event].push_back(sign * e.t);
-      states[e.event].push_back(e.before.head(n));
-    }
-  const auto rows = [n](const std::vector<Eigen::VectorXd>& ys) {
-    py::array_t<double> a({static_cast<py::ssize_t>(ys.size()), static_cast<py::ssize_t>(n)});
-    auto m = a.mutable_unchecked<2>();
-    for (size_t k = 0; k < ys.size(); ++k)
-      for (int i = 0; i < n; ++i) m(static_cast<py::ssize_t>(k), i) = ys[k][i];
-    return a;
-  };
-  py::list t_events, y_events;
-  py::dict own_events;
-  for (size_t k = 0; k < all.size(); ++k) {
-    if (k < system->own()) own_events[py::str(all[k].name)] = py::make_tuple(vector_array(event_times[k]), rows(states[k]));
-    else {
-      t_events.append(vector_array(event_times[k]));
-      y_events.append(rows(states[k]));
-    }
-  }
   py::dict d;
   d["t"] = vector_array(t_done);
   d["y"] = columns_array(y_done, n);
   d["status"] = std::string(to_string(r.status));
   d["message"] = r.message;
   d["t_stop"] = sign * r.t_stop;
-  d["t_events"] = t_events;
-  d["y_events"] = y_events;
-  d["own_events"] = own_events;
+  put_events(d, *system, r, sign, n);
   d["terminated"] = r.terminated;
   d["stats"] = stats_dict(r.stats);
   d["method"] = std::string(method->name);

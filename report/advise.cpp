@@ -55,6 +55,19 @@ double with_event_error(double state_error, const RunResult& r, const std::vecto
   return error;
 }
 
+// a scene's own events (a ball that bounces at the wrong time is wrong, so their times count in the error): their
+// times in the reference run; none for a scene without
+std::optional<std::vector<double>> reference_event_times(const Model& model, double t_end) {
+  if (std::none_of(model.events().begin(), model.events().end(), [](const Event& e) { return !e.surface; })) return std::nullopt;
+  const std::vector<double> t_out{t_end};
+  const RunResult r = make_integrator(reference_method, StepControl::adaptive(reference_rtol, 1e-3 * reference_rtol))
+                          ->integrate(model, 0, model.initial_state(), t_out);
+  if (r.status != Status::ok) throw std::runtime_error(fmt::format("advise: the reference run for the event times ({}) failed: {}", reference_method, r.message));
+  std::vector<double> times;
+  for (const auto& e : r.events) times.push_back(e.t);
+  return times;
+}
+
 // the scene's error at t_end: against the exact solution where the model has one, else the reference state
 AdvisePoint measure(const Model& model, const Method& method, const StepControl& control, double t_end, const AdviseReference& reference) {
   AdvisePoint p;
@@ -188,16 +201,8 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
     advice.reference = r.methods;
     advice.reference_agreement = r.agreement;
   }
-  // a scene's own events: a ball that bounces at the wrong time is wrong, so their times count in the error
-  if (std::any_of(model->events().begin(), model->events().end(), [](const Event& e) { return !e.surface; })) {
-    const std::vector<double> t_out{scene.t_end};
-    const RunResult r = make_integrator(reference_method, StepControl::adaptive(reference_rtol, 1e-3 * reference_rtol))
-                            ->integrate(*model, 0, model->initial_state(), t_out);
-    if (r.status != Status::ok) throw std::runtime_error(fmt::format("advise: the reference run for the event times ({}) failed: {}", reference_method, r.message));
-    reference.event_times.emplace();
-    for (const auto& e : r.events) reference.event_times->push_back(e.t);
-    advice.event_count = reference.event_times->size();
-  }
+  reference.event_times = reference_event_times(*model, scene.t_end);
+  if (reference.event_times) advice.event_count = reference.event_times->size();
   spectrum_along_run(scene, advice);
   // the worst-case spectrum for the stability predictions: the eigenvalues at the start and the fastest decay seen
   Eigen::VectorXcd spectrum = jacobian_spectrum(*model, 0, model->initial_state());

@@ -79,6 +79,7 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
       last_recorded = t;
     }
     if (stop) {
+      // the run ends at the event: the outputs recorded before it moved t_stop back to theirs
       result.t_stop = t;
       result.y_stop = y;
       break;

@@ -8,6 +8,13 @@
 namespace stepwise {
 namespace {
 
+// whether g going from a to b crosses zero in the direction (+1 rising, -1 falling, 0 either): strictly from
+// one side, to zero or the other (so never from g = 0: an event at t0, or one just handled)
+bool crosses(double a, double b, int direction) {
+  const bool falling = a > 0 && b <= 0, rising = a < 0 && b >= 0;
+  return direction < 0 ? falling : direction > 0 ? rising : falling || rising;
+}
+
 // a built-in surface event's crossing: which event, and where in the step the linear interpolant of its g
 // vanishes, in [0, 1]: 1 when g starts at zero (a flight shorter than the step left the surface and came
 // back), 0 when the state is already behind the surface
@@ -103,7 +110,8 @@ std::optional<Bracket> sign_change_bracket(const Event& event, std::optional<dou
                                            double b, const Eigen::VectorXd& y0, const Eigen::VectorXd& y1, const Restep& restep) {
   const int d = event.direction;
   if (crosses(a, b, d)) return Bracket{0, 1, a, b};
-  if (!event.rate || b == 0) return std::nullopt;
+  // from one side to the other in the wrong direction, or without a rate: nothing (the rates are not evaluated)
+  if (!event.rate || b == 0 || (!fired_rate && (a > 0) != (b > 0))) return std::nullopt;
   const double r0 = event.rate(t, y0), r1 = event.rate(t + h, y1);
   // the extremum between the ends, and g there
   const auto extremum = [&] {
@@ -136,7 +144,7 @@ std::optional<Bracket> sign_change_bracket(const Event& event, std::optional<dou
     if (crosses(g_star, b, d)) return Bracket{s_star, 1, g_star, b};
     return std::nullopt;
   }
-  if ((a > 0) != (b > 0) || !toward) return std::nullopt;
+  if (!toward) return std::nullopt;
   const auto [s_star, g_star] = extremum();
   if (crosses(a, g_star, d)) return Bracket{0, s_star, a, g_star};
   if (crosses(g_star, b, d)) return Bracket{s_star, 1, g_star, b};
@@ -145,10 +153,6 @@ std::optional<Bracket> sign_change_bracket(const Event& event, std::optional<dou
 
 }  // namespace
 
-bool crosses(double a, double b, int direction) {
-  const bool falling = a > 0 && b <= 0, rising = a < 0 && b >= 0;
-  return direction < 0 ? falling : direction > 0 ? rising : falling || rising;
-}
 
 EventWatch start_watch(std::span<const Event> events, double t, const Eigen::VectorXd& y) {
   EventWatch watch{event_values(events, t, y), Eigen::VectorXd::Zero(static_cast<Eigen::Index>(events.size()))};

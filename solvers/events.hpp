@@ -52,8 +52,4 @@ std::optional<Settled> settle_step_events(std::span<const Event> events, EventWa
                                           const Eigen::VectorXd& y_start, Eigen::VectorXd& y, EventLocation location,
                                           const Restep& restep, RunResult& result);
 
-// whether g going from a to b crosses zero in the direction (+1 rising, -1 falling, 0 either): strictly from
-// one side, to zero or the other (so never from g = 0: an event at t0, or one just handled)
-bool crosses(double a, double b, int direction);
-
 }  // namespace stepwise

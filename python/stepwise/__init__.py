@@ -300,12 +300,16 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
         status=status, message=message, success=ok, method=out["method"], stats=stats, equation_events=out["own_events"])
 
 
-def _with_args(event, args):
-    wrapped = lambda t, y: event(t, y, *args)  # noqa: E731
+def _like(wrapped, event):
+    """`wrapped` with the event's SciPy attributes (terminal, direction)"""
     for attribute in ("terminal", "direction"):
         if hasattr(event, attribute):
             setattr(wrapped, attribute, getattr(event, attribute))
     return wrapped
+
+
+def _with_args(event, args):
+    return _like(lambda t, y: event(t, y, *args), event)
 
 
 def _rescaled(fun, jac, events, y0, scale):
@@ -320,13 +324,7 @@ def _rescaled(fun, jac, events, y0, scale):
         z_jac = lambda t, z: np.asarray(user_jac(t, z * scale), dtype=float) * scale[None, :] / scale[:, None]  # noqa: E731
     elif jac is not None:
         z_jac = np.asarray(jac, dtype=float) * scale[None, :] / scale[:, None]
-    z_events = []
-    for event in events:
-        wrapped = (lambda e: lambda t, z: e(t, z * scale))(event)
-        for attribute in ("terminal", "direction"):
-            if hasattr(event, attribute):
-                setattr(wrapped, attribute, getattr(event, attribute))
-        z_events.append(wrapped)
+    z_events = [_like((lambda e: lambda t, z: e(t, z * scale))(event), event) for event in events]
     return z_fun, z_jac, z_events, y0 / scale
 
 
