@@ -8,6 +8,7 @@
 #include "solvers/capabilities/distance_constraints.hpp"
 #include "solvers/capabilities/imex_split.hpp"
 
+#include "membrane.hpp"
 #include "particle_common.hpp"
 #include "plane_collision.hpp"
 #include "springs.hpp"
@@ -15,6 +16,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <map>
 #include <cmath>
 #include <numbers>
 
@@ -64,6 +66,13 @@ std::span<const ParamSpec> parameter_table() {
       {"ground", 0, "", "collide with the ground plane y = ground_y (1) or not (0)", Bound::flag},
       {"ground_y", -2, "m", "height of the ground plane", Bound::finite},
       {"friction", 0.3, "", "Coulomb friction on the sphere and the ground", Bound::nonnegative},
+      {"continuum", 0, "", "the sheet's elastic forces: springs (0), or the continuum (1): a St. Venant-Kirchhoff membrane and "
+       "quadratic bending on the grid's triangles (models/membrane.hpp), with E, nu, thickness and density in place of the "
+       "springs' constants, `mass` and `damping`", Bound::flag},
+      {"E", 5e5, "Pa", "Young's modulus of the continuum sheet", Bound::positive},
+      {"nu", 0.3, "", "Poisson's ratio of the continuum sheet, in (-1, 0.5)", Bound::finite},
+      {"thickness", 5e-4, "m", "thickness of the continuum sheet", Bound::positive},
+      {"density", 1000, "kg/m^3", "density of the continuum sheet; its node masses are lumped from its triangles", Bound::positive},
   };
   return table;
 }
@@ -100,7 +109,13 @@ class Cloth final : public Model {
         sphere_radius_(p.at("sphere_radius")),
         ground_(p.at("ground") == 1),
         ground_y_(p.at("ground_y")),
-        friction_(p.at("friction")) {
+        friction_(p.at("friction")),
+        continuum_(p.at("continuum") == 1),
+        material_(p.at("E"), p.at("nu"), p.at("thickness")) {
+    if (!(p.at("nu") > -1 && p.at("nu") < 0.5))
+      throw BadParameter("nu", fmt::format("parameter 'nu' = {} must be in (-1, 0.5): 0.5 is an incompressible sheet and -1 one with no "
+                                           "resistance to area change, where the plane-stress Lame parameters are infinite",
+                                           p.at("nu")));
     // the sheet's whole run, its springs and the default implicit Euler's sparse Cholesky factor, by node:
     // 16 KiB, the peak resident size measured here at 256 x 256 (1.04 GiB) and 384 x 384 (2.35 GiB) nodes
     particle_grid(p, "rows", "columns", 16 * 1024, "nodes");
@@ -161,7 +176,7 @@ class Cloth final : public Model {
       else if (fb < 0) view_.springs.push_back(Spring{-1, fa, rest, stiffness, gamma, rest_[b]});
       else view_.springs.push_back(Spring{fa, fb, rest, stiffness, gamma});
     };
-    for (int r = 0; r < rows_; ++r)
+    for (int r = 0; r < rows_ && !continuum_; ++r)
       for (int c = 0; c < columns_; ++c) {
         if (p.at("structural") == 1) join(r, c, 0, 1, p.at("stiffness")), join(r, c, 1, 0, p.at("stiffness"));
         if (p.at("shear") == 1) join(r, c, 1, 1, p.at("shear_stiffness")), join(r, c, 1, -1, p.at("shear_stiffness"));
@@ -175,13 +190,20 @@ class Cloth final : public Model {
       }
     view_.nodes = free_;
     view_.mass.assign(free_, node_mass_);
+    if (continuum_) set_up_continuum(dx, dz, p.at("density"));
+    mass3_.resize(3 * free_);
+    for (int i = 0; i < free_; ++i) mass3_.segment<3>(3 * i).setConstant(view_.mass[i]);
     grid_ = ClothGridView{rows_, columns_, rest_, free_index_, dx, dz,
                           {p.at("stiffness"), p.at("shear_stiffness"), p.at("bend_stiffness")},
                           {p.at("structural") == 1, p.at("shear") == 1, p.at("bend") == 1}, gamma, node_mass_, drag_, g_, wind_, wind_k_, gust_,
                           gust_frequency_, pick_row >= 0 ? pick_row * columns_ + pick_column : -1, pick_force_, sphere_radius_, sphere_centre_,
                           ground_, ground_y_, friction_};
     auto pairs = spring_pairs(view_.springs);
-    if (wind_k_ > 0)
+    for (const auto& s : stencils_)
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j)
+          if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0) pairs.emplace_back(free_index_[s.node[i]], free_index_[s.node[j]]);
+    if (wind_k_ > 0 || continuum_)
       for (const auto& tri : triangles_)
         for (int i = 0; i < 3; ++i)
           for (int j = i + 1; j < 3; ++j)
@@ -189,7 +211,7 @@ class Cloth final : public Model {
     pattern_ = std::make_unique<BlockPattern>(free_, pairs);
     spring_slots_ = spring_slots(view_.springs, *pattern_);
     for (int i = 0; i < free_; ++i) diagonal_slots_.push_back(pattern_->slot(i, i));
-    if (wind_k_ > 0)
+    if (wind_k_ > 0 || continuum_)
       for (const auto& tri : triangles_) {
         std::array<BlockPattern::Slot, 9> slots{};
         for (int i = 0; i < 3; ++i)
@@ -197,12 +219,19 @@ class Cloth final : public Model {
             if (free_index_[tri[i]] >= 0 && free_index_[tri[j]] >= 0) slots[3 * i + j] = pattern_->slot(free_index_[tri[i]], free_index_[tri[j]]);
         triangle_slots_.push_back(slots);
       }
+    for (const auto& s : stencils_) {
+      std::array<BlockPattern::Slot, 16> slots{};
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+          if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0) slots[4 * i + j] = pattern_->slot(free_index_[s.node[i]], free_index_[s.node[j]]);
+      stencil_slots_.push_back(slots);
+    }
     second_order_.positions = 3 * free_;
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
     view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                                    Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
     set_up_split();
-    read_springs_as_constraints();
+    if (!continuum_) read_springs_as_constraints();
   }
   Cloth(const Cloth&) = delete;  // its capabilities hold `this`
   Cloth& operator=(const Cloth&) = delete;
@@ -229,7 +258,12 @@ class Cloth final : public Model {
   }
   int size() const override { return 6 * free_; }
   bool autonomous() const override { return gust_ == 0 || wind_k_ == 0; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, grid_, split_, constraints_); }
+  // the continuum sheet is no network of springs: the GPU pass, the position-based methods and the prefactored
+  // local/global method, which step springs, do not apply to it
+  const void* capability(const std::type_info& type) const override {
+    if (continuum_) return offer(type, second_order_, view_, split_);
+    return offer(type, second_order_, view_, network_, grid_, split_, constraints_);
+  }
   std::vector<std::string> state_names() const override { return particle_state_names(free_); }
   Eigen::VectorXd initial_state() const override {
     Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
@@ -249,9 +283,9 @@ class Cloth final : public Model {
     const double* x = y.data();
     const double* v = y.data() + 3 * free_;
     a.setZero();
-    if (forces != Forces::nonstiff) add_spring_forces(view_.springs, x, v, a.data());
+    if (forces != Forces::nonstiff) add_elastic_forces(x, v, a);
     if (forces == Forces::stiff) {
-      a /= node_mass_;
+      a.array() /= mass3_.array();
       return;
     }
     if (wind_k_ > 0) {
@@ -263,7 +297,7 @@ class Cloth final : public Model {
       }
     }
     if (picked_ >= 0) a.segment<3>(3 * picked_) += pick_force_;
-    a /= node_mass_;
+    a.array() /= mass3_.array();
     a -= drag_ * y.tail(3 * free_);
     for (int i = 0; i < free_; ++i) a[3 * i + 1] -= g_;
   }
@@ -275,11 +309,10 @@ class Cloth final : public Model {
     const double* v = y.data() + 3 * free_;
     pattern_->zero(dfdx);
     pattern_->zero(dfdv);
-    if (forces != Forces::stiff) {
-      const Eigen::Matrix3d drag = -node_mass_ * drag_ * Eigen::Matrix3d::Identity();
-      for (const auto& slot : diagonal_slots_) BlockPattern::add(dfdv, slot, drag);
-    }
+    if (forces != Forces::stiff)
+      for (int i = 0; i < free_; ++i) BlockPattern::add(dfdv, diagonal_slots_[i], -view_.mass[i] * drag_ * Eigen::Matrix3d::Identity());
     add_spring_force_jacobians(view_.springs, spring_slots_, x, v, definite, dfdx, dfdv);
+    if (continuum_) add_continuum_force_jacobian(x, definite, dfdx);
     if (forces == Forces::stiff || wind_k_ == 0) return;
     const Eigen::Vector3d w = wind_at(t);
     for (size_t k = 0; k < triangles_.size(); ++k) {
@@ -339,8 +372,8 @@ class Cloth final : public Model {
   }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
-    double e = node_mass_ * y.tail(3 * free_).squaredNorm() / 2 + spring_energy(view_.springs, y.data());
-    for (int i = 0; i < free_; ++i) e += node_mass_ * g_ * y[3 * i + 1];
+    double e = kinetic_energy(y) + elastic_energy(y.data());
+    for (int i = 0; i < free_; ++i) e += view_.mass[i] * g_ * y[3 * i + 1];
     if (picked_ >= 0) e -= pick_force_.dot(y.segment<3>(3 * picked_));
     return e;
   }
@@ -355,8 +388,13 @@ class Cloth final : public Model {
       const Eigen::Vector3d from = s.a < 0 ? s.anchor : Eigen::Vector3d(x.col(s.a));
       stretch = std::max(stretch, (x.col(s.b) - from).norm() / s.rest - 1);
     }
+    // the continuum's: each element's largest principal stretch, the root of F^T F's larger eigenvalue
+    for (const MembraneElement& e : elements_) {
+      const Eigen::Matrix<double, 3, 2> F = deformation_gradient(e, corners(e.node, y.data()));
+      stretch = std::max(stretch, std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(F.transpose() * F).eigenvalues().maxCoeff()) - 1);
+    }
     Eigen::VectorXd out(7);
-    out << *energy(y), node_mass_ * y.tail(3 * free_).squaredNorm() / 2, x.row(0).mean(), x.row(1).mean(), x.row(2).mean(),
+    out << *energy(y), kinetic_energy(y), x.row(0).mean(), x.row(1).mean(), x.row(2).mean(),
         x.row(1).minCoeff(), stretch;
     return out;
   }
@@ -364,7 +402,7 @@ class Cloth final : public Model {
  private:
   // IMEX: x' = v and the springs' forces implicit, the rest explicit
   void set_up_split() {
-    split_.stiff = "the springs and their damping";
+    split_.stiff = continuum_ ? "the membrane and bending forces" : "the springs and their damping";
     split_.implicit_part = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
       f.head(3 * free_) = y.tail(3 * free_);
       acceleration(t, y, f.tail(3 * free_), Forces::stiff);
@@ -378,6 +416,78 @@ class Cloth final : public Model {
       force_jacobians(t, y, false, dfdx, dfdv, Forces::stiff);
       mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
     };
+  }
+
+  // the continuum: the grid's triangles as membrane elements in the sheet's own (across, down) coordinates,
+  // each interior edge's bending stencil, and the node masses lumped from the triangles (a third of each's)
+  void set_up_continuum(double dx, double dz, double density) {
+    const auto material_point = [&](int k) { return Eigen::Vector2d((k % columns_) * dx, (k / columns_) * dz); };
+    std::fill(view_.mass.begin(), view_.mass.end(), 0.0);
+    std::map<std::pair<int, int>, std::vector<int>> opposite;  // edge (low, high) -> the corners opposite it
+    for (const auto& tri : triangles_) {
+      elements_.push_back(make_membrane_element(tri, material_point(tri[0]), material_point(tri[1]), material_point(tri[2])));
+      for (const int k : tri)
+        if (free_index_[k] >= 0) view_.mass[free_index_[k]] += density * material_.thickness * elements_.back().area / 3;
+      for (int i = 0; i < 3; ++i) {
+        const int a = tri[i], b = tri[(i + 1) % 3];
+        opposite[{std::min(a, b), std::max(a, b)}].push_back(tri[(i + 2) % 3]);
+      }
+    }
+    for (const auto& [edge, corners] : opposite)
+      if (corners.size() == 2)
+        stencils_.push_back(make_bending_stencil({edge.first, edge.second, corners[0], corners[1]}, rest_[edge.first], rest_[edge.second],
+                                                 rest_[corners[0]], rest_[corners[1]]));
+  }
+
+  Corners3 corners(const std::array<int, 3>& node, const double* x) const { return {corner(node[0], x), corner(node[1], x), corner(node[2], x)}; }
+  std::array<Eigen::Vector3d, 4> corners(const std::array<int, 4>& node, const double* x) const {
+    return {corner(node[0], x), corner(node[1], x), corner(node[2], x), corner(node[3], x)};
+  }
+
+  // the springs' forces, or the continuum's (membrane and bending), added to f (N, by free node)
+  void add_elastic_forces(const double* x, const double* v, Eigen::Ref<Eigen::VectorXd> f) const {
+    if (!continuum_) {
+      add_spring_forces(view_.springs, x, v, f.data());
+      return;
+    }
+    const auto add = [&](int k, const Eigen::Vector3d& force) {
+      if (free_index_[k] >= 0) f.segment<3>(3 * free_index_[k]) += force;
+    };
+    for (const MembraneElement& e : elements_) {
+      const Vector9d fe = membrane_force(material_, e, corners(e.node, x));
+      for (int i = 0; i < 3; ++i) add(e.node[i], fe.segment<3>(3 * i));
+    }
+    for (const BendingStencil& s : stencils_) {
+      const auto fb = bending_force(material_.bending, s, corners(s.node, x));
+      for (int i = 0; i < 4; ++i) add(s.node[i], fb[i]);
+    }
+  }
+
+  // the continuum's df/dx added on the pattern (definite: each element's Hessian projected to PSD)
+  void add_continuum_force_jacobian(const double* x, bool definite, Eigen::SparseMatrix<double>& dfdx) const {
+    for (size_t k = 0; k < elements_.size(); ++k) {
+      const MembraneElement& e = elements_[k];
+      const Matrix9d J = membrane_force_jacobian(material_, e, corners(e.node, x), definite);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (free_index_[e.node[i]] >= 0 && free_index_[e.node[j]] >= 0) BlockPattern::add(dfdx, triangle_slots_[k][3 * i + j], J.block<3, 3>(3 * i, 3 * j));
+    }
+    for (size_t k = 0; k < stencils_.size(); ++k) {
+      const BendingStencil& s = stencils_[k];
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+          if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0)
+            BlockPattern::add(dfdx, stencil_slots_[k][4 * i + j], -material_.bending * s.Q(i, j) * Eigen::Matrix3d::Identity());
+    }
+  }
+
+  double kinetic_energy(const Eigen::VectorXd& y) const { return y.tail(3 * free_).cwiseAbs2().dot(mass3_) / 2; }
+  double elastic_energy(const double* x) const {
+    if (!continuum_) return spring_energy(view_.springs, x);
+    double e = 0;
+    for (const MembraneElement& m : elements_) e += membrane_energy(material_, m, corners(m.node, x));
+    for (const BendingStencil& s : stencils_) e += bending_energy(material_.bending, s, corners(s.node, x));
+    return e;
   }
 
   // the springs read as compliant distance constraints (alpha = 1 / stiffness: the same material), which the
@@ -427,7 +537,12 @@ class Cloth final : public Model {
   bool ground_;
   bool pole_ = false;  // the left edge pinned to a pole
   double ground_y_, friction_;
-  double node_mass_ = 0;
+  double node_mass_ = 0;  // the spring sheet's (the continuum's masses are lumped: view_.mass)
+  bool continuum_;
+  MembraneMaterial material_;
+  std::vector<MembraneElement> elements_;  // the continuum's, one a triangle (triangles_'s order)
+  std::vector<BendingStencil> stencils_;   // the continuum's, one an interior edge
+  Eigen::VectorXd mass3_;                  // each free node's mass, once a coordinate
   std::vector<Eigen::Vector3d> rest_;  // every grid node's starting place (a pinned node stays there)
   std::vector<int> free_index_;         // grid node -> state node, -1 if pinned
   std::vector<int> grid_node_;          // state node -> grid node
@@ -436,6 +551,7 @@ class Cloth final : public Model {
   std::vector<std::array<int, 3>> triangles_;  // grid nodes
   SecondOrderView second_order_;  // y = (x, v), with the acceleration below
   MassSpringView view_;
+  SpringNetworkView network_{&view_};  // the spring sheet's elastic forces are its springs alone
   ClothGridView grid_;
   ImexSplit split_;
   DistanceConstraints constraints_;  // the springs as compliant constraints
@@ -443,6 +559,7 @@ class Cloth final : public Model {
   std::vector<std::array<BlockPattern::Slot, 4>> spring_slots_;
   std::vector<BlockPattern::Slot> diagonal_slots_;
   std::vector<std::array<BlockPattern::Slot, 9>> triangle_slots_;  // (corner i, corner j) of each triangle
+  std::vector<std::array<BlockPattern::Slot, 16>> stencil_slots_;  // (corner i, corner j) of each bending stencil
 };
 
 }  // namespace

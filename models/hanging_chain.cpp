@@ -64,7 +64,7 @@ class HangingChain final : public Model {
   }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, network_); }
   std::vector<std::string> state_names() const override {
     std::vector<std::string> names;
     for (const char* q : {"", "v"})
@@ -123,6 +123,7 @@ class HangingChain final : public Model {
   double mass_, drag_, g_;
   SecondOrderView second_order_;  // y = (x, v), with the acceleration below
   MassSpringView view_;
+  SpringNetworkView network_{&view_};  // its elastic forces are the springs alone
   BlockPattern pattern_;
   std::vector<std::array<BlockPattern::Slot, 4>> slots_;
   Eigen::VectorXd y0_;

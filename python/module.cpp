@@ -309,12 +309,13 @@ Equations equations_from_scene(const std::string& file, bool compile) {
 
 py::array_t<double> vector_array(const std::vector<double>& v) { return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data()); }
 
-// samples as an (n, N) array, SciPy's layout: one row a component, one column a time
-py::array_t<double> columns_array(const std::vector<Eigen::VectorXd>& samples, py::ssize_t n) {
-  py::array_t<double> a({n, static_cast<py::ssize_t>(samples.size())});
+// samples as an (n, N) array, SciPy's layout: one row a component, one column a time; or (N, n), one row a time
+py::array_t<double> columns_array(const std::vector<Eigen::VectorXd>& samples, py::ssize_t n, bool row_a_time = false) {
+  const auto count = static_cast<py::ssize_t>(samples.size());
+  py::array_t<double> a = row_a_time ? py::array_t<double>({count, n}) : py::array_t<double>({n, count});
   auto m = a.mutable_unchecked<2>();
-  for (size_t k = 0; k < samples.size(); ++k)
-    for (py::ssize_t i = 0; i < n; ++i) m(i, static_cast<py::ssize_t>(k)) = samples[k][i];
+  for (py::ssize_t k = 0; k < count; ++k)
+    for (py::ssize_t i = 0; i < n; ++i) (row_a_time ? m(k, i) : m(i, k)) = samples[static_cast<size_t>(k)][i];
   return a;
 }
 
@@ -345,7 +346,7 @@ void put_events(py::dict& d, const EventfulSystem& system, const RunResult& r, d
   py::list t_events, y_events;
   py::dict own_events;
   for (size_t k = 0; k < all.size(); ++k) {
-    py::object rows = columns_array(states[k], n).attr("T");
+    py::array_t<double> rows = columns_array(states[k], n, true);
     if (k < system.own()) own_events[py::str(all[k].name)] = py::make_tuple(vector_array(times[k]), rows);
     else {
       t_events.append(vector_array(times[k]));
@@ -361,7 +362,7 @@ void put_events(py::dict& d, const EventfulSystem& system, const RunResult& r, d
 // would add ~1 us a solve): `fun` a Python callable or an Equations; t_eval, where given, sorted in the direction
 // of integration and within t_span (checked here, SciPy's messages)
 py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<double, py::array::c_style | py::array::forcecast>& y0_array, const std::string& method_name, double rtol, double atol,
-               std::optional<double> dt, double max_step, std::optional<std::vector<double>> t_eval, const py::object& jac, std::optional<double> max_steps,
+               std::optional<double> dt, double max_step, const std::optional<py::array_t<double, py::array::c_style | py::array::forcecast>>& t_eval, const py::object& jac, std::optional<double> max_steps,
                const py::list& events, bool record_steps) {
   const Method* method = find_method(method_name);
   if (!method) throw BadMethod(fmt::format("unknown method \"{}\" (stepwise.methods() lists them)", method_name));
@@ -407,7 +408,8 @@ py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<do
     throw BadMethod(fmt::format("{} keeps dense {}x{} matrices ({:.3g} GB): {}", method->name, n, n, bytes / 1e9, memory_budget_text()));
 
   // the output times in s; those at t0 itself are y0
-  std::vector<double> times = t_eval ? *t_eval : std::vector<double>{t0, t1};
+  if (t_eval && t_eval->ndim() != 1) throw py::value_error("`t_eval` must be 1-dimensional.");
+  const std::vector<double> times = t_eval ? std::vector<double>(t_eval->data(), t_eval->data() + t_eval->shape(0)) : std::vector<double>{t0, t1};
   for (const double t : times)
     if (!(std::min(t0, t1) <= t && t <= std::max(t0, t1))) throw py::value_error("Values in `t_eval` are not within `t_span`.");
   for (size_t k = 1; k < times.size(); ++k)

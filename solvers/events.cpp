@@ -155,21 +155,23 @@ std::optional<Bracket> sign_change_bracket(const Event& event, std::optional<dou
 
 
 EventWatch start_watch(std::span<const Event> events, double t, const Eigen::VectorXd& y) {
-  EventWatch watch{event_values(events, t, y), Eigen::VectorXd::Zero(static_cast<Eigen::Index>(events.size()))};
+  EventWatch watch;
+  event_values(events, t, y, watch.g);
+  watch.zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(events.size()));
   return watch;
 }
 
-Eigen::VectorXd event_values(std::span<const Event> events, double t, const Eigen::VectorXd& y) {
-  Eigen::VectorXd g(static_cast<Eigen::Index>(events.size()));
+void event_values(std::span<const Event> events, double t, const Eigen::VectorXd& y, Eigen::VectorXd& g) {
+  g.resize(static_cast<Eigen::Index>(events.size()));
   for (size_t i = 0; i < events.size(); ++i) g[static_cast<Eigen::Index>(i)] = events[i].g(t, y);
-  return g;
 }
 
 std::optional<Settled> settle_step_events(std::span<const Event> events, EventWatch& watch, double t, double h,
                                           const Eigen::VectorXd& y_start, Eigen::VectorXd& y, EventLocation location,
                                           const Restep& restep, RunResult& result) {
   if (events.empty() || !(h > 0)) return std::nullopt;
-  Eigen::VectorXd g_end = event_values(events, t + h, y);
+  Eigen::VectorXd& g_end = watch.g_end;
+  event_values(events, t + h, y, g_end);
   // the earliest event of the step: each candidate located, the one at the earliest time kept
   std::optional<size_t> first;
   double t_first = 0;
@@ -198,13 +200,13 @@ std::optional<Settled> settle_step_events(std::span<const Event> events, EventWa
   watch.zero.setZero();
   watch.fired.reset();
   if (!first) {
-    watch.g = std::move(g_end);
+    watch.g.swap(g_end);
     return std::nullopt;
   }
   const double rate_before = events[*first].rate ? events[*first].rate(t_first, y_first) : 0.0;
   const bool go_on = handle_event(result, events, *first, t_first, y_first);
   y = std::move(y_first);
-  watch.g = event_values(events, t_first, y);
+  event_values(events, t_first, y, watch.g);
   // an event just handled sits on its zero: rounding may leave its g a hair behind, and the next step would see
   // the same crossing again. A built-in undirected event's g is taken as 0; a user's event measures its next
   // crossing from where its g is now

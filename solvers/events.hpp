@@ -21,8 +21,8 @@
 
 namespace stepwise {
 
-// g_i(t, y) for every event
-Eigen::VectorXd event_values(std::span<const Event> events, double t, const Eigen::VectorXd& y);
+// g_i(t, y) for every event, into g (sized to the events)
+void event_values(std::span<const Event> events, double t, const Eigen::VectorXd& y, Eigen::VectorXd& g);
 
 // what the event pass keeps between steps: g at the step's start, and the level each event's g is measured from.
 // That is 0, but for a user's event just handled it is g right after the handler: the state sits on the
@@ -30,6 +30,7 @@ Eigen::VectorXd event_values(std::span<const Event> events, double t, const Eige
 // flight of 1e-22 m above it is still a flight)
 struct EventWatch {
   Eigen::VectorXd g, zero;
+  Eigen::VectorXd g_end;        // scratch: g at the step's end (kept, so that a step allocates nothing)
   std::optional<size_t> fired;  // the user's event handled at the step's start
   double fired_rate = 0;        // its g's rate just before its handler
 };

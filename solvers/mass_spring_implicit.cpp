@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace stepwise {
@@ -80,13 +81,28 @@ class MassSpringImplicit final : public FixedStepper {
     if (!options_.newton) return true;
 
     const double t1 = t + h;
+    double previous = std::numeric_limits<double>::infinity();  // the last iterate's residual
     for (int iteration = 0; iteration < options_.newton_max_iterations; ++iteration) {
       // the residual at the iterate, and the matrix there
       bw_.assemble_matrix(t1, y_next, h);
       residual_ = bw_.mass().cwiseProduct(y_next.tail(n_) - y.tail(n_)) - h * bw_.force();
       const double scale = bw_.mass().cwiseProduct(y_next.tail(n_)).norm() + h * bw_.force().norm();
       if (!residual_.allFinite()) break;
-      if (residual_.norm() <= options_.newton_residual * scale || residual_.norm() == 0) return true;
+      const double norm = residual_.norm();
+      if (norm <= options_.newton_residual * scale || norm == 0) return true;
+      // a definite matrix is not the Jacobian where the forces' Hessian is indefinite (a compressed spring, a
+      // compressed element): its iteration converges linearly and, past some level, may stop improving. An
+      // iterate that made the residual grow is given up for the last one, kept if that is within
+      // newton_stall: the equation solved as far as this iteration can
+      if (norm >= previous) {
+        if (previous <= options_.newton_stall * scale) {
+          y_next = y_previous_;
+          return true;
+        }
+        break;
+      }
+      previous = norm;
+      y_previous_ = y_next;
       rhs_ = -residual_;
       if (!solve(t, failure, &rhs_)) return false;
       y_next.tail(n_) += dv_;
@@ -114,6 +130,7 @@ class MassSpringImplicit final : public FixedStepper {
       const double start = thread_cpu_seconds();
       const std::string e = factor_.factorize(bw_.matrix());
       factor_seconds_ = thread_cpu_seconds() - start;
+      factored_ = e.empty();
       if (!e.empty()) {
         failure = fmt::format("implicit-euler: {} at t = {:.9g}", e, t);
         return false;
@@ -137,7 +154,7 @@ class MassSpringImplicit final : public FixedStepper {
       if (!rhs) guess_ = dv_;
       return true;
     };
-    if (options_.solve == LinearSolve::refactor || !analysed_ || direct_left_ > 0) {
+    if (options_.solve == LinearSolve::refactor || !factored_ || direct_left_ > 0) {
       if (direct_left_ > 0) --direct_left_;
       return direct();
     }
@@ -194,12 +211,13 @@ class MassSpringImplicit final : public FixedStepper {
   Eigen::Index n_;
   SparseCholesky factor_;
   bool analysed_ = false;
+  bool factored_ = false;  // the factor holds a matrix's (a failed factorisation leaves none to keep)
   int reuses_ = 0;        // CG solves with the present factor
   int direct_left_ = 0;   // solves still to refactorise directly
   int direct_run_ = 1;    // how many the next failed trial of a kept factor refactorises directly
   double factor_seconds_ = 0, solve_seconds_ = 0;  // thread CPU time of the last factorisation, and of one CG iteration
   Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, FactorPreconditioner> cg_;
-  Eigen::VectorXd dv_, residual_, rhs_, guess_;
+  Eigen::VectorXd dv_, residual_, rhs_, guess_, y_previous_;
   Eigen::MatrixXd b_, x_;
 };
 

@@ -43,6 +43,7 @@ struct MassSpringImplicitOptions {
   double cg_residual = 1e-8;      // relative residual of the kept-factor conjugate gradients
   int cg_max_iterations = 200;
   double newton_residual = 1e-10;
+  double newton_stall = 1e-8;     // the residual an iteration that stops improving is accepted within
   int newton_max_iterations = 20;
 };
 

@@ -437,6 +437,17 @@ inline constexpr double rk4_probe_excess = 0.10;
 // next step's motion inward is undone at the step's end; after the step nothing is inside by more than eps r
 inline constexpr double obstacle_roundoff = 1e-12;
 
+// ---- the continuum cloth's elements (test_membrane.cpp)
+// an element's force against central differences of its energy (and df/dx against differences of the force)
+// with a step d = eps^(1/3) of the element's size L: truncation d^2 |W's third derivative| / 6 ~ eps^(2/3) |f|
+// and round-off eps |W| / d ~ eps^(2/3) |f| (W ~ |f| L), each ~4e-11 of the largest entry for strains of
+// order 0.1; 1e-7 of it leaves a factor 1000 for the strain's higher powers, where a dropped factor 1/2 or a
+// wrong sign is an error of order one
+inline constexpr double element_fd = 1e-7;
+// sums of a few dozen products of O(1) numbers (a node's forces from its six elements and twelve bending
+// stencils, a 9 x 9 eigendecomposition): round-off, some hundred eps of the largest term
+inline constexpr double element_roundoff = 1e-12;
+
 }  // namespace stepwise::tolerance
 
 namespace stepwise::tolerance {

@@ -266,7 +266,6 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
         t_eval = np.asarray(t_eval, dtype=float)
         if t_eval.ndim != 1:
             raise ValueError("`t_eval` must be 1-dimensional.")
-        t_eval = t_eval.tolist()
     if scale is not None:
         if scale.shape != y0.shape:
             raise ValueError("`atol` has wrong shape.")

@@ -39,4 +39,12 @@ struct MassSpringView {
 
 inline const Requirement needs_mass_spring = needs<MassSpringView>("a mass-spring system (a cloth or chain scene)");
 
+// Capability: a mass-spring system whose elastic forces are its MassSpringView's springs alone, as the
+// prefactored local/global method needs (a spring cloth, a chain; not the continuum cloth, whose elastic
+// forces are finite elements and whose view has no springs)
+struct SpringNetworkView {
+  const MassSpringView* network = nullptr;
+};
+inline const Requirement needs_spring_network = needs<SpringNetworkView>("a mass-spring system of springs alone (a spring cloth or chain scene; not the continuum cloth)");
+
 }  // namespace stepwise

@@ -148,7 +148,7 @@ void register_fast_mass_spring_methods(MethodTable& table) {
                      "other forces explicit, fixed step",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
-      .needs = needs_mass_spring,
+      .needs = needs_spring_network,
       .make = fixed_steps(make_fast_mass_spring),
   });
 }

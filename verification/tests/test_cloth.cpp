@@ -123,35 +123,38 @@ Eigen::VectorXd shaken(const Model& model, double spread, unsigned seed) {
 }
 
 TEST(Cloth, ForceJacobiansMatchCentralDifferences) {
-  const auto model = small_cloth();
-  const MassSpringView& view = *model->as<MassSpringView>();
-  const Eigen::Index n = model->size() / 2;
-  for (const double spread : {0.02, 0.1}) {  // springs near rest, and some compressed
-    const Eigen::VectorXd y = shaken(*model, spread, 3);
-    const double t = 0.3;
-    Eigen::SparseMatrix<double> k, d;
-    view.force_jacobians(t, y, false, k, d);
-    // f = M a, by Richardson-extrapolated central differences (as for the chain)
-    const auto force = [&](const Eigen::VectorXd& at) {
-      Eigen::VectorXd a(n);
-      model->as<SecondOrderView>()->acceleration(t, at, a);
-      for (int i = 0; i < view.nodes; ++i) a.segment<3>(3 * i) *= view.mass[i];
-      return a;
-    };
-    const auto column = [&](Eigen::Index j, double h) {
-      Eigen::VectorXd yp = y, ym = y;
-      yp[j] += h;
-      ym[j] -= h;
-      return Eigen::VectorXd((force(yp) - force(ym)) / (2 * h));
-    };
-    // both blocks are differences of the same f, so they share its round-off, eps |f| / h absolute: the
-    // scale is the whole Jacobian's, as for the chain
-    const double scale = 1 + std::max(Eigen::MatrixXd(k).lpNorm<Eigen::Infinity>(), Eigen::MatrixXd(d).lpNorm<Eigen::Infinity>());
-    for (const auto& [offset, analytic, what] : {std::tuple{Eigen::Index{0}, Eigen::MatrixXd(k), "df/dx"}, std::tuple{n, Eigen::MatrixXd(d), "df/dv"}}) {
-      Eigen::MatrixXd fd(n, n);
-      for (Eigen::Index j = 0; j < n; ++j)
-        fd.col(j) = (4 * column(offset + j, tolerance::richardson_step / 2) - column(offset + j, tolerance::richardson_step)) / 3;
-      EXPECT_LT((analytic - fd).lpNorm<Eigen::Infinity>(), tolerance::jacobian_richardson * scale) << what << " at spread " << spread;
+  // the spring sheet's, and the continuum's (membrane and bending elements on the same grid)
+  for (const double continuum : {0.0, 1.0}) {
+    const auto model = small_cloth({{"continuum", continuum}});
+    const MassSpringView& view = *model->as<MassSpringView>();
+    const Eigen::Index n = model->size() / 2;
+    for (const double spread : {0.02, 0.1}) {  // near rest, and some compressed
+      const Eigen::VectorXd y = shaken(*model, spread, 3);
+      const double t = 0.3;
+      Eigen::SparseMatrix<double> k, d;
+      view.force_jacobians(t, y, false, k, d);
+      // f = M a, by Richardson-extrapolated central differences (as for the chain)
+      const auto force = [&](const Eigen::VectorXd& at) {
+        Eigen::VectorXd a(n);
+        model->as<SecondOrderView>()->acceleration(t, at, a);
+        for (int i = 0; i < view.nodes; ++i) a.segment<3>(3 * i) *= view.mass[i];
+        return a;
+      };
+      const auto column = [&](Eigen::Index j, double h) {
+        Eigen::VectorXd yp = y, ym = y;
+        yp[j] += h;
+        ym[j] -= h;
+        return Eigen::VectorXd((force(yp) - force(ym)) / (2 * h));
+      };
+      // both blocks are differences of the same f, so they share its round-off, eps |f| / h absolute: the
+      // scale is the whole Jacobian's, as for the chain
+      const double scale = 1 + std::max(Eigen::MatrixXd(k).lpNorm<Eigen::Infinity>(), Eigen::MatrixXd(d).lpNorm<Eigen::Infinity>());
+      for (const auto& [offset, analytic, what] : {std::tuple{Eigen::Index{0}, Eigen::MatrixXd(k), "df/dx"}, std::tuple{n, Eigen::MatrixXd(d), "df/dv"}}) {
+        Eigen::MatrixXd fd(n, n);
+        for (Eigen::Index j = 0; j < n; ++j)
+          fd.col(j) = (4 * column(offset + j, tolerance::richardson_step / 2) - column(offset + j, tolerance::richardson_step)) / 3;
+        EXPECT_LT((analytic - fd).lpNorm<Eigen::Infinity>(), tolerance::jacobian_richardson * scale) << what << " at spread " << spread << ", continuum " << continuum;
+      }
     }
   }
 }

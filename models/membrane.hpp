@@ -1,0 +1,78 @@
+// The continuum cloth's element formulas (the second seed's "Continuum-Mechanics + FEM"): a thin sheet of
+// linear triangles whose membrane is St. Venant-Kirchhoff on the Green strain, and whose bending is the
+// isometric quadratic energy of Bergou, Wardetzky, Harmon, Zorin & Grinspun (2006), each with its exact force
+// and force Jacobian. The model (models/cloth.cpp, `continuum = 1`) assembles them; nothing here steps.
+//
+// Membrane (Volino, Magnenat-Thalmann & Faure 2009; Kim & Eberle 2022 for the derivatives). A triangle with
+// rest corners X0, X1, X2 in the sheet's own plane (2-D material coordinates) has Dm = [X1 - X0, X2 - X0]
+// (2 x 2), rest area A = |det Dm| / 2. Deformed corners x_i (3-D): Ds = [x1 - x0, x2 - x0] (3 x 2), the
+// deformation gradient F = Ds Dm^-1 (3 x 2), the Green strain E = (F^T F - I) / 2 (2 x 2). Plane stress,
+// Young's modulus Y, Poisson's ratio nu, thickness h:
+//     mu = Y / (2 (1 + nu)),   lambda = Y nu / (1 - nu^2),
+//     psi = mu E:E + lambda tr(E)^2 / 2          (energy per unit rest volume),
+//     W = A h psi,   S = 2 mu E + lambda tr(E) I,   P = F S   (first Piola-Kirchhoff, 3 x 2),
+//     forces on x1, x2: the columns of -A h P Dm^-T; on x0 minus their sum.
+// Its force Jacobian df/dx (9 x 9) is -d^2W/dx^2, exact: dP = dF S + F dS, dS = 2 mu dE + lambda tr(dE) I,
+// dE = (dF^T F + F^T dF) / 2, for each of the nine coordinates. StVK's Hessian is indefinite under
+// compression (a cloth's everyday state), which makes Newton's matrix M - h^2 K indefinite: `definite`
+// projects each element's Hessian onto the positive semidefinite cone (its negative eigenvalues set to zero:
+// Teran, Sifakis, Irving & Fedkiw 2005), so that the assembled matrix has a Cholesky factor.
+//
+// Bending (Bergou et al. 2006, "A quadratic bending model for inextensible surfaces"). Each interior edge
+// (x0, x1) with opposite corners x2 (triangle A = (x0, x1, x2)) and x3 (triangle B) has, from the rest shape,
+//     K = (-(cot a1A + cot a1B), -(cot a0A + cot a0B), cot a0A + cot a1A, cot a0B + cot a1B),
+// a_iX the rest angle at x_i in triangle X (K x = 0 for every flat placement), and
+//     Q = 3 / (A_A + A_B) K K^T,   W_b = (D / 2) sum_ij Q_ij x_i . x_j,   D = Y h^3 / (12 (1 - nu^2)),
+// whose force -D Q x and Jacobian -D Q (x the 3-D identity) are exact and constant: the energy is quadratic
+// for a sheet that bends without stretching, the cloth's regime. Chosen over discrete shells (Grinspun et al.
+// 2003) for its constant Hessian: no dihedral angle, no indefinite bending term for Newton. (Its constant
+// against the plate's (D / 2)(kappa_1 + kappa_2)^2 per unit area on a refined cylinder is not yet measured.)
+#pragma once
+
+#include <Eigen/Dense>
+#include <array>
+
+namespace stepwise {
+
+// plane-stress Lame parameters and the plate's bending stiffness
+struct MembraneMaterial {
+  MembraneMaterial(double young, double poisson, double thickness);
+  double young, poisson, thickness;
+  double mu, lambda;  // Pa
+  double bending;     // D, N m
+};
+
+struct MembraneElement {
+  std::array<int, 3> node{};     // grid nodes
+  Eigen::Matrix2d rest_inverse;  // Dm^-1
+  double area = 0;               // rest area A (m^2)
+};
+MembraneElement make_membrane_element(std::array<int, 3> node, const Eigen::Vector2d& X0, const Eigen::Vector2d& X1, const Eigen::Vector2d& X2);
+
+using Corners3 = std::array<Eigen::Vector3d, 3>;
+using Vector9d = Eigen::Matrix<double, 9, 1>;
+using Matrix9d = Eigen::Matrix<double, 9, 9>;
+
+// F (3 x 2) and the Green strain
+Eigen::Matrix<double, 3, 2> deformation_gradient(const MembraneElement& e, const Corners3& x);
+Eigen::Matrix2d green_strain(const Eigen::Matrix<double, 3, 2>& F);
+// the second Piola-Kirchhoff stress S (Pa) for a Green strain
+Eigen::Matrix2d membrane_stress(const MembraneMaterial& m, const Eigen::Matrix2d& E);
+// W, the corner forces (x0, x1, x2 stacked) and df/dx (definite: -(the Hessian
+// projected to PSD))
+double membrane_energy(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x);
+Vector9d membrane_force(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x);
+Matrix9d membrane_force_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, bool definite);
+
+struct BendingStencil {
+  std::array<int, 4> node{};  // edge x0, x1; opposite corners x2, x3 (grid nodes)
+  Eigen::Matrix4d Q;          // 3 / (A_A + A_B) K K^T
+};
+// from the rest corners (any dimension: the rest shape is the flat sheet)
+BendingStencil make_bending_stencil(std::array<int, 4> node, const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
+                                    const Eigen::Vector3d& x3);
+double bending_energy(double D, const BendingStencil& s, const std::array<Eigen::Vector3d, 4>& x);
+// the force on each of the four corners, -D (Q x)_i
+std::array<Eigen::Vector3d, 4> bending_force(double D, const BendingStencil& s, const std::array<Eigen::Vector3d, 4>& x);
+
+}  // namespace stepwise

@@ -1,0 +1,146 @@
+// The continuum cloth's elements (models/membrane.hpp): the St. Venant-Kirchhoff membrane's force is minus its
+// energy's gradient and its Jacobian the force's derivative (central differences), the definite Jacobian is
+// negative semidefinite and the exact one where the element is stretched both ways, the quadratic bending
+// force is its energy's gradient and vanishes on every flat placement, and a uniformly stretched sheet of them
+// is in equilibrium at every interior node (the patch test).
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "models/membrane.hpp"
+#include "models/model.hpp"
+#include "solvers/capabilities/second_order.hpp"
+#include "verification/tolerances.hpp"
+
+namespace stepwise {
+namespace {
+
+const MembraneMaterial material(5e5, 0.3, 5e-4);
+
+// a right-ish triangle of the flag's size, 0.1 m, in the sheet's plane
+MembraneElement element() { return make_membrane_element({0, 1, 2}, {0, 0}, {0.1, 0.01}, {0.02, 0.08}); }
+
+// the rest corners in 3-D (z = 0), moved by up to `spread` of the element's
+// size in each coordinate
+Corners3 deformed(double spread, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Corners3 x{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.1, 0.01, 0), Eigen::Vector3d(0.02, 0.08, 0)};
+  for (auto& c : x)
+    for (int i = 0; i < 3; ++i) c[i] += spread * 0.1 * u(rng);
+  return x;
+}
+
+Corners3 moved(Corners3 x, int coordinate, double by) {
+  x[static_cast<size_t>(coordinate / 3)][coordinate % 3] += by;
+  return x;
+}
+
+constexpr double fd_step = 6e-6 * 0.1;  // eps^(1/3) of the element's size
+
+TEST(Membrane, ForceIsMinusTheEnergyGradient) {
+  const MembraneElement e = element();
+  for (const double spread : {0.05, 0.3}) {  // small strain, and large with compression
+    const Corners3 x = deformed(spread, 7);
+    const Vector9d f = membrane_force(material, e, x);
+    Vector9d fd;
+    for (int k = 0; k < 9; ++k)
+      fd[k] = -(membrane_energy(material, e, moved(x, k, fd_step)) - membrane_energy(material, e, moved(x, k, -fd_step))) / (2 * fd_step);
+    EXPECT_LT((f - fd).lpNorm<Eigen::Infinity>(), tolerance::element_fd * f.lpNorm<Eigen::Infinity>()) << "spread " << spread;
+  }
+}
+
+TEST(Membrane, ForceJacobianIsTheForceDerivative) {
+  const MembraneElement e = element();
+  for (const double spread : {0.05, 0.3}) {
+    const Corners3 x = deformed(spread, 11);
+    const Matrix9d J = membrane_force_jacobian(material, e, x, false);
+    Matrix9d fd;
+    for (int k = 0; k < 9; ++k)
+      fd.col(k) = (membrane_force(material, e, moved(x, k, fd_step)) - membrane_force(material, e, moved(x, k, -fd_step))) / (2 * fd_step);
+    EXPECT_LT((J - fd).lpNorm<Eigen::Infinity>(), tolerance::element_fd * J.lpNorm<Eigen::Infinity>()) << "spread " << spread;
+    // a force Jacobian of a potential is symmetric
+    EXPECT_LT((J - J.transpose()).lpNorm<Eigen::Infinity>(), tolerance::element_roundoff * J.lpNorm<Eigen::Infinity>());
+  }
+}
+
+TEST(Membrane, DefiniteJacobianIsSemidefiniteAndExactWhereStretchedBothWays) {
+  const MembraneElement e = element();
+  // stretched 1% and 2% along the sheet's two axes: StVK's Hessian is
+  // semidefinite there, the projection a no-op
+  Corners3 stretched{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.101, 0.0102, 0), Eigen::Vector3d(0.0202, 0.0816, 0)};
+  const Matrix9d exact = membrane_force_jacobian(material, e, stretched, false);
+  EXPECT_LT((membrane_force_jacobian(material, e, stretched, true) - exact).lpNorm<Eigen::Infinity>(),
+            tolerance::element_roundoff * exact.lpNorm<Eigen::Infinity>());
+  // compressed: the exact Hessian has a negative eigenvalue, the definite one
+  // none
+  Corners3 compressed{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.09, 0.009, 0), Eigen::Vector3d(0.018, 0.072, 0)};
+  const auto lowest = [](const Matrix9d& J) { return Eigen::SelfAdjointEigenSolver<Matrix9d>(-(J + J.transpose()) / 2).eigenvalues().minCoeff(); };
+  const Matrix9d exact_compressed = membrane_force_jacobian(material, e, compressed, false);
+  const double scale = exact_compressed.lpNorm<Eigen::Infinity>();
+  EXPECT_LT(lowest(exact_compressed), -1e-3 * scale);
+  EXPECT_GT(lowest(membrane_force_jacobian(material, e, compressed, true)), -tolerance::element_roundoff * scale);
+}
+
+TEST(Membrane, BendingForceIsTheEnergyGradientAndVanishesWhenFlat) {
+  // an interior edge of the flag's grid: (0, 0)-(1, 1) diagonal with corners
+  // (1, 0) and (0, 1), spacing 0.1
+  const std::array<Eigen::Vector3d, 4> rest{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.1, 0.1, 0), Eigen::Vector3d(0.1, 0, 0),
+                                            Eigen::Vector3d(0, 0.1, 0)};
+  const BendingStencil s = make_bending_stencil({0, 1, 2, 3}, rest[0], rest[1], rest[2], rest[3]);
+  const double D = material.bending;
+  // any flat placement (rotated out of its plane, moved, stretched within it)
+  // has no bending force
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  Eigen::Matrix3d in_plane = Eigen::Matrix3d::Identity();
+  in_plane(0, 0) = 1.03, in_plane(0, 1) = 0.02, in_plane(1, 1) = 0.98;
+  std::array<Eigen::Vector3d, 4> flat;
+  for (int i = 0; i < 4; ++i) flat[i] = R * in_plane * rest[i] + Eigen::Vector3d(0.3, -0.2, 0.1);
+  const double unit = D * s.Q.lpNorm<Eigen::Infinity>() * 0.1;  // a force of the stencil's size
+  for (const auto& f : bending_force(D, s, flat)) EXPECT_LT(f.norm(), tolerance::element_roundoff * unit);
+  // folded: the force is minus the energy's gradient
+  std::array<Eigen::Vector3d, 4> folded = rest;
+  folded[2].z() = 0.02, folded[3].z() = 0.015;
+  const auto f = bending_force(D, s, folded);
+  for (int i = 0; i < 4; ++i)
+    for (int c = 0; c < 3; ++c) {
+      auto plus = folded, minus = folded;
+      plus[i][c] += fd_step, minus[i][c] -= fd_step;
+      const double fd = -(bending_energy(D, s, plus) - bending_energy(D, s, minus)) / (2 * fd_step);
+      EXPECT_NEAR(f[i][c], fd, tolerance::element_fd * unit) << "corner " << i << " coordinate " << c;
+    }
+  EXPECT_GT(bending_energy(D, s, folded), 0);
+}
+
+TEST(Membrane, PatchTestAUniformlyStretchedSheetIsInEquilibriumInside) {
+  // a free continuum sheet, no gravity, wind or drag, stretched 1% across and
+  // 2% down (and sheared): every element has the same strain and stress, so the
+  // interior nodes' forces cancel; the edges' carry the stress
+  const auto model =
+      make_model("cloth", {{"rows", 7}, {"columns", 6}, {"continuum", 1}, {"pin_corners", 0}, {"g", 0}, {"wind_coefficient", 0}, {"drag", 0}});
+  Eigen::VectorXd y = model->initial_state();
+  const Eigen::Index n = y.size() / 2;
+  Eigen::Matrix3d A = Eigen::Matrix3d::Identity();
+  A(0, 0) = 1.01, A(1, 1) = 1.02, A(0, 1) = 0.005;
+  for (Eigen::Index i = 0; i < n / 3; ++i) y.segment<3>(3 * i) = A * y.segment<3>(3 * i).eval();
+  Eigen::VectorXd a(n);
+  model->as<SecondOrderView>()->acceleration(0, y, a);
+  const int rows = 7, columns = 6;
+  double interior = 0, edge = 0;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < columns; ++c) {
+      const double norm = a.segment<3>(3 * (r * columns + c)).norm();
+      if (r == 0 || c == 0 || r == rows - 1 || c == columns - 1)
+        edge = std::max(edge, norm);
+      else
+        interior = std::max(interior, norm);
+    }
+  EXPECT_GT(edge, 0);
+  EXPECT_LT(interior, tolerance::element_roundoff * edge);
+}
+
+}  // namespace
+}  // namespace stepwise
