@@ -8,7 +8,10 @@
 //    the flag and on the hanging sheet, against refactorising;
 //  - whole steps: implicit-euler as the project runs it (a kept CHOLMOD factor preconditioning CG, refreshed
 //    when the iterations climb), against the same step refactorising every step, and against Liu et al.'s
-//    prefactored fast-mass-spring.
+//    prefactored fast-mass-spring;
+//  - the continuum flag (`continuum = 1`: StVK membrane and bending elements on the same grid, 32 and 64) against
+//    the spring flag: assembly (force Jacobians, each element's Hessian projected, and the matrix), CHOLMOD's
+//    refactorisation and solve, and a whole implicit-euler step, the symbolic analysis kept across steps.
 // One core: CHOLMOD's BLAS is kept on the calling thread (sparse_cholesky.cpp). The BLAS is Debian's
 // alternative (OpenBLAS when installed); LD_LIBRARY_PATH=/usr/lib/x86_64-linux-gnu/blas runs the reference
 // BLAS instead. The program prints the library its dgemm_ comes from.
@@ -28,6 +31,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <tuple>
 
 namespace {
 
@@ -43,14 +47,15 @@ struct Flag {
   std::unique_ptr<stepwise::BaraffWitkinSystem> bw;
 };
 
-// the flag (the model's defaults), or a scene file's cloth, at n x n nodes
-Flag& flag(int n, const std::string& scene = {}) {
-  static std::map<std::pair<int, std::string>, Flag> flags;
-  auto [it, fresh] = flags.try_emplace({n, scene});
+// the flag (the model's defaults), or a scene file's cloth, at n x n nodes; springs, or the continuum
+Flag& flag(int n, const std::string& scene = {}, bool continuum = false) {
+  static std::map<std::tuple<int, std::string, bool>, Flag> flags;
+  auto [it, fresh] = flags.try_emplace({n, scene, continuum});
   Flag& f = it->second;
   if (fresh) {
     Params params = scene.empty() ? Params{} : stepwise::load_scene(stepwise::scenes_directory() + "/" + scene + ".toml").parameters;
     params["rows"] = params["columns"] = n;
+    params["continuum"] = continuum ? 1 : 0;
     f.model = stepwise::make_model("cloth", params);
     const std::vector<double> t_out{0.1};
     f.y = stepwise::make_integrator("implicit-euler", stepwise::StepControl::fixed(dt))->integrate(*f.model, 0, f.model->initial_state(), t_out).y_stop;
@@ -63,8 +68,8 @@ Flag& flag(int n, const std::string& scene = {}) {
 }
 
 // a numeric factorisation and a solve, the analysis kept
-void refactor_and_solve(benchmark::State& state, const std::string& scene) {
-  Flag& f = flag(static_cast<int>(state.range(0)), scene);
+void refactor_and_solve(benchmark::State& state, const std::string& scene, bool continuum = false) {
+  Flag& f = flag(static_cast<int>(state.range(0)), scene, continuum);
   stepwise::SparseCholesky cholesky;
   cholesky.analyze(f.bw->matrix(), stepwise::Ordering::cheaper);
   Eigen::MatrixXd x;
@@ -79,6 +84,7 @@ void refactor_and_solve(benchmark::State& state, const std::string& scene) {
 }
 void BM_cholmod_refactor(benchmark::State& state) { refactor_and_solve(state, {}); }
 void BM_hanging_cholmod_refactor(benchmark::State& state) { refactor_and_solve(state, "hanging-cloth"); }
+void BM_continuum_cholmod_refactor(benchmark::State& state) { refactor_and_solve(state, {}, true); }
 
 // one pair of triangular solves with a factor
 void BM_cholmod_solve(benchmark::State& state) {
@@ -94,14 +100,16 @@ void BM_cholmod_solve(benchmark::State& state) {
 }
 
 // the step's matrix and right-hand side: force Jacobians, M - h D - h^2 K, f, b
-void BM_assemble(benchmark::State& state) {
-  Flag& f = flag(static_cast<int>(state.range(0)));
+void assemble(benchmark::State& state, bool continuum) {
+  Flag& f = flag(static_cast<int>(state.range(0)), {}, continuum);
   for (auto _ : state) {
     f.bw->assemble_matrix(0.1, f.y, dt);
     f.bw->assemble_rhs(f.y, dt);
     benchmark::DoNotOptimize(f.bw->rhs().data());
   }
 }
+void BM_assemble(benchmark::State& state) { assemble(state, false); }
+void BM_continuum_assemble(benchmark::State& state) { assemble(state, true); }
 
 void BM_eigen_ldlt_refactor(benchmark::State& state) {
   Flag& f = flag(static_cast<int>(state.range(0)));
@@ -177,8 +185,8 @@ void BM_hanging_previous_factor_cg(benchmark::State& state) { previous_factor_cg
 
 // steps of dt from the fixture's state, one stepper for the whole benchmark (its symbolic analysis, done at
 // the first step, is set apart first), 10 steps per iteration; time per step
-void steps(benchmark::State& state, const stepwise::FixedStepperFactory& make, const std::string& scene = {}) {
-  Flag& f = flag(static_cast<int>(state.range(0)), scene);
+void steps(benchmark::State& state, const stepwise::FixedStepperFactory& make, const std::string& scene = {}, bool continuum = false) {
+  Flag& f = flag(static_cast<int>(state.range(0)), scene, continuum);
   stepwise::Stats stats;
   stepwise::CountedSystem counted(*f.model, stats);
   auto stepper = make(counted);
@@ -213,6 +221,7 @@ void BM_step_refactor(benchmark::State& state) { steps(state, refactoring); }
 void BM_hanging_step_kept_factor(benchmark::State& state) { steps(state, stepwise::make_implicit_euler, "hanging-cloth"); }
 void BM_hanging_step_refactor(benchmark::State& state) { steps(state, refactoring, "hanging-cloth"); }
 void BM_step_fast_mass_spring(benchmark::State& state) { steps(state, stepwise::make_fast_mass_spring); }
+void BM_continuum_step_kept_factor(benchmark::State& state) { steps(state, stepwise::make_implicit_euler, {}, true); }
 
 #define FLAG_SIZES ->Arg(32)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)
 BENCHMARK(BM_cholmod_analyze_amd) FLAG_SIZES;
@@ -230,6 +239,10 @@ BENCHMARK(BM_step_kept_factor) FLAG_SIZES;
 BENCHMARK(BM_step_fast_mass_spring) FLAG_SIZES;
 BENCHMARK(BM_hanging_step_refactor) FLAG_SIZES;
 BENCHMARK(BM_hanging_step_kept_factor) FLAG_SIZES;
+#define CONTINUUM_SIZES ->Arg(32)->Arg(64)->Unit(benchmark::kMillisecond)
+BENCHMARK(BM_continuum_assemble) CONTINUUM_SIZES;
+BENCHMARK(BM_continuum_cholmod_refactor) CONTINUUM_SIZES;
+BENCHMARK(BM_continuum_step_kept_factor) CONTINUUM_SIZES;
 
 }  // namespace
 
@@ -249,6 +262,12 @@ int main(int argc, char** argv) {
     pairs.emplace_back("BM_step_refactor" + arg, "BM_step_kept_factor" + arg);
     pairs.emplace_back("BM_step_kept_factor" + arg, "BM_step_fast_mass_spring" + arg);
     pairs.emplace_back("BM_hanging_step_refactor" + arg, "BM_hanging_step_kept_factor" + arg);
+  }
+  for (const char* n : {"32", "64"}) {
+    const std::string arg = std::string("/") + n;
+    pairs.emplace_back("BM_continuum_assemble" + arg, "BM_assemble" + arg);
+    pairs.emplace_back("BM_continuum_cholmod_refactor" + arg, "BM_cholmod_refactor" + arg);
+    pairs.emplace_back("BM_continuum_step_kept_factor" + arg, "BM_step_kept_factor" + arg);
   }
   return stepwise::bench::run_with_ratios(argc, argv, pairs);
 }

@@ -447,6 +447,15 @@ inline constexpr double element_fd = 1e-7;
 // sums of a few dozen products of O(1) numbers (a node's forces from its six elements and twelve bending
 // stencils, a 9 x 9 eigendecomposition): round-off, some hundred eps of the largest term
 inline constexpr double element_roundoff = 1e-12;
+// a strip stretched by 0.1%: St. Venant-Kirchhoff on the Green strain E = e + e^2 / 2 departs from linear
+// elasticity's Poisson's ratio and modulus at first order in the strain (a few e: ~0.3%); 1% (the issue's
+// figure) leaves a factor 3, where a wrong Lame parameter (plane strain's lambda for plane stress's) is off by
+// tens of percent at nu = 0.3
+inline constexpr double small_strain_elastic_constants = 0.01;
+// a symplectic method's energy error stays in a band of width O(h) for exponentially long times (Hairer, Lubich
+// & Wanner, ch. IX): the band's maximum is met within its first oscillations, and a later window's maximum is
+// within twice the first's, where a non-symplectic method's drift grows without bound
+inline constexpr double symplectic_energy_band_growth = 2.0;
 
 }  // namespace stepwise::tolerance
 

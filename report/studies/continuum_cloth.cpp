@@ -1,0 +1,203 @@
+// The report's study: the spring cloth against the continuum (the second seed's two cloths), at rest. What
+// material the spring mesh is (its Poisson's ratio and Young's modulus, measured on a stretched strip as for
+// the finite elements), and how the hanging sheet's sag and bottom width change as each mesh is refined.
+#include "report/studies.hpp"
+
+#include "verification/continuum_checks.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+namespace stepwise {
+namespace {
+
+constexpr double stretch = 1e-3;  // the strip's strain: small, so that the answer is the linear material's
+constexpr int strip_rows = 9;     // nodes across the strip (33 along it)
+
+// the convergence order p of a quantity on meshes of spacing h1 > h2 > h3 from its three values, solving
+// (q1 - q2) / (q2 - q3) = (h1^p - h2^p) / (h2^p - h3^p) by bisection (the spacings are not exactly halved)
+std::optional<double> observed_order(double h1, double h2, double h3, double q1, double q2, double q3) {
+  const double ratio = (q1 - q2) / (q2 - q3);
+  if (!(ratio > 0) || !std::isfinite(ratio)) return std::nullopt;
+  const auto f = [&](double p) { return (std::pow(h1, p) - std::pow(h2, p)) / (std::pow(h2, p) - std::pow(h3, p)) - ratio; };
+  double lo = 0.05, hi = 8;
+  if (f(lo) * f(hi) > 0) return std::nullopt;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = (lo + hi) / 2;
+    (f(lo) * f(mid) <= 0 ? hi : lo) = mid;
+  }
+  return (lo + hi) / 2;
+}
+
+StudyOutput continuum_cloth(const StudyContext& ctx) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // ---- the materials: the continuum at three Poisson's ratios, the spring mesh with and without its diagonals
+  Table poisson{{"model", "nu_set", "nu_measured", "E_set", "E_measured", "strain", "newton_iterations"}, {}};
+  const double E = 5e5;
+  for (const double nu : {0.0, 0.3, 0.45}) {
+    const UniaxialStretch s = uniaxial_stretch({{"continuum", 1}, {"nu", nu}, {"E", E}}, strip_rows, stretch);
+    if (!s.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the strip at nu = {}: {}", nu, s.failure));
+    poisson.rows.push_back({std::string("continuum"), nu, s.nu, E, s.E, stretch, long{s.iterations}});
+  }
+  std::optional<UniaxialStretch> springs;
+  for (const auto& [name, shear] : {std::pair{"springs", 1.0}, std::pair{"springs-no-shear", 0.0}}) {
+    const UniaxialStretch s = uniaxial_stretch({{"continuum", 0}, {"shear", shear}}, strip_rows, stretch);
+    if (!s.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the {} strip: {}", name, s.failure));
+    poisson.rows.push_back({std::string(name), nan, s.nu, nan, s.E, stretch, long{s.iterations}});
+    if (shear == 1.0) springs = s;
+  }
+
+  // ---- refinement: the hanging sheet, springs (the flag's constants, unscaled) and the continuum of the
+  // material the springs measured as
+  std::vector<int> sides{8, 16, 32};
+  if (!ctx.quick) sides.push_back(64);
+  Table refinement{{"model", "side", "nodes", "spacing", "sag", "bottom_width", "middle_width", "bottom_drop", "newton_iterations"}, {}};
+  struct Point {
+    std::string model;
+    int side;
+  };
+  std::vector<Point> points;
+  for (const char* model : {"springs", "continuum"})
+    for (const int side : sides) points.push_back({model, side});
+  const double nu_springs = std::clamp(springs->nu, -0.9, 0.49);
+  std::vector<std::string> labels;
+  for (const auto& p : points) labels.push_back(fmt::format("continuum-cloth {} {}x{}", p.model, p.side, p.side));
+  const auto sheets = ctx.sweep<HangingSheet>(labels, [&](size_t i) {
+    const Point& p = points[i];
+    const Params params = p.model == "springs" ? Params{{"continuum", 0}} : Params{{"continuum", 1}, {"E", springs->E}, {"nu", nu_springs}};
+    return hanging_sheet(params, p.side);
+  });
+  for (size_t i = 0; i < points.size(); ++i) {
+    const HangingSheet& s = sheets[i];
+    if (!s.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: {}: {}", labels[i], s.failure));
+    refinement.rows.push_back({points[i].model, long{points[i].side}, long{points[i].side * points[i].side}, 1.0 / (points[i].side - 1), s.sag,
+                               s.bottom_width, s.middle_width, s.bottom_drop, long{s.iterations}});
+  }
+  const auto value = [&](const std::string& model, int side, const char* column) {
+    for (const auto& row : refinement.rows)
+      if (std::get<std::string>(cell_of(refinement, row, "model")) == model && std::get<long>(cell_of(refinement, row, "side")) == side)
+        return std::get<double>(cell_of(refinement, row, column));
+    return nan;
+  };
+  const int n3 = sides.back(), n2 = sides[sides.size() - 2], n1 = sides[sides.size() - 3];
+  const auto order = [&](const std::string& model, const char* column) {
+    return observed_order(1.0 / (n1 - 1), 1.0 / (n2 - 1), 1.0 / (n3 - 1), value(model, n1, column), value(model, n2, column), value(model, n3, column));
+  };
+  // the last doubling's growth of the sag over the one before
+  const auto growth_ratio = [&](const std::string& model) {
+    return (value(model, n3, "sag") - value(model, n2, "sag")) / (value(model, n2, "sag") - value(model, n1, "sag"));
+  };
+  const auto shown_order = [](std::optional<double> p) { return p ? fmt::format("{:.2f}", *p) : std::string("none (not monotone)"); };
+  const double gap_sag = value("springs", n3, "sag") / value("continuum", n3, "sag") - 1;
+  const double gap_width = value("springs", n3, "bottom_width") / value("continuum", n3, "bottom_width") - 1;
+
+  // ---- "the sides shrink inside": the continuum's hanging sheet at three Poisson's ratios, beside the springs'
+  const int sides_side = 32;
+  Table narrowing{{"model", "nu", "side", "middle_width", "bottom_width", "sag"}, {}};
+  for (const double nu : {0.0, 0.3, 0.45}) {
+    const HangingSheet h = hanging_sheet({{"continuum", 1}, {"nu", nu}, {"E", springs->E}}, sides_side);
+    if (!h.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the hanging continuum at nu = {}: {}", nu, h.failure));
+    narrowing.rows.push_back({std::string("continuum"), nu, long{sides_side}, h.middle_width, h.bottom_width, h.sag});
+  }
+  // (without its diagonals the spring sheet has no shear stiffness: hanging, it is a mechanism, with no equilibrium)
+  const HangingSheet hanging_springs = hanging_sheet({{"continuum", 0}}, sides_side);
+  if (!hanging_springs.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the hanging springs: {}", hanging_springs.failure));
+  narrowing.rows.push_back({std::string("springs"), nan, long{sides_side}, hanging_springs.middle_width, hanging_springs.bottom_width, hanging_springs.sag});
+  const auto widening_of = [&](const std::string& model, double nu) {
+    for (const auto& row : narrowing.rows) {
+      const double row_nu = std::get<double>(cell_of(narrowing, row, "nu"));
+      if (std::get<std::string>(cell_of(narrowing, row, "model")) == model && (std::isnan(nu) ? std::isnan(row_nu) : row_nu == nu))
+        return std::get<double>(cell_of(narrowing, row, "middle_width")) - 1;
+    }
+    return nan;
+  };
+  const double no_shear_nu = [&] {
+    for (const auto& row : poisson.rows)
+      if (std::get<std::string>(cell_of(poisson, row, "model")) == "springs-no-shear") return std::get<double>(cell_of(poisson, row, "nu_measured"));
+    return nan;
+  }();
+
+  std::string md = fmt::format(
+      "**The spring mesh is an elastic material with Poisson's ratio {:.3f} and Young's modulus {:.3g} Pa** (the flag's "
+      "constants, 200, 100 and 20 N/m, read as a 0.5 mm sheet), measured as the finite elements are, on a strip stretched "
+      "{:.1f}%; without its diagonal (shear) springs its ratio is {:.3f}. The seed's \"volume preservation\" by the diagonals is "
+      "that Poisson's ratio (without them the hanging sheet, which has then no shear stiffness, is a mechanism): but hanging "
+      "from its two top corners ({}², in its plane) the sheet does not shrink inside: its width halfway down changes by {:+.2f} mm "
+      "(springs), and by {:+.2f}, {:+.2f} and {:+.2f} mm for the continuum of the springs' modulus at ν = 0, 0.3 and 0.45 (only "
+      "a nearly incompressible sheet draws in: the weight hung from two points spreads the sheet sideways as it stretches it "
+      "down). **Neither mesh converges fast**: the sheet hangs from two points, where the continuum's stress is singular, and its "
+      "sag grows with every refinement, each doubling's growth {:.2f} of the last one's for the finite elements (order {} from "
+      "{}², {}², {}²) and {:.2f} for the springs (order {}); at {}² the spring sheet's sag is {:+.1f}% off the continuum of its own material "
+      "and its bottom width {:+.2f}%.\n\n",
+      springs->nu, springs->E, 100 * stretch, no_shear_nu, sides_side, 1e3 * widening_of("springs", nan),
+      1e3 * widening_of("continuum", 0.0), 1e3 * widening_of("continuum", 0.3), 1e3 * widening_of("continuum", 0.45),
+      growth_ratio("continuum"), shown_order(order("continuum", "sag")), n1, n2, n3, growth_ratio("springs"), shown_order(order("springs", "sag")),
+      n3, 100 * gap_sag, 100 * gap_width);
+  md += fmt::format(
+      "Each is a static equilibrium in the sheet's plane (`solvers/static_equilibrium`: Newton on CHOLMOD with the elements' "
+      "Hessians projected to positive semidefinite and a backtracking line search; every z held). The strip is 4 × 1 m, {} × {} "
+      "nodes, its left end held, its right end moved by the strain, free to narrow; ν is minus the lateral strain at its middle "
+      "over the strain, E the pull per unit width over thickness × strain. The continuum's ν and E are the material's to "
+      "{:.2g} and {:.2g} of themselves at ν = 0.3 (test_membrane holds them to 1%).\n\n",
+      strip_rows, 4 * (strip_rows - 1) + 1, [&] {
+        for (const auto& row : poisson.rows)
+          if (std::get<std::string>(cell_of(poisson, row, "model")) == "continuum" && std::get<double>(cell_of(poisson, row, "nu_set")) == 0.3)
+            return std::abs(std::get<double>(cell_of(poisson, row, "nu_measured")) / 0.3 - 1);
+        return nan;
+      }(),
+      [&] {
+        for (const auto& row : poisson.rows)
+          if (std::get<std::string>(cell_of(poisson, row, "model")) == "continuum" && std::get<double>(cell_of(poisson, row, "nu_set")) == 0.3)
+            return std::abs(std::get<double>(cell_of(poisson, row, "E_measured")) / E - 1);
+        return nan;
+      }());
+  const auto number = [](const char* f) { return shown_as(f); };
+  md += markdown_table(poisson, {{"model", "model"},
+                                 {"nu_set", "ν set", number("{:.2f}")},
+                                 {"nu_measured", "ν measured", number("{:.4f}")},
+                                 {"E_set", "E set (Pa)", number("{:.3g}")},
+                                 {"E_measured", "E measured (Pa)", number("{:.4g}")},
+                                 {"newton_iterations", "Newton iterations"}});
+  md += "\nThe hanging sheet (1 m square, 0.5 kg, pinned at its two top corners, gravity in its plane, applied in four steps), "
+        "each mesh side by side:\n\n";
+  md += markdown_table(refinement, {{"model", "model"},
+                                    {"side", "nodes a side"},
+                                    {"sag", "sag (m)", number("{:.5f}")},
+                                    {"bottom_width", "bottom width (m)", number("{:.5f}")},
+                                    {"middle_width", "width halfway down (m)", number("{:.5f}")},
+                                    {"bottom_drop", "bottom drop (m)", number("{:.5f}")},
+                                    {"newton_iterations", "Newton iterations"}});
+  md += fmt::format("\nThe sides drawing in, {}² (the continuum at the springs' modulus):\n\n", sides_side);
+  md += markdown_table(narrowing, {{"model", "model"},
+                                   {"nu", "ν", number("{:.2f}")},
+                                   {"middle_width", "width halfway down (m)", number("{:.5f}")},
+                                   {"bottom_width", "bottom width (m)", number("{:.5f}")},
+                                   {"sag", "sag (m)", number("{:.5f}")}});
+  md += "\n";
+  std::vector<Figure> figures;
+  const auto by_model = [](std::string y) {
+    return std::vector<FigureSpec::Layer>{{.table = "continuum_cloth_refinement", .x = "side", .y = std::move(y), .series = "model"}};
+  };
+  FigureSpec spec{.title = "The hanging sheet as each mesh is refined",
+                  .panels = {{.title = "Sag of the top edge", .x_label = "nodes a side", .y_label = "sag (m)", .log_x = true, .layers = by_model("sag")},
+                             {.title = "Bottom width (1 m at rest)",
+                              .x_label = "nodes a side",
+                              .y_label = "bottom width (m)",
+                              .log_x = true,
+                              .layers = by_model("bottom_width")}}};
+  md += add_figure(figures, "continuum_cloth", "", std::move(spec), "Springs and the continuum of the same material, hanging, by mesh");
+  return {{{"continuum_cloth_poisson", std::move(poisson)}, {"continuum_cloth_refinement", std::move(refinement)}, {"continuum_cloth_sides", std::move(narrowing)}},
+          md, figures};
+}
+
+}  // namespace
+
+Study continuum_cloth_study() {
+  return {"continuum-cloth", "Cloth: the spring mesh against the continuum (finite elements) at rest", continuum_cloth};
+}
+
+}  // namespace stepwise

@@ -1,0 +1,96 @@
+#include "continuum_checks.hpp"
+
+#include "solvers/capabilities/mass_spring.hpp"
+#include "solvers/capabilities/second_order.hpp"
+#include "solvers/static_equilibrium.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <vector>
+
+namespace stepwise {
+
+namespace {
+
+// every position coordinate z held: the sheet stays in its plane
+std::vector<bool> in_plane(Eigen::Index coordinates) {
+  std::vector<bool> held(static_cast<size_t>(coordinates), false);
+  for (Eigen::Index i = 2; i < coordinates; i += 3) held[static_cast<size_t>(i)] = true;
+  return held;
+}
+
+}  // namespace
+
+UniaxialStretch uniaxial_stretch(Params params, int rows, double strain) {
+  const int columns = 4 * (rows - 1) + 1;
+  for (const auto& [key, value] : Params{{"rows", rows}, {"columns", columns}, {"width", 4.0}, {"height", 1.0}, {"pin_corners", 0},
+                                         {"g", 0}, {"wind_coefficient", 0}, {"drag", 0}})
+    params[key] = value;
+  params = resolve_params(*find_model("cloth"), params);
+  const auto model = make_model("cloth", params);
+  Eigen::VectorXd y = model->initial_state();
+  const Eigen::Index n = y.size() / 2;
+  // every node free, row-major: node (r, c) at 3 (r columns + c)
+  const auto at = [&](int r, int c) { return 3 * (Eigen::Index{r} * columns + c); };
+  const double left = y[at(0, 0)];
+  for (Eigen::Index i = 0; i < n; i += 3) y[i] = left + (y[i] - left) * (1 + strain);  // the affine stretch: the first guess
+  std::vector<bool> held = in_plane(n);
+  for (int r = 0; r < rows; ++r) held[static_cast<size_t>(at(r, 0))] = held[static_cast<size_t>(at(r, columns - 1))] = true;
+  held[static_cast<size_t>(at(rows / 2, 0) + 1)] = true;
+  const StaticEquilibrium eq = static_equilibrium(*model, y, held);
+  UniaxialStretch out;
+  out.strain = strain;
+  out.iterations = eq.iterations;
+  out.failure = eq.failure;
+  const int middle = (columns - 1) / 2;
+  const double width = eq.y[at(0, middle) + 1] - eq.y[at(rows - 1, middle) + 1];
+  out.nu = -(width / params.at("height") - 1) / strain + 0.0;  // + 0: a ratio of 0 is shown as 0, not -0
+  // the pull on the right end: minus the sheet's force on its held x
+  Eigen::VectorXd a(n);
+  model->as<SecondOrderView>()->acceleration(0, eq.y, a);
+  const auto& mass = model->as<MassSpringView>()->mass;
+  double pull = 0;
+  for (int r = 0; r < rows; ++r) pull -= a[at(r, columns - 1)] * mass[static_cast<size_t>(at(r, columns - 1) / 3)];
+  out.E = pull / (params.at("height") * params.at("thickness") * strain);
+  return out;
+}
+
+HangingSheet hanging_sheet(Params params, int side) {
+  for (const auto& [key, value] : Params{{"rows", side}, {"columns", side}, {"width", 1.0}, {"height", 1.0}, {"pin_corners", 0},
+                                         {"pin_top_corners", 1}, {"wind_coefficient", 0}})
+    params[key] = value;
+  params = resolve_params(*find_model("cloth"), params);
+  const double g = params.at("g");
+  // the two top corners pinned: grid node k is state node k - 1 on the top row, k - 2 below it
+  const auto at = [&](int r, int c) {
+    const int k = r * side + c;
+    return 3 * Eigen::Index{r == 0 ? k - 1 : k - 2};
+  };
+  Eigen::VectorXd y;
+  HangingSheet out;
+  for (int step = 1; step <= 4; ++step) {
+    params["g"] = g * step / 4;
+    const auto model = make_model("cloth", params);
+    if (y.size() == 0) y = model->initial_state();
+    const StaticEquilibrium eq = static_equilibrium(*model, y, in_plane(y.size() / 2));
+    out.iterations += eq.iterations;
+    y = eq.y;
+    if (!eq.failure.empty()) {
+      out.failure = fmt::format("g = {}: {}", params["g"], eq.failure);
+      break;
+    }
+  }
+  const double top = params.at("elevation");
+  const auto middle_y = [&](int r) {
+    return side % 2 ? y[at(r, side / 2) + 1] : (y[at(r, side / 2 - 1) + 1] + y[at(r, side / 2) + 1]) / 2;
+  };
+  out.sag = top - middle_y(0);
+  out.bottom_width = y[at(side - 1, side - 1)] - y[at(side - 1, 0)];
+  const auto width_at = [&](int r) { return y[at(r, side - 1)] - y[at(r, 0)]; };
+  out.middle_width = side % 2 ? width_at(side / 2) : (width_at(side / 2 - 1) + width_at(side / 2)) / 2;
+  out.bottom_drop = (top - 1) - middle_y(side - 1);
+  return out;
+}
+
+}  // namespace stepwise

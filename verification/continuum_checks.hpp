@@ -1,0 +1,39 @@
+// The cloth at rest, springs or continuum (models/cloth.cpp), measured as a materials lab measures a sheet:
+// its Poisson's ratio and Young's modulus from a uniaxial stretch of a strip, its sag and the narrowing of its
+// bottom edge when it hangs from its two top corners. Each is a static equilibrium (solvers/static_equilibrium)
+// in the sheet's plane (every z held: the in-plane answer, without the wrinkles a compressed sheet would throw).
+#pragma once
+
+#include "models/model.hpp"
+
+#include <string>
+#include <tuple>
+
+namespace stepwise {
+
+struct UniaxialStretch {
+  double nu = 0;        // -(lateral strain) / strain at the strip's middle
+  double E = 0;         // the pull per unit width over (thickness x strain), Pa (for springs: at the `thickness` given)
+  double strain = 0;    // the stretch imposed
+  int iterations = 0;   // Newton's
+  std::string failure;  // empty when the equilibrium was found
+};
+// a strip 4 m long (x) and 1 m wide, `rows` nodes across its width and 4 (rows - 1) + 1 along it, of the cloth
+// with `params` (continuum or springs; gravity, wind and drag off), its left end's x held, its right end's
+// moved by `strain` of the length, free to narrow (one node's y held against sliding)
+UniaxialStretch uniaxial_stretch(Params params, int rows, double strain);
+
+struct HangingSheet {
+  double sag = 0;           // how far the top edge's middle hangs below the pins (m)
+  double bottom_width = 0;  // the bottom edge's corners' distance (m; 1 at rest)
+  double middle_width = 0;  // the sheet's width halfway down, edge to edge (m; 1 at rest): "the sides shrink inside"
+  double bottom_drop = 0;   // how far the bottom edge's middle has moved down (m)
+  int iterations = 0;       // Newton's, over the four load steps
+  std::string failure;
+  static auto fields(auto& s) { return std::tie(s.sag, s.bottom_width, s.middle_width, s.bottom_drop, s.iterations, s.failure); }  // a sweep's result
+};
+// a 1 m square sheet of side x side nodes hanging in its plane from its two top corners under gravity (applied
+// in four steps, each from the last one's equilibrium), the cloth with `params` (wind off)
+HangingSheet hanging_sheet(Params params, int side);
+
+}  // namespace stepwise
