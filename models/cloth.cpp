@@ -16,7 +16,6 @@
 #include <fmt/format.h>
 
 #include <array>
-#include <map>
 #include <cmath>
 #include <numbers>
 
@@ -200,8 +199,8 @@ class Cloth final : public Model {
                           ground_, ground_y_, friction_};
     auto pairs = spring_pairs(view_.springs);
     for (const auto& s : stencils_)
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j)
+      for (size_t i = 0; i < s.node.size(); ++i)
+        for (size_t j = i + 1; j < s.node.size(); ++j)
           if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0) pairs.emplace_back(free_index_[s.node[i]], free_index_[s.node[j]]);
     if (wind_k_ > 0 || continuum_)
       for (const auto& tri : triangles_)
@@ -220,11 +219,12 @@ class Cloth final : public Model {
         triangle_slots_.push_back(slots);
       }
     for (const auto& s : stencils_) {
-      std::array<BlockPattern::Slot, 16> slots{};
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j)
-          if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0) slots[4 * i + j] = pattern_->slot(free_index_[s.node[i]], free_index_[s.node[j]]);
-      stencil_slots_.push_back(slots);
+      const size_t m = s.node.size();
+      std::vector<BlockPattern::Slot> slots(m * m);
+      for (size_t i = 0; i < m; ++i)
+        for (size_t j = 0; j < m; ++j)
+          if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0) slots[m * i + j] = pattern_->slot(free_index_[s.node[i]], free_index_[s.node[j]]);
+      stencil_slots_.push_back(std::move(slots));
     }
     second_order_.positions = 3 * free_;
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
@@ -419,29 +419,25 @@ class Cloth final : public Model {
   }
 
   // the continuum: the grid's triangles as membrane elements in the sheet's own (across, down) coordinates,
-  // each interior edge's bending stencil, and the node masses lumped from the triangles (a third of each's)
+  // each interior node's bending stencil, and the node masses lumped from the triangles (a third of each's)
   void set_up_continuum(double dx, double dz, double density) {
     const auto material_point = [&](int k) { return Eigen::Vector2d((k % columns_) * dx, (k / columns_) * dz); };
     std::fill(view_.mass.begin(), view_.mass.end(), 0.0);
-    std::map<std::pair<int, int>, std::vector<int>> opposite;  // edge (low, high) -> the corners opposite it
     for (const auto& tri : triangles_) {
       elements_.push_back(make_membrane_element(tri, material_point(tri[0]), material_point(tri[1]), material_point(tri[2])));
       for (const int k : tri)
         if (free_index_[k] >= 0) view_.mass[free_index_[k]] += density * material_.thickness * elements_.back().area / 3;
-      for (int i = 0; i < 3; ++i) {
-        const int a = tri[i], b = tri[(i + 1) % 3];
-        opposite[{std::min(a, b), std::max(a, b)}].push_back(tri[(i + 2) % 3]);
-      }
     }
-    for (const auto& [edge, corners] : opposite)
-      if (corners.size() == 2)
-        stencils_.push_back(make_bending_stencil({edge.first, edge.second, corners[0], corners[1]}, rest_[edge.first], rest_[edge.second],
-                                                 rest_[corners[0]], rest_[corners[1]]));
+    std::vector<bool> interior(rest_.size());
+    for (int k = 0; k < rows_ * columns_; ++k) interior[k] = k / columns_ > 0 && k / columns_ < rows_ - 1 && k % columns_ > 0 && k % columns_ < columns_ - 1;
+    stencils_ = bending_stencils(triangles_, rest_, interior);
   }
 
   Corners3 corners(const std::array<int, 3>& node, const double* x) const { return {corner(node[0], x), corner(node[1], x), corner(node[2], x)}; }
-  std::array<Eigen::Vector3d, 4> corners(const std::array<int, 4>& node, const double* x) const {
-    return {corner(node[0], x), corner(node[1], x), corner(node[2], x), corner(node[3], x)};
+  std::vector<Eigen::Vector3d> corners(const std::vector<int>& node, const double* x) const {
+    std::vector<Eigen::Vector3d> c;
+    for (const int k : node) c.push_back(corner(k, x));
+    return c;
   }
 
   // the springs' forces, or the continuum's (membrane and bending), added to f (N, by free node)
@@ -459,7 +455,7 @@ class Cloth final : public Model {
     }
     for (const BendingStencil& s : stencils_) {
       const auto fb = bending_force(material_.bending, s, corners(s.node, x));
-      for (int i = 0; i < 4; ++i) add(s.node[i], fb[i]);
+      for (size_t i = 0; i < s.node.size(); ++i) add(s.node[i], fb[i]);
     }
   }
 
@@ -474,10 +470,12 @@ class Cloth final : public Model {
     }
     for (size_t k = 0; k < stencils_.size(); ++k) {
       const BendingStencil& s = stencils_[k];
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j)
+      const size_t m = s.node.size();
+      for (size_t i = 0; i < m; ++i)
+        for (size_t j = 0; j < m; ++j)
           if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0)
-            BlockPattern::add(dfdx, stencil_slots_[k][4 * i + j], -material_.bending * s.Q(i, j) * Eigen::Matrix3d::Identity());
+            BlockPattern::add(dfdx, stencil_slots_[k][m * i + j],
+                              -material_.bending * s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * Eigen::Matrix3d::Identity());
     }
   }
 
@@ -541,7 +539,7 @@ class Cloth final : public Model {
   bool continuum_;
   MembraneMaterial material_;
   std::vector<MembraneElement> elements_;  // the continuum's, one a triangle (triangles_'s order)
-  std::vector<BendingStencil> stencils_;   // the continuum's, one an interior edge
+  std::vector<BendingStencil> stencils_;   // the continuum's, one an interior node
   Eigen::VectorXd mass3_;                  // each free node's mass, once a coordinate
   std::vector<Eigen::Vector3d> rest_;  // every grid node's starting place (a pinned node stays there)
   std::vector<int> free_index_;         // grid node -> state node, -1 if pinned
@@ -559,7 +557,7 @@ class Cloth final : public Model {
   std::vector<std::array<BlockPattern::Slot, 4>> spring_slots_;
   std::vector<BlockPattern::Slot> diagonal_slots_;
   std::vector<std::array<BlockPattern::Slot, 9>> triangle_slots_;  // (corner i, corner j) of each triangle
-  std::vector<std::array<BlockPattern::Slot, 16>> stencil_slots_;  // (corner i, corner j) of each bending stencil
+  std::vector<std::vector<BlockPattern::Slot>> stencil_slots_;  // (node i, node j) of each bending stencil, row-major
 };
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <map>
 
 namespace stepwise {
 
@@ -91,27 +92,52 @@ double cot_at(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::V
 
 }  // namespace
 
-BendingStencil make_bending_stencil(std::array<int, 4> node, const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
-                                    const Eigen::Vector3d& x3) {
-  const double a0A = cot_at(x0, x1, x2), a1A = cot_at(x1, x2, x0), a0B = cot_at(x0, x1, x3), a1B = cot_at(x1, x3, x0);
-  const Eigen::Vector4d K(-(a1A + a1B), -(a0A + a0B), a0A + a1A, a0B + a1B);
-  const double areas = ((x1 - x0).cross(x2 - x0).norm() + (x1 - x0).cross(x3 - x0).norm()) / 2;
-  return {node, 3 / areas * K * K.transpose()};
+std::vector<BendingStencil> bending_stencils(std::span<const std::array<int, 3>> triangles, std::span<const Eigen::Vector3d> rest,
+                                             const std::vector<bool>& interior) {
+  // each vertex's neighbours with their cotangent weights, and its barycentric area
+  std::vector<std::map<int, double>> weights(rest.size());
+  std::vector<double> area(rest.size(), 0.0);
+  for (const auto& t : triangles) {
+    const double a = (rest[t[1]] - rest[t[0]]).cross(rest[t[2]] - rest[t[0]]).norm() / 2;
+    for (int i = 0; i < 3; ++i) {
+      const int p = t[i], q = t[(i + 1) % 3], o = t[(i + 2) % 3];
+      const double w = cot_at(rest[o], rest[p], rest[q]) / 2;  // the edge (p, q)'s share from this triangle
+      weights[p][q] += w;
+      weights[q][p] += w;
+      area[p] += a / 3;
+    }
+  }
+  std::vector<BendingStencil> stencils;
+  for (size_t v = 0; v < rest.size(); ++v) {
+    if (!interior[v]) continue;
+    BendingStencil s;
+    s.node.push_back(static_cast<int>(v));
+    Eigen::VectorXd c(static_cast<Eigen::Index>(weights[v].size() + 1));
+    c[0] = 0;
+    Eigen::Index k = 1;
+    for (const auto& [j, w] : weights[v]) {
+      s.node.push_back(j);
+      c[k++] = w;
+      c[0] -= w;
+    }
+    s.Q = c * c.transpose() / area[v];
+    stencils.push_back(std::move(s));
+  }
+  return stencils;
 }
 
-double bending_energy(double D, const BendingStencil& s, const std::array<Eigen::Vector3d, 4>& x) {
+double bending_energy(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x) {
   double w = 0;
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) w += s.Q(i, j) * x[static_cast<size_t>(i)].dot(x[static_cast<size_t>(j)]);
+  for (size_t i = 0; i < s.node.size(); ++i)
+    for (size_t j = 0; j < s.node.size(); ++j) w += s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * x[i].dot(x[j]);
   return D / 2 * w;
 }
 
-std::array<Eigen::Vector3d, 4> bending_force(double D, const BendingStencil& s, const std::array<Eigen::Vector3d, 4>& x) {
-  std::array<Eigen::Vector3d, 4> f;
-  for (int i = 0; i < 4; ++i) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (int j = 0; j < 4; ++j) sum += s.Q(i, j) * x[static_cast<size_t>(j)];
-    f[static_cast<size_t>(i)] = -D * sum;
+std::vector<Eigen::Vector3d> bending_force(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x) {
+  std::vector<Eigen::Vector3d> f(s.node.size(), Eigen::Vector3d::Zero());
+  for (size_t i = 0; i < s.node.size(); ++i) {
+    for (size_t j = 0; j < s.node.size(); ++j) f[i] += s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * x[j];
+    f[i] *= -D;
   }
   return f;
 }

@@ -3,23 +3,24 @@
 // negative semidefinite and the exact one where the element is stretched both ways, the quadratic bending
 // force is its energy's gradient and vanishes on every flat placement, and a uniformly stretched sheet of them
 // is in equilibrium at every interior node (the patch test).
-#include <gtest/gtest.h>
-
-#include <Eigen/Eigenvalues>
-#include <cmath>
-#include <limits>
-#include <random>
-
 #include "models/membrane.hpp"
 #include "models/model.hpp"
+#include "run/measure.hpp"
+#include "solvers/capabilities/second_order.hpp"
+#include "solvers/method_table.hpp"
+#include "solvers/stability.hpp"
 #include "verification/continuum_checks.hpp"
 #include "verification/order_fit.hpp"
 #include "verification/stability.hpp"
-#include "run/measure.hpp"
-#include "solvers/method_table.hpp"
-#include "solvers/stability.hpp"
-#include "solvers/capabilities/second_order.hpp"
 #include "verification/tolerances.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
 
 namespace stepwise {
 namespace {
@@ -91,34 +92,81 @@ TEST(Membrane, DefiniteJacobianIsSemidefiniteAndExactWhereStretchedBothWays) {
   EXPECT_GT(lowest(membrane_force_jacobian(material, e, compressed, true)), -tolerance::element_roundoff * scale);
 }
 
+// an n x n grid of spacing 1 / (n - 1) in the x-y plane, triangulated as the cloth's grid, and the bending
+// stencils of its interior nodes
+struct Grid {
+  std::vector<Eigen::Vector3d> rest;
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<BendingStencil> stencils;
+};
+Grid grid(int n) {
+  Grid g;
+  const double h = 1.0 / (n - 1);
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) g.rest.emplace_back(c * h, r * h, 0);
+  for (int r = 0; r + 1 < n; ++r)
+    for (int c = 0; c + 1 < n; ++c) {
+      const int k = r * n + c;
+      g.triangles.push_back({k, k + n, k + 1});
+      g.triangles.push_back({k + n, k + n + 1, k + 1});
+    }
+  std::vector<bool> interior(g.rest.size());
+  for (int k = 0; k < n * n; ++k) interior[k] = k / n > 0 && k / n < n - 1 && k % n > 0 && k % n < n - 1;
+  g.stencils = bending_stencils(g.triangles, g.rest, interior);
+  return g;
+}
+
+std::vector<Eigen::Vector3d> placed(const BendingStencil& s, const std::vector<Eigen::Vector3d>& x) {
+  std::vector<Eigen::Vector3d> out;
+  for (const int k : s.node) out.push_back(x[k]);
+  return out;
+}
+
 TEST(Membrane, BendingForceIsTheEnergyGradientAndVanishesWhenFlat) {
-  // an interior edge of the flag's grid: (0, 0)-(1, 1) diagonal with corners
-  // (1, 0) and (0, 1), spacing 0.1
-  const std::array<Eigen::Vector3d, 4> rest{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.1, 0.1, 0), Eigen::Vector3d(0.1, 0, 0),
-                                            Eigen::Vector3d(0, 0.1, 0)};
-  const BendingStencil s = make_bending_stencil({0, 1, 2, 3}, rest[0], rest[1], rest[2], rest[3]);
+  const Grid g = grid(3);  // one interior node and its six neighbours, spacing 0.5
+  ASSERT_EQ(g.stencils.size(), 1u);
+  const BendingStencil& s = g.stencils[0];
   const double D = material.bending;
-  // any flat placement (rotated out of its plane, moved, stretched within it)
-  // has no bending force
+  // any flat placement (rotated out of its plane, moved, stretched within it) has no bending force
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   Eigen::Matrix3d in_plane = Eigen::Matrix3d::Identity();
   in_plane(0, 0) = 1.03, in_plane(0, 1) = 0.02, in_plane(1, 1) = 0.98;
-  std::array<Eigen::Vector3d, 4> flat;
-  for (int i = 0; i < 4; ++i) flat[i] = R * in_plane * rest[i] + Eigen::Vector3d(0.3, -0.2, 0.1);
-  const double unit = D * s.Q.lpNorm<Eigen::Infinity>() * 0.1;  // a force of the stencil's size
-  for (const auto& f : bending_force(D, s, flat)) EXPECT_LT(f.norm(), tolerance::element_roundoff * unit);
+  std::vector<Eigen::Vector3d> flat;
+  for (const auto& x : g.rest) flat.push_back(R * in_plane * x + Eigen::Vector3d(0.3, -0.2, 0.1));
+  const double unit = D * s.Q.lpNorm<Eigen::Infinity>() * 0.5;  // a force of the stencil's size
+  for (const auto& f : bending_force(D, s, placed(s, flat))) EXPECT_LT(f.norm(), tolerance::element_roundoff * unit);
   // folded: the force is minus the energy's gradient
-  std::array<Eigen::Vector3d, 4> folded = rest;
-  folded[2].z() = 0.02, folded[3].z() = 0.015;
+  std::vector<Eigen::Vector3d> folded = placed(s, g.rest);
+  for (size_t i = 0; i < folded.size(); ++i) folded[i].z() = 0.02 * std::sin(3.0 * static_cast<double>(i) + 1);
   const auto f = bending_force(D, s, folded);
-  for (int i = 0; i < 4; ++i)
+  for (size_t i = 0; i < folded.size(); ++i)
     for (int c = 0; c < 3; ++c) {
       auto plus = folded, minus = folded;
       plus[i][c] += fd_step, minus[i][c] -= fd_step;
       const double fd = -(bending_energy(D, s, plus) - bending_energy(D, s, minus)) / (2 * fd_step);
-      EXPECT_NEAR(f[i][c], fd, tolerance::element_fd * unit) << "corner " << i << " coordinate " << c;
+      EXPECT_NEAR(f[i][c], fd, tolerance::element_fd * unit) << "node " << i << " coordinate " << c;
     }
   EXPECT_GT(bending_energy(D, s, folded), 0);
+}
+
+TEST(Membrane, BendingEnergyOfACylinderIsThePlatesInEveryDirection) {
+  // a 33 x 33 unit sheet wrapped isometrically onto a cylinder of radius 2 whose axis makes an angle with the
+  // grid's: the plate's energy D / (2 R^2) per unit area, over the interior nodes' area ((n - 2) / (n - 1))^2
+  const int n = 33;
+  const Grid g = grid(n);
+  const double R = 2, D = material.bending;
+  for (const double angle : {0.0, 0.3, std::numbers::pi / 4, -std::numbers::pi / 4, std::numbers::pi / 2}) {
+    const Eigen::Vector3d d(std::cos(angle), std::sin(angle), 0), axis(-std::sin(angle), std::cos(angle), 0);
+    std::vector<Eigen::Vector3d> x;
+    for (const auto& X : g.rest) {
+      const double theta = X.dot(d) / R;
+      x.push_back(R * std::sin(theta) * d + X.dot(axis) * axis + Eigen::Vector3d(0, 0, R * (1 - std::cos(theta))));
+    }
+    double energy = 0;
+    for (const auto& s : g.stencils) energy += bending_energy(D, s, placed(s, x));
+    const double plate = D / (2 * R * R) * std::pow((n - 2.0) / (n - 1.0), 2);
+    EXPECT_NEAR(energy / plate, 1, tolerance::cylinder_bending) << "angle " << angle;
+  }
 }
 
 TEST(Membrane, PatchTestAUniformlyStretchedSheetIsInEquilibriumInside) {
