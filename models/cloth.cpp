@@ -116,8 +116,9 @@ class Cloth final : public Model {
                                            "resistance to area change, where the plane-stress Lame parameters are infinite",
                                            p.at("nu")));
     // the sheet's whole run, its springs and the default implicit Euler's sparse Cholesky factor, by node:
-    // 16 KiB, the peak resident size measured here at 256 x 256 (1.04 GiB) and 384 x 384 (2.35 GiB) nodes
-    particle_grid(p, "rows", "columns", 16 * 1024, "nodes");
+    // 16 KiB, the peak resident size measured here at 256 x 256 (1.04 GiB) and 384 x 384 (2.35 GiB) nodes; the
+    // continuum's 22 KiB (its elements, and bending stencils coupling nodes two apart: 1.43 GB at 256 x 256)
+    particle_grid(p, "rows", "columns", (p.at("continuum") == 1 ? 22 : 16) * 1024, "nodes");
     const int nodes = rows_ * columns_;
     node_mass_ = p.at("mass") / nodes;
     const double dx = p.at("width") / (columns_ - 1), dz = p.at("height") / (rows_ - 1);
