@@ -51,6 +51,7 @@ StaticEquilibrium static_equilibrium(const OdeSystem& system, Eigen::VectorXd y,
   Eigen::MatrixXd rhs, dx;
   for (; out.iterations < max_iterations; ++out.iterations) {
     out.scale = std::max({out.scale, reactions.norm()});
+    out.residuals.push_back(norm / out.scale);
     if (norm <= tolerance * out.scale) break;
     view->force_jacobians(0, y, true, K, D);
     const Eigen::SparseMatrix<double> A = -(S * K * S.transpose());

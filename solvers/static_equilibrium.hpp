@@ -24,6 +24,7 @@ struct StaticEquilibrium {
   double residual = 0;     // |f_free| at the end, relative to `scale`
   double scale = 0;        // the force it is relative to: the larger of |f| at the start and the held coordinates' reactions
   std::string failure;     // empty when converged; else why not
+  std::vector<double> residuals;  // |f_free| / scale at the start and after each iteration
 };
 
 // from y (positions, then velocities, which are set to zero), holding the coordinates `held` marks (one per

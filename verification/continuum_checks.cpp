@@ -43,6 +43,7 @@ UniaxialStretch uniaxial_stretch(Params params, int rows, double strain) {
   out.strain = strain;
   out.iterations = eq.iterations;
   out.failure = eq.failure;
+  out.residuals = eq.residuals;
   const int middle = (columns - 1) / 2;
   const double width = eq.y[at(0, middle) + 1] - eq.y[at(rows - 1, middle) + 1];
   out.nu = -(width / params.at("height") - 1) / strain + 0.0;  // + 0: a ratio of 0 is shown as 0, not -0

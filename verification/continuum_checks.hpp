@@ -7,6 +7,7 @@
 #include "models/model.hpp"
 
 #include <string>
+#include <vector>
 #include <tuple>
 
 namespace stepwise {
@@ -17,6 +18,7 @@ struct UniaxialStretch {
   double strain = 0;    // the stretch imposed
   int iterations = 0;   // Newton's
   std::string failure;  // empty when the equilibrium was found
+  std::vector<double> residuals;  // Newton's relative residuals, iteration by iteration
 };
 // a strip 4 m long (x) and 1 m wide, `rows` nodes across its width and 4 (rows - 1) + 1 along it, of the cloth
 // with `params` (continuum or springs; gravity, wind and drag off), its left end's x held, its right end's

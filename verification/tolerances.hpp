@@ -456,6 +456,9 @@ inline constexpr double small_strain_elastic_constants = 0.01;
 // is the curvature to O((h / R)^2) (2.4e-4 at h = 1/32, R = 2; measured 2e-5); 1e-3 leaves a factor 4, where the
 // edge form's constant (3) or its anisotropy across the diagonals (9) is off by hundreds of percent
 inline constexpr double cylinder_bending = 1e-3;
+// Newton's observed order from three successive residuals: 2 for quadratic convergence, up to the variation of
+// its error constant between iterations; 1 for a linearly converging (modified) iteration. 1.5 tells them apart
+inline constexpr double newton_order_floor = 1.5;
 // a symplectic method's energy error stays in a band of width O(h) for exponentially long times (Hairer, Lubich
 // & Wanner, ch. IX): the band's maximum is met within its first oscillations, and a later window's maximum is
 // within twice the first's, where a non-symplectic method's drift grows without bound

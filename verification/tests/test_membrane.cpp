@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -205,6 +206,22 @@ TEST(Membrane, AStretchedStripMeasuresTheMaterialsPoissonRatioAndModulus) {
     EXPECT_NEAR(s.nu, nu, tolerance::small_strain_elastic_constants * std::max(nu, 0.1)) << "nu " << nu;
     EXPECT_NEAR(s.E, 5e5, tolerance::small_strain_elastic_constants * 5e5) << "nu " << nu;
   }
+}
+
+TEST(Membrane, NewtonConvergesQuadraticallyOnAStretchedStrip) {
+  // 5% stretch from the affine guess: several iterations. In tension the projected Hessian is the exact one, so
+  // Newton's residuals fall quadratically: the observed order log(r3 / r2) / log(r2 / r1) of the last three
+  // before round-off is about 2 (a linearly converging iteration's is 1)
+  const UniaxialStretch s = uniaxial_stretch({{"continuum", 1}, {"nu", 0.3}}, 9, 0.05);
+  ASSERT_TRUE(s.failure.empty()) << s.failure;
+  std::vector<double> r;
+  for (const double v : s.residuals)
+    if (v > 1e-13) r.push_back(v);  // above round-off
+  ASSERT_GE(r.size(), 3u);
+  const size_t k = r.size() - 1;
+  const double order = std::log(r[k] / r[k - 1]) / std::log(r[k - 1] / r[k - 2]);
+  EXPECT_GT(order, tolerance::newton_order_floor) << r[k - 2] << " " << r[k - 1] << " " << r[k];
+  std::cout << "residuals " << r[k - 2] << " " << r[k - 1] << " " << r[k] << ", order " << order << "\n";
 }
 
 // the continuum sheet the dynamics tests run: 8 x 8 nodes hanging from its two top corners, no wind
