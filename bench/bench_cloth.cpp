@@ -11,7 +11,8 @@
 //    prefactored fast-mass-spring;
 //  - the continuum flag (`continuum = 1`: StVK membrane and bending elements on the same grid, 32 and 64) against
 //    the spring flag: assembly (force Jacobians, each element's Hessian projected, and the matrix), CHOLMOD's
-//    refactorisation and solve, and a whole implicit-euler step, the symbolic analysis kept across steps.
+//    refactorisation and solve, and a whole implicit-euler step, the symbolic analysis kept across steps; and
+//    the continuum's assembly with the exact K against the projected one (what the projection costs).
 // One core: CHOLMOD's BLAS is kept on the calling thread (sparse_cholesky.cpp). The BLAS is Debian's
 // alternative (OpenBLAS when installed); LD_LIBRARY_PATH=/usr/lib/x86_64-linux-gnu/blas runs the reference
 // BLAS instead. The program prints the library its dgemm_ comes from.
@@ -110,6 +111,16 @@ void assemble(benchmark::State& state, bool continuum) {
 }
 void BM_assemble(benchmark::State& state) { assemble(state, false); }
 void BM_continuum_assemble(benchmark::State& state) { assemble(state, true); }
+// the same with the exact K: what the per-element projection costs
+void BM_continuum_assemble_exact(benchmark::State& state) {
+  Flag& f = flag(static_cast<int>(state.range(0)), {}, true);
+  stepwise::BaraffWitkinSystem exact(*f.counted, false);
+  for (auto _ : state) {
+    exact.assemble_matrix(0.1, f.y, dt);
+    exact.assemble_rhs(f.y, dt);
+    benchmark::DoNotOptimize(exact.rhs().data());
+  }
+}
 
 void BM_eigen_ldlt_refactor(benchmark::State& state) {
   Flag& f = flag(static_cast<int>(state.range(0)));
@@ -241,6 +252,7 @@ BENCHMARK(BM_hanging_step_refactor) FLAG_SIZES;
 BENCHMARK(BM_hanging_step_kept_factor) FLAG_SIZES;
 #define CONTINUUM_SIZES ->Arg(32)->Arg(64)->Unit(benchmark::kMillisecond)
 BENCHMARK(BM_continuum_assemble) CONTINUUM_SIZES;
+BENCHMARK(BM_continuum_assemble_exact) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_cholmod_refactor) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_step_kept_factor) CONTINUUM_SIZES;
 
@@ -266,6 +278,7 @@ int main(int argc, char** argv) {
   for (const char* n : {"32", "64"}) {
     const std::string arg = std::string("/") + n;
     pairs.emplace_back("BM_continuum_assemble" + arg, "BM_assemble" + arg);
+    pairs.emplace_back("BM_continuum_assemble" + arg, "BM_continuum_assemble_exact" + arg);
     pairs.emplace_back("BM_continuum_cholmod_refactor" + arg, "BM_cholmod_refactor" + arg);
     pairs.emplace_back("BM_continuum_step_kept_factor" + arg, "BM_step_kept_factor" + arg);
   }
