@@ -17,6 +17,7 @@ namespace {
 
 constexpr double stretch = 1e-3;  // the strip's strain: small, so that the answer is the linear material's
 constexpr int strip_rows = 9;     // nodes across the strip (33 along it)
+constexpr double strip_E = 5e5;   // the continuum strips' Young's modulus (Pa)
 
 // the convergence order p of a quantity on meshes of spacing h1 > h2 > h3 from its three values, solving
 // (q1 - q2) / (q2 - q3) = (h1^p - h2^p) / (h2^p - h3^p) by bisection (the spacings are not exactly halved)
@@ -33,23 +34,64 @@ std::optional<double> observed_order(double h1, double h2, double h3, double q1,
   return (lo + hi) / 2;
 }
 
-StudyOutput continuum_cloth(const StudyContext& ctx) {
+// the materials: the continuum at three Poisson's ratios, the spring mesh with and without its diagonals;
+// `springs` gets the spring mesh's own
+Table poisson_table(UniaxialStretch& springs) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  // ---- the materials: the continuum at three Poisson's ratios, the spring mesh with and without its diagonals
   Table poisson{{"model", "nu_set", "nu_measured", "E_set", "E_measured", "strain", "newton_iterations"}, {}};
-  const double E = 5e5;
+  const double E = strip_E;
   for (const double nu : {0.0, 0.3, 0.45}) {
     const UniaxialStretch s = uniaxial_stretch({{"continuum", 1}, {"nu", nu}, {"E", E}}, strip_rows, stretch);
     if (!s.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the strip at nu = {}: {}", nu, s.failure));
     poisson.rows.push_back({std::string("continuum"), nu, s.nu, E, s.E, stretch, long{s.iterations}});
   }
-  std::optional<UniaxialStretch> springs;
   for (const auto& [name, shear] : {std::pair{"springs", 1.0}, std::pair{"springs-no-shear", 0.0}}) {
     const UniaxialStretch s = uniaxial_stretch({{"continuum", 0}, {"shear", shear}}, strip_rows, stretch);
     if (!s.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the {} strip: {}", name, s.failure));
     poisson.rows.push_back({std::string(name), nan, s.nu, nan, s.E, stretch, long{s.iterations}});
     if (shear == 1.0) springs = s;
   }
+
+  return poisson;
+}
+
+// "the sides shrink inside": the continuum's hanging sheet at three Poisson's ratios (at the springs' modulus),
+// beside the springs'
+Table sides_table(double E_springs, int sides_side) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Table narrowing{{"model", "nu", "side", "middle_width", "bottom_width", "sag"}, {}};
+  for (const double nu : {0.0, 0.3, 0.45}) {
+    const HangingSheet h = hanging_sheet({{"continuum", 1}, {"nu", nu}, {"E", E_springs}}, sides_side);
+    if (!h.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the hanging continuum at nu = {}: {}", nu, h.failure));
+    narrowing.rows.push_back({std::string("continuum"), nu, long{sides_side}, h.middle_width, h.bottom_width, h.sag});
+  }
+  // (without its diagonals the spring sheet has no shear stiffness: hanging, it is a mechanism, with no equilibrium)
+  const HangingSheet hanging_springs = hanging_sheet({{"continuum", 0}}, sides_side);
+  if (!hanging_springs.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the hanging springs: {}", hanging_springs.failure));
+  narrowing.rows.push_back({std::string("springs"), nan, long{sides_side}, hanging_springs.middle_width, hanging_springs.bottom_width, hanging_springs.sag});
+  return narrowing;
+}
+
+// the refinement table's figure: sag and bottom width by mesh, a line a model
+std::string refinement_figure(std::vector<Figure>& figures) {
+  const auto by_model = [](std::string y) {
+    return std::vector<FigureSpec::Layer>{{.table = "continuum_cloth_refinement", .x = "side", .y = std::move(y), .series = "model"}};
+  };
+  FigureSpec spec{.title = "The hanging sheet as each mesh is refined",
+                  .panels = {{.title = "Sag of the top edge", .x_label = "nodes a side", .y_label = "sag (m)", .log_x = true, .layers = by_model("sag")},
+                             {.title = "Bottom width (1 m at rest)",
+                              .x_label = "nodes a side",
+                              .y_label = "bottom width (m)",
+                              .log_x = true,
+                              .layers = by_model("bottom_width")}}};
+  return add_figure(figures, "continuum_cloth", "", std::move(spec), "Springs and the continuum of the same material, hanging, by mesh");
+}
+
+StudyOutput continuum_cloth(const StudyContext& ctx) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  UniaxialStretch springs_measured;
+  Table poisson = poisson_table(springs_measured);
+  const UniaxialStretch* springs = &springs_measured;
 
   // ---- refinement: the hanging sheet, springs (the flag's constants, unscaled) and the continuum of the
   // material the springs measured as
@@ -95,18 +137,8 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
   const double gap_sag = value("springs", n3, "sag") / value("continuum", n3, "sag") - 1;
   const double gap_width = value("springs", n3, "bottom_width") / value("continuum", n3, "bottom_width") - 1;
 
-  // ---- "the sides shrink inside": the continuum's hanging sheet at three Poisson's ratios, beside the springs'
   const int sides_side = 32;
-  Table narrowing{{"model", "nu", "side", "middle_width", "bottom_width", "sag"}, {}};
-  for (const double nu : {0.0, 0.3, 0.45}) {
-    const HangingSheet h = hanging_sheet({{"continuum", 1}, {"nu", nu}, {"E", springs->E}}, sides_side);
-    if (!h.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the hanging continuum at nu = {}: {}", nu, h.failure));
-    narrowing.rows.push_back({std::string("continuum"), nu, long{sides_side}, h.middle_width, h.bottom_width, h.sag});
-  }
-  // (without its diagonals the spring sheet has no shear stiffness: hanging, it is a mechanism, with no equilibrium)
-  const HangingSheet hanging_springs = hanging_sheet({{"continuum", 0}}, sides_side);
-  if (!hanging_springs.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: the hanging springs: {}", hanging_springs.failure));
-  narrowing.rows.push_back({std::string("springs"), nan, long{sides_side}, hanging_springs.middle_width, hanging_springs.bottom_width, hanging_springs.sag});
+  const Table narrowing = sides_table(springs->E, sides_side);
   const auto widening_of = [&](const std::string& model, double nu) {
     for (const auto& row : narrowing.rows) {
       const double row_nu = std::get<double>(cell_of(narrowing, row, "nu"));
@@ -152,7 +184,7 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
       [&] {
         for (const auto& row : poisson.rows)
           if (std::get<std::string>(cell_of(poisson, row, "model")) == "continuum" && std::get<double>(cell_of(poisson, row, "nu_set")) == 0.3)
-            return std::abs(std::get<double>(cell_of(poisson, row, "E_measured")) / E - 1);
+            return std::abs(std::get<double>(cell_of(poisson, row, "E_measured")) / strip_E - 1);
         return nan;
       }());
   const auto number = [](const char* f) { return shown_as(f); };
@@ -179,17 +211,7 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
                                    {"sag", "sag (m)", number("{:.5f}")}});
   md += "\n";
   std::vector<Figure> figures;
-  const auto by_model = [](std::string y) {
-    return std::vector<FigureSpec::Layer>{{.table = "continuum_cloth_refinement", .x = "side", .y = std::move(y), .series = "model"}};
-  };
-  FigureSpec spec{.title = "The hanging sheet as each mesh is refined",
-                  .panels = {{.title = "Sag of the top edge", .x_label = "nodes a side", .y_label = "sag (m)", .log_x = true, .layers = by_model("sag")},
-                             {.title = "Bottom width (1 m at rest)",
-                              .x_label = "nodes a side",
-                              .y_label = "bottom width (m)",
-                              .log_x = true,
-                              .layers = by_model("bottom_width")}}};
-  md += add_figure(figures, "continuum_cloth", "", std::move(spec), "Springs and the continuum of the same material, hanging, by mesh");
+  md += refinement_figure(figures);
   return {{{"continuum_cloth_poisson", std::move(poisson)}, {"continuum_cloth_refinement", std::move(refinement)}, {"continuum_cloth_sides", std::move(narrowing)}},
           md, figures};
 }
