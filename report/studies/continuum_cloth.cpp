@@ -87,15 +87,10 @@ std::string refinement_figure(std::vector<Figure>& figures) {
   return add_figure(figures, "continuum_cloth", "", std::move(spec), "Springs and the continuum of the same material, hanging, by mesh");
 }
 
-StudyOutput continuum_cloth(const StudyContext& ctx) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  UniaxialStretch springs_measured;
-  Table poisson = poisson_table(springs_measured);
-  const UniaxialStretch* springs = &springs_measured;
-
-  // ---- refinement: the hanging sheet, springs (the flag's constants, unscaled) and the continuum of the
-  // material the springs measured as
-  std::vector<int> sides{8, 16, 32};
+// refinement: the hanging sheet by mesh, springs (the flag's constants, unscaled) and the continuum of the
+// material the springs measured as; `sides` gets the meshes' sides
+Table refinement_table(const StudyContext& ctx, const UniaxialStretch& springs, std::vector<int>& sides) {
+  sides = {8, 16, 32};
   if (!ctx.quick) sides.push_back(64);
   Table refinement{{"model", "side", "nodes", "spacing", "sag", "bottom_width", "middle_width", "bottom_drop", "newton_iterations"}, {}};
   struct Point {
@@ -105,12 +100,12 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
   std::vector<Point> points;
   for (const char* model : {"springs", "continuum"})
     for (const int side : sides) points.push_back({model, side});
-  const double nu_springs = std::clamp(springs->nu, -0.9, 0.49);
+  const double nu_springs = std::clamp(springs.nu, -0.9, 0.49);
   std::vector<std::string> labels;
   for (const auto& p : points) labels.push_back(fmt::format("continuum-cloth {} {}x{}", p.model, p.side, p.side));
   const auto sheets = ctx.sweep<HangingSheet>(labels, [&](size_t i) {
     const Point& p = points[i];
-    const Params params = p.model == "springs" ? Params{{"continuum", 0}} : Params{{"continuum", 1}, {"E", springs->E}, {"nu", nu_springs}};
+    const Params params = p.model == "springs" ? Params{{"continuum", 0}} : Params{{"continuum", 1}, {"E", springs.E}, {"nu", nu_springs}};
     return hanging_sheet(params, p.side);
   });
   for (size_t i = 0; i < points.size(); ++i) {
@@ -119,6 +114,17 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
     refinement.rows.push_back({points[i].model, long{points[i].side}, long{points[i].side * points[i].side}, 1.0 / (points[i].side - 1), s.sag,
                                s.bottom_width, s.middle_width, s.bottom_drop, long{s.iterations}});
   }
+  return refinement;
+}
+
+StudyOutput continuum_cloth(const StudyContext& ctx) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  UniaxialStretch springs_measured;
+  Table poisson = poisson_table(springs_measured);
+  const UniaxialStretch* springs = &springs_measured;
+
+  std::vector<int> sides;
+  const Table refinement = refinement_table(ctx, *springs, sides);
   const auto value = [&](const std::string& model, int side, const char* column) {
     for (const auto& row : refinement.rows)
       if (std::get<std::string>(cell_of(refinement, row, "model")) == model && std::get<long>(cell_of(refinement, row, "side")) == side)
