@@ -4,8 +4,12 @@
 //   (M - h D - h^2 K) dv = h (f0 + h K v0),   v1 = v0 + dv,   x1 = x0 + h v1,
 // the backward Euler step linearised once. With `newton`, the nonlinear backward Euler equations
 //   R(v1) = M (v1 - v0) - h f(x0 + h v1, v1) = 0
-// are iterated to |R| <= newton_residual (|M v1| + h |f|), each iteration solving the same kind of matrix at the
-// latest iterate (a quasi-Newton iteration: the matrix is the definite approximation, the residual exact).
+// are iterated from that step to |R| <= newton_residual (|M v1| + h |f|) by Newton's method with R's exact
+// Jacobian (the model's exact K and D), its linear systems solved by GMRES preconditioned with the step's
+// definite factor, and a backtracking line search on |R| (the exact Jacobian's step is a descent direction
+// for |R|, the definite approximation's need not be). Where the backward Euler equations have no root near
+// the linearised step's answer (the gusting flag released flat at rest, at h = 1/60 s) no step lowers |R|
+// and the run fails, naming the step.
 //
 // The matrix is symmetric positive definite and its pattern never changes: CHOLMOD analyses it once (AMD or
 // METIS, whichever factor is cheaper) and factorises it with the analysis kept. How each solve is done:
@@ -56,6 +60,12 @@ class BaraffWitkinSystem {
   void assemble_matrix(double t, const Eigen::VectorXd& y, double h);
   // b = h (f0 + h K v0), with the K and f0 of the last assemble_matrix at y
   void assemble_rhs(const Eigen::VectorXd& y, double h);
+  // f(t, x, v) alone
+  void assemble_force(double t, const Eigen::VectorXd& y);
+  // the backward Euler residual's exact Jacobian J = M - h D - h^2 K at (t, x, v), with the model's exact K and
+  // D (indefinite where a spring or element is compressed, unsymmetric where the wind turns with the normals)
+  void assemble_exact(double t, const Eigen::VectorXd& y, double h);
+  const Eigen::SparseMatrix<double>& exact_matrix() const { return j_; }
   const Eigen::SparseMatrix<double>& matrix() const { return a_; }
   const Eigen::VectorXd& rhs() const { return b_; }
   const Eigen::VectorXd& force() const { return f_; }  // f at the last assembly
@@ -67,7 +77,7 @@ class BaraffWitkinSystem {
   bool definite_;
   Eigen::VectorXd m_, f_, b_;
   Eigen::VectorXd scratch_;  // f where the model has no acceleration of its own
-  Eigen::SparseMatrix<double> k_, d_, a_;
+  Eigen::SparseMatrix<double> k_, d_, a_, exact_k_, exact_d_, j_;
   bool shared_pattern_ = false;  // K, D and A have one pattern (found at the first assembly)
 };
 
