@@ -57,11 +57,11 @@ def main():
     problems = []
     panels = list(csv.DictReader(open(os.path.join(report, "side_by_side.csv"))))
     frames = list(csv.DictReader(open(os.path.join(report, "side_by_side_frames.csv"))))
-    scenes = sorted({p["scene"] for p in panels})
-    assert scenes == ["flag", "pendulum", "water-drop"], scenes
+    scenes = sorted({p["clip"] for p in panels})
+    assert scenes == ["flag", "flag-continuum", "pendulum", "water-drop"], scenes
     shots = []
     for scene in scenes:
-        rows = [p for p in panels if p["scene"] == scene]
+        rows = [p for p in panels if p["clip"] == scene]
         video = os.path.join(report, rows[0]["video"])
         codec, width, height, count = probe(video)
         want = (int(rows[0]["width"]), int(rows[0]["height"]), int(rows[0]["frames"]))
@@ -74,7 +74,7 @@ def main():
             problems.append(f"{video}: {width} x {height}, not {expected[0]} x {expected[1]} ({len(rows)} panels of 640 x 360, two a row)")
         # the same simulated time in every panel of a frame, the reference's; a panel that stopped holds its last
         by_frame = {}
-        for f in (f for f in frames if f["scene"] == scene):
+        for f in (f for f in frames if f["clip"] == scene):
             by_frame.setdefault(int(f["frame"]), []).append(f)
         if sorted(by_frame) != list(range(count)):
             problems.append(f"{scene}: side_by_side_frames.csv has frames {min(by_frame)}..{max(by_frame)}, the video {count}")

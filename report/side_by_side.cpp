@@ -8,6 +8,7 @@
 #include "run/message.hpp"
 #include "run/process.hpp"
 #include "run/side_by_side.hpp"
+#include "verification/continuum_checks.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -27,6 +28,7 @@ namespace {
 struct Contender {
   const char* method;
   double dt;
+  bool continuum = false;  // on a cloth: the continuum of the springs' own measured material, not the springs
 };
 
 // a clip: a scene, how long it runs, the CPU budget its methods share, and the reference
@@ -43,6 +45,11 @@ struct Clip {
   Contender reference;      // converged: rk4 far below the steps the others take
   const char* says;         // what the clip shows
   double draw_ms;           // a panel's drawing at 640 x 360, measured: the expected cost
+  const char* name = nullptr;  // the clip's name (its video's), where one scene has two clips; else the scene's
+  std::string clip() const { return name ? name : scene; }
+  bool two_models() const {
+    return reference.continuum || std::any_of(methods.begin(), methods.end(), [](const Contender& c) { return c.continuum; });
+  }
 };
 
 const std::vector<Clip>& clips() {
@@ -56,6 +63,15 @@ const std::vector<Clip>& clips() {
        "far below its stability limit; xpbd (its springs as compliant constraints) steps each frame in as many substeps "
        "as the budget buys.",
        5},
+      // the two cloths of the second seed at one budget, implicit Euler's on the spring flag at 1/60 s: the springs,
+      // and the continuum of the springs' own material (the continuum-cloth study's), against the continuum converged
+      {"flag", {}, 2.0, 0.5, std::nullopt, {"implicit-euler", 1.0 / 60}, "implicit Euler's CPU time on the spring flag at dt 1/60 s", 0.25,
+       {{"implicit-euler", 1.0 / 60}, {"implicit-euler", 1.0 / 60, true}, {"symplectic-euler", 5e-4, true}}, {"rk4", 2.5e-4, true},
+       "The seeds' two cloths at one CPU budget: the 32 x 32 spring flag and the continuum (finite elements) of the springs' "
+       "own measured material by implicit Euler, and the continuum by symplectic Euler at the step the budget buys (its "
+       "stability limit falls as the sheet stretches), against the continuum converged (the continuum-cloth study measures "
+       "the same runs in a 720-pixel frame).",
+       5, "flag-continuum"},
       // released at 170 degrees, near the top: a small energy error changes the swing's period, or sends it over
       {"pendulum", {"theta0=2.9670597283903604"}, 10.0, 5.0, std::nullopt, {"rk4", 1.0 / 30}, "rk4's CPU time at one step a frame", 1,
        {{"euler", 1e-2}, {"symplectic-euler", 1e-2}, {"rk4", 1.0 / 30}}, {"rk4", 1e-4},
@@ -85,23 +101,41 @@ std::string step_text(double dt) {
   return std::abs(per_second - std::round(per_second)) < 1e-6 * per_second ? fmt::format("dt 1/{:.0f} s", per_second) : fmt::format("dt {:.3g} s", dt);
 }
 
-// `method` at n steps a frame of `interval`: n steps of interval / n, or a position-based method's one step a
+// the models of a clip's panels: on a clip of two (the spring cloth and the continuum), each panel's setting names
+// its model, and a continuum panel runs with the material's sets
+struct ClipModels {
+  bool named = false;
+  std::vector<std::string> continuum_sets;
+};
+
+// contender `c` at n steps a frame of `interval`: n steps of interval / n, or a position-based method's one step a
 // frame in n substeps (of one iteration: Macklin et al.'s small steps)
-Panel panel_at(const char* method, int n, double interval) {
-  if (find_method(method)->substepped) return {method, interval, fmt::format("{} in {} substeps", step_text(interval), n), n};
-  return {method, interval / n, step_text(interval / n)};
+Panel panel_at(const Contender& c, int n, double interval, const ClipModels& models) {
+  Panel panel = find_method(c.method)->substepped ? Panel{c.method, interval, fmt::format("{} in {} substeps", step_text(interval), n), n}
+                                                  : Panel{c.method, interval / n, step_text(interval / n)};
+  if (models.named) panel.setting = fmt::format("{}  {}", c.continuum ? "continuum" : "springs", panel.setting);
+  if (c.continuum) panel.sets = models.continuum_sets;
+  return panel;
 }
 
-// the steps a frame that keep `method`'s CPU time within `budget` over t_end, at least one: its CPU time over
+// the steps a frame that keep contender `c`'s CPU time within `budget` over t_end, at least one: its CPU time over
 // the span, c(n) = a + b n at n steps a frame (a: the run's fixed costs and outputs, b: the steps), measured at
 // two step counts, scaled to the run and solved for the budget
-int steps_within(const RunOptions& scene, const char* method, double dt, int fps, double t_end, double span, double budget) {
+int steps_within(const RunOptions& scene, const Contender& c, const ClipModels& models, int fps, double t_end, double span, double budget) {
   const double interval = 1.0 / fps;
-  const int n1 = static_cast<int>(std::lround(interval / on_frames(dt, interval))), n2 = 2 * n1;
-  const auto cost = [&](int n) { return panel_cpu_seconds(scene, panel_at(method, n, interval), fps, span) * t_end / span; };
+  const int n1 = static_cast<int>(std::lround(interval / on_frames(c.dt, interval))), n2 = 2 * n1;
+  const auto cost = [&](int n) { return panel_cpu_seconds(scene, panel_at(c, n, interval, models), fps, span) * t_end / span; };
   const double c1 = cost(n1), c2 = cost(n2);
   const double b = std::max(c2 - c1, 1e-3 * c2) / (n2 - n1), a = std::max(0.0, c1 - b * n1);
   return static_cast<int>(std::clamp(std::floor((budget - a) / b), 1.0, 1e6));
+}
+
+// the continuum cloth of the spring flag's own material, measured as the continuum-cloth study measures it, as sets
+std::vector<std::string> springs_material_sets() {
+  const Params material = continuum_of(uniaxial_stretch({{"continuum", 0}}, material_strip_rows, material_strip_strain));
+  std::vector<std::string> sets;
+  for (const auto& [key, value] : material) sets.push_back(fmt::format("{}={:.17g}", key, value));
+  return sets;
 }
 
 struct Shot {
@@ -126,7 +160,7 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
     if (fs::exists(scenes_dir / (std::string(clip.scene) + ".toml")))
       all.push_back(clip);
     else
-      missing.push_back(clip.scene);
+      missing.push_back(clip.clip());
   }
   std::string skipped;
   if (!missing.empty()) {
@@ -137,7 +171,7 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
   std::vector<std::string> labels;
   std::vector<double> costs;
   for (const Clip& clip : all) {
-    labels.push_back(clip.scene);
+    labels.push_back(clip.clip());
     const double t_end = ctx.quick ? clip.quick_t_end : clip.t_end;
     // the runs at their budget, the reference's about as much again, and the frames drawn
     costs.push_back(1e9 * t_end * (clip.per_second.value_or(0.01) * 5) + 4 * fps * t_end * clip.draw_ms * 1e6);
@@ -152,53 +186,53 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
     o.run.sets = clip.sets;
     o.run.t_end = ctx.quick ? clip.quick_t_end : clip.t_end;
     o.fps = fps;
-    o.video = (dir / "side_by_side" / (std::string(clip.scene) + ".mp4")).string();
+    o.video = (dir / "side_by_side" / (clip.clip() + ".mp4")).string();
     const double interval = 1.0 / fps, t_end = *o.run.t_end;
     // each method's step at the budget (steps_within)
     Shot shot;
     const double span = timed_span(clip, t_end, interval);
-    shot.budget = clip.per_second ? *clip.per_second * t_end
-                                  : panel_cpu_seconds(o.run, {clip.anchor.method, on_frames(clip.anchor.dt, interval), ""}, fps, span) * t_end / span;
+    const ClipModels models{clip.two_models(), clip.two_models() ? springs_material_sets() : std::vector<std::string>{}};
+    const int anchor_steps = static_cast<int>(std::lround(interval / on_frames(clip.anchor.dt, interval)));
+    shot.budget = clip.per_second ? *clip.per_second * t_end : panel_cpu_seconds(o.run, panel_at(clip.anchor, anchor_steps, interval, models), fps, span) * t_end / span;
     for (const Contender& c : clip.methods) {
-      // the method that sets the budget takes its own step
-      const bool anchor = c.method == std::string_view(clip.anchor.method);
-      const int n = anchor ? static_cast<int>(std::lround(interval / on_frames(clip.anchor.dt, interval)))
-                           : steps_within(o.run, c.method, c.dt, fps, t_end, span, shot.budget);
-      o.panels.push_back(panel_at(c.method, n, interval));
+      // the contender that sets the budget takes its own step
+      const bool anchor = c.method == std::string_view(clip.anchor.method) && c.continuum == clip.anchor.continuum;
+      const int n = anchor ? anchor_steps : steps_within(o.run, c, models, fps, t_end, span, shot.budget);
+      o.panels.push_back(panel_at(c, n, interval, models));
     }
-    const double reference_dt = on_frames(clip.reference.dt, interval);
-    o.panels.push_back({clip.reference.method, reference_dt, step_text(reference_dt)});
+    const int reference_steps = static_cast<int>(std::lround(interval / on_frames(clip.reference.dt, interval)));
+    o.panels.push_back(panel_at(clip.reference, reference_steps, interval, models));
     try {
       shot.filmed = film_side_by_side(o);
     } catch (const InputError& e) {  // a shipped scene the clip's plan does not fit: ours to fix
-      throw std::runtime_error(fmt::format("side by side {}: {}", clip.scene, e.what()));
+      throw std::runtime_error(fmt::format("side by side {}: {}", clip.clip(), e.what()));
     }
     return shot;
   }, costs);
   if (ctx.progress) ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 
-  Table panels{{"scene", "panel", "method", "setting", "dt", "steps", "cpu_seconds", "budget_cpu_seconds", "cpu_over_budget", "pixel_error", "status",
+  Table panels{{"clip", "scene", "panel", "method", "setting", "dt", "steps", "cpu_seconds", "budget_cpu_seconds", "cpu_over_budget", "pixel_error", "status",
                 "t_last", "label", "video", "frames", "width", "height", "fps"},
                {}};
-  Table frames{{"scene", "frame", "t", "panel", "method", "shown_t", "pixel_error"}, {}};
+  Table frames{{"clip", "scene", "frame", "t", "panel", "method", "shown_t", "pixel_error"}, {}};
   std::string body;
   for (size_t i = 0; i < all.size(); ++i) {
     const Clip& clip = all[i];
     const Shot& shot = shots[i];
     const Filmed& f = shot.filmed;
-    const std::string video = fmt::format("side_by_side/{}.mp4", clip.scene);
+    const std::string video = fmt::format("side_by_side/{}.mp4", clip.clip());
     const size_t first = panels.rows.size();
     for (size_t k = 0; k < f.panels.size(); ++k) {
       const FilmedPanel& p = f.panels[k];
       const bool reference = k + 1 == f.panels.size();
-      panels.rows.push_back({std::string(clip.scene), static_cast<long>(k), p.method, p.setting, p.dt, p.steps, p.cpu_seconds,
+      panels.rows.push_back({clip.clip(), std::string(clip.scene), static_cast<long>(k), p.method, p.setting, p.dt, p.steps, p.cpu_seconds,
                              reference ? NAN : shot.budget, reference ? NAN : p.cpu_seconds / shot.budget, p.pixel_error,
                              std::string(to_string(p.status)), p.t_last, p.label, video, static_cast<long>(f.t.size()), static_cast<long>(f.width),
                              static_cast<long>(f.height), static_cast<long>(fps)});
     }
     for (size_t n = 0; n < f.t.size(); ++n)
       for (size_t k = 0; k < f.panels.size(); ++k)
-        frames.rows.push_back({std::string(clip.scene), static_cast<long>(n), f.t[n], static_cast<long>(k), f.panels[k].method, f.shown_t[n][k],
+        frames.rows.push_back({clip.clip(), std::string(clip.scene), static_cast<long>(n), f.t[n], static_cast<long>(k), f.panels[k].method, f.shown_t[n][k],
                                f.shown_error[n][k]});
     double low = INFINITY, high = 0;
     for (size_t k = first; k + 1 < panels.rows.size(); ++k) {
@@ -209,7 +243,7 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
                         "CPU time, measured at two steps beforehand, keeps within it (at least one step a frame). Filmed, they took "
                         "{:.2f} to {:.2f} of the budget (whole steps a frame, and CPU times that vary from run to run). The last panel "
                         "is the reference.\n\n",
-                        clip.scene, clip.says, clip.budget_says, cpu_text(shot.budget), low, high);
+                        clip.clip(), clip.says, clip.budget_says, cpu_text(shot.budget), low, high);
     body += fmt::format("<video controls loop muted playsinline preload=\"metadata\" width=\"{}\" style=\"max-width: 100%; height: auto\" src=\"{}\"></video>\n\n"
                         "[{}]({}) ({} x {}, {} frames at {} a second: it plays in real time)\n\n",
                         f.width, video, video, video, f.width, f.height, f.t.size(), fps);
@@ -224,7 +258,7 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
   }
   write_file_atomic(dir / "side_by_side.csv", to_csv(panels));
   write_file_atomic(dir / "side_by_side_frames.csv", to_csv(frames));
-  md += fmt::format("The flag, the 170-degree pendulum and the water drop, each run by three methods at one CPU budget and filmed beside a converged reference, seen by one camera "
+  md += fmt::format("The flag (by four methods, and as springs and as the continuum), the 170-degree pendulum and the water drop, each run at one CPU budget and filmed beside a converged reference, seen by one camera "
                     "at the same simulated times: each panel is labelled with its method and step, its CPU time, and its largest offset "
                     "from the reference over the run, in pixels of its {} x {} panel (the farthest any drawn point lies from the same point "
                     "of the reference's picture). Data: [side_by_side.csv](side_by_side.csv), "

@@ -82,6 +82,7 @@ PreparedRun prepare_panel(const RunOptions& scene, const Panel& panel, double in
   RunOptions run = scene;
   run.method = panel.method;
   run.dt = panel.dt;
+  run.sets.insert(run.sets.end(), panel.sets.begin(), panel.sets.end());
   if (panel.substeps > 0) run.substeps = panel.substeps, run.iterations = 1;
   PreparedRun p = prepare_run(run);
   const double steps = interval / panel.dt;

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -55,6 +56,10 @@ UniaxialStretch uniaxial_stretch(Params params, int rows, double strain) {
   for (int r = 0; r < rows; ++r) pull -= a[at(r, columns - 1)] * mass[static_cast<size_t>(at(r, columns - 1) / 3)];
   out.E = pull / (params.at("height") * params.at("thickness") * strain);
   return out;
+}
+
+Params continuum_of(const UniaxialStretch& springs) {
+  return {{"continuum", 1}, {"E", springs.E}, {"nu", std::clamp(springs.nu, -0.9, 0.49)}};
 }
 
 HangingSheet hanging_sheet(Params params, int side) {

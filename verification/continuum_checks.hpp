@@ -24,6 +24,12 @@ struct UniaxialStretch {
 // with `params` (continuum or springs; gravity, wind and drag off), its left end's x held, its right end's
 // moved by `strain` of the length, free to narrow (one node's y held against sliding)
 UniaxialStretch uniaxial_stretch(Params params, int rows, double strain);
+// the strip the report measures a material on: nodes across it, and the strain (small: the linear material's answer)
+inline constexpr int material_strip_rows = 9;
+inline constexpr double material_strip_strain = 1e-3;
+// the continuum cloth of the material `springs` measured as: its E, and its Poisson's ratio kept inside the range
+// the model takes
+Params continuum_of(const UniaxialStretch& springs);
 
 struct HangingSheet {
   double sag = 0;           // how far the top edge's middle hangs below the pins (m)

@@ -9,8 +9,6 @@ namespace {
 
 // the quick report's flag runs half as long (its reference rk4 runs were 8 of its 15 CPU s)
 constexpr double full_t_end = 2.0, quick_t_end = 1.0;
-// the flag (1 m square, billowing out of its plane) filmed in a 1.5 m frame: half a pixel of 720
-constexpr double frame_extent = 1.5;
 // the reference: rk4 far below its stability limit (the stiffest mode's omega h ~ 0.5 at 2.5e-4 s), checked
 // against itself at half the step
 constexpr double reference_dt = 2.5e-4;
@@ -79,7 +77,7 @@ StudyOutput cloth_realtime(const StudyContext& ctx) {
   const double t_end = ctx.quick ? quick_t_end : full_t_end;
   const auto flag = make_model("cloth", {});  // the model's defaults are the seeds' flag (scenes/flag.toml)
   const Eigen::Index positions = flag->as<SecondOrderView>()->positions;
-  const double half_pixel = 0.5 * frame_extent / frame_pixels;
+  const double half_pixel = 0.5 * flag_frame_extent / frame_pixels;
   const std::vector<Point> points = plan(ctx.quick);
 
   // the two reference runs, then every point
@@ -167,7 +165,7 @@ StudyOutput cloth_realtime(const StudyContext& ctx) {
       "node position error at t = {:g} s against its CPU time per simulated second, on one core. The reference is rk4 at dt "
       "{:.3g} s (its own error, from the run at twice that step: {}). The vertical line is the real-time budget (1/60 s of CPU "
       "per 1/60 s of simulated time); the horizontal one half a pixel of a {:.0f}-pixel-high frame {:g} m tall ({:.2g} m).\n\n",
-      t_end, t_end, reference_dt / 2, sci(reference_error), frame_pixels, frame_extent, half_pixel);
+      t_end, t_end, reference_dt / 2, sci(reference_error), frame_pixels, flag_frame_extent, half_pixel);
   FigureSpec spec{.title = fmt::format("The 32 x 32 flag over {:g} s: accuracy against cost", t_end),
                   .panels = {{.x_label = "CPU seconds per simulated second", .y_label = "largest node position error (m)", .log_x = true, .log_y = true,
                               .layers = {{.table = "cloth_realtime", .x = "cpu_per_simulated_second", .y = "position_error", .series = "method",

@@ -1,7 +1,8 @@
 // The report's study: the spring cloth against the continuum (the second seed's two cloths), at rest. What
 // material the spring mesh is (its Poisson's ratio and Young's modulus, measured on a stretched strip as for
 // the finite elements), and how the hanging sheet's sag and bottom width change as each mesh is refined.
-#include "report/studies.hpp"
+#include "report/studies/study_scenes.hpp"
+#include "solvers/capabilities/second_order.hpp"
 
 #include "verification/continuum_checks.hpp"
 
@@ -15,8 +16,8 @@
 namespace stepwise {
 namespace {
 
-constexpr double stretch = 1e-3;  // the strip's strain: small, so that the answer is the linear material's
-constexpr int strip_rows = 9;     // nodes across the strip (33 along it)
+constexpr double stretch = material_strip_strain;
+constexpr int strip_rows = material_strip_rows;
 constexpr double strip_E = 5e5;   // the continuum strips' Young's modulus (Pa)
 
 // the convergence order p of a quantity on meshes of spacing h1 > h2 > h3 from its three values, solving
@@ -100,12 +101,11 @@ Table refinement_table(const StudyContext& ctx, const UniaxialStretch& springs, 
   std::vector<Point> points;
   for (const char* model : {"springs", "continuum"})
     for (const int side : sides) points.push_back({model, side});
-  const double nu_springs = std::clamp(springs.nu, -0.9, 0.49);
   std::vector<std::string> labels;
   for (const auto& p : points) labels.push_back(fmt::format("continuum-cloth {} {}x{}", p.model, p.side, p.side));
   const auto sheets = ctx.sweep<HangingSheet>(labels, [&](size_t i) {
     const Point& p = points[i];
-    const Params params = p.model == "springs" ? Params{{"continuum", 0}} : Params{{"continuum", 1}, {"E", springs.E}, {"nu", nu_springs}};
+    const Params params = p.model == "springs" ? Params{{"continuum", 0}} : continuum_of(springs);
     return hanging_sheet(params, p.side);
   });
   for (size_t i = 0; i < points.size(); ++i) {
@@ -115,6 +115,157 @@ Table refinement_table(const StudyContext& ctx, const UniaxialStretch& springs, 
                                s.bottom_width, s.middle_width, s.bottom_drop, long{s.iterations}});
   }
   return refinement;
+}
+
+// the flag in motion: the seeds' gusting 32 x 32 flag with springs and with the continuum of the springs' own
+// material (its measured E and nu), each by implicit Euler at frame-sized steps and below, and the springs by rk4
+// far below their explicit limit (their answer converged in time: the model's own offset), every one against the
+// continuum's converged run (rk4 far below its limit, checked against itself at twice the step)
+struct FlagRun {
+  std::string model;
+  std::string method;
+  double dt;
+};
+
+constexpr double flag_reference_dt = 2.5e-4;
+
+struct EqualCpu {
+  Table table;
+  double reference_pixels = 0;  // the reference's own offset (Richardson, from its run at twice the step)
+  double t_end = 0;
+};
+
+// the offset of `model` at CPU cost `cpu` (s per simulated s), interpolated log-log between its implicit Euler
+// points bracketing it; NaN outside them
+double pixels_at_cpu(const Table& table, const std::string& model, double cpu) {
+  std::vector<std::pair<double, double>> points;
+  for (const auto& row : table.rows)
+    if (std::get<std::string>(cell_of(table, row, "model")) == model && std::get<std::string>(cell_of(table, row, "method")) == "implicit-euler")
+      points.emplace_back(std::get<double>(cell_of(table, row, "cpu_per_simulated_second")), std::get<double>(cell_of(table, row, "pixels_off")));
+  std::sort(points.begin(), points.end());
+  for (size_t k = 0; k + 1 < points.size(); ++k) {
+    const auto [c0, p0] = points[k];
+    const auto [c1, p1] = points[k + 1];
+    if (cpu < c0 || cpu > c1 || !(p0 > 0) || !(p1 > 0)) continue;
+    const double w = std::log(cpu / c0) / std::log(c1 / c0);
+    return std::exp((1 - w) * std::log(p0) + w * std::log(p1));
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+EqualCpu equal_cpu_table(const StudyContext& ctx, const Params& continuum) {
+  const double t_end = ctx.quick ? 0.5 : 2.0;
+  std::vector<double> dts{1.0 / 15, 1.0 / 30, 1.0 / 60, 1.0 / 120};
+  if (!ctx.quick) dts.push_back(1.0 / 240);
+  // (the springs undamped too: the continuum has no damping of its own, the springs' Voigt damping is part of their model)
+  std::vector<FlagRun> runs{{"continuum", "rk4", flag_reference_dt},
+                            {"continuum", "rk4", 2 * flag_reference_dt},
+                            {"springs", "rk4", 2 * flag_reference_dt},
+                            {"springs-undamped", "rk4", 2 * flag_reference_dt}};
+  for (const char* model : {"springs", "continuum"})
+    for (const double dt : dts) runs.push_back({model, "implicit-euler", dt});
+  std::vector<std::string> labels;
+  std::vector<double> costs;  // ns, measured on this flag: an rk4 step ~0.5 ms (continuum) or 0.25 ms, an implicit step ~10 ms
+  for (const auto& r : runs) {
+    labels.push_back(fmt::format("continuum-cloth flag {} {} dt {:.3g}", r.model, r.method, r.dt));
+    costs.push_back(t_end / r.dt * (r.method == "rk4" ? (r.model == "continuum" ? 5e5 : 2.5e5) : 1e7));
+  }
+  const auto measured = ctx.sweep<Measured>(labels, [&](size_t i) {
+    const auto model = make_model("cloth", runs[i].model == "continuum" ? continuum : runs[i].model == "springs" ? Params{} : Params{{"damping", 0}});
+    return run_and_measure(*model, runs[i].method, StepControl::fixed(runs[i].dt), t_end, t_end);
+  }, costs);
+  for (size_t i = 0; i < 2; ++i)
+    if (measured[i].result.status != Status::ok)
+      throw std::runtime_error(fmt::format("continuum-cloth: the flag's reference run failed: {}", measured[i].result.message));
+  const Eigen::Index positions = make_model("cloth", {})->as<SecondOrderView>()->positions;
+  const double pixel = flag_frame_extent / frame_pixels;
+  // the largest node offset from the reference at t_end, in pixels
+  const auto pixels_off = [&](const Eigen::VectorXd& y, const Eigen::VectorXd& reference) {
+    double largest = 0;
+    for (Eigen::Index i = 0; i < positions; i += 3) largest = std::max(largest, (y.segment<3>(i) - reference.segment<3>(i)).norm());
+    return largest / pixel;
+  };
+  const Eigen::VectorXd& reference = measured[0].result.y_stop;
+  EqualCpu out;
+  out.t_end = t_end;
+  // rk4's error at the finer step, estimated from the two (Richardson: the difference over 2^4 - 1)
+  out.reference_pixels = pixels_off(measured[1].result.y_stop, reference) / 15;
+  out.table = {{"model", "method", "curve", "setting", "dt", "cpu_per_simulated_second", "pixels_off", "other_model_pixels_at_equal_cpu", "status"}, {}};
+  for (size_t i = 2; i < runs.size(); ++i) {
+    const RunResult& r = measured[i].result;
+    const bool ok = r.status == Status::ok;
+    out.table.rows.push_back({runs[i].model, runs[i].method, fmt::format("{}, {}", runs[i].model, runs[i].method), fmt::format("dt {:.3g}", runs[i].dt),
+                              runs[i].dt, r.stats.cpu_seconds / t_end, ok ? pixels_off(r.y_stop, reference) : NAN, NAN, std::string(to_string(r.status))});
+  }
+  const auto& columns = out.table.columns;
+  const auto other_column = static_cast<size_t>(std::find(columns.begin(), columns.end(), "other_model_pixels_at_equal_cpu") - columns.begin());
+  for (auto& row : out.table.rows) {
+    if (std::get<std::string>(cell_of(out.table, row, "method")) != "implicit-euler") continue;
+    const std::string other = std::get<std::string>(cell_of(out.table, row, "model")) == "springs" ? "continuum" : "springs";
+    row[other_column] = pixels_at_cpu(out.table, other, std::get<double>(cell_of(out.table, row, "cpu_per_simulated_second")));
+  }
+  return out;
+}
+
+// the flag in motion, in words, its table and its figure
+std::string equal_cpu_text(const EqualCpu& motion, const UniaxialStretch& springs, const Params& flag, std::vector<Figure>& figures) {
+  const Table& t = motion.table;
+  const auto row_of = [&](const std::string& model, const std::string& method, double dt) -> const std::vector<Cell>* {
+    for (const auto& row : t.rows)
+      if (std::get<std::string>(cell_of(t, row, "model")) == model && std::get<std::string>(cell_of(t, row, "method")) == method &&
+          std::abs(std::get<double>(cell_of(t, row, "dt")) / dt - 1) < 1e-9)
+        return &row;
+    return nullptr;
+  };
+  const auto value = [&](const std::vector<Cell>* row, const char* column) { return row ? std::get<double>(cell_of(t, *row, column)) : NAN; };
+  const auto* frame = row_of("springs", "implicit-euler", 1.0 / 60);
+  const auto* converged = row_of("springs", "rk4", 2 * flag_reference_dt);
+  const auto* continuum_frame = row_of("continuum", "implicit-euler", 1.0 / 60);
+  const double floor_px = value(converged, "pixels_off");
+  const double undamped_px = value(row_of("springs-undamped", "rk4", 2 * flag_reference_dt), "pixels_off");
+  const double springs_px = value(frame, "pixels_off"), continuum_px = value(frame, "other_model_pixels_at_equal_cpu");
+  const std::string closer = !(std::isfinite(springs_px) && std::isfinite(continuum_px)) ? "one of the two not measured at that CPU"
+                             : std::abs(springs_px - continuum_px) <= 0.25 * std::max(springs_px, continuum_px)
+                                 ? "about as far off either way"
+                                 : (springs_px < continuum_px ? "the springs the closer" : "the continuum the closer");
+  const std::string verdict =
+      std::min(springs_px, continuum_px) >= 0.8 * floor_px
+          ? "At an animator's step the integrator's error is as large as the model's: the spring mesh's pseudo-physics shows once "
+            "both are converged in time."
+          : continuum_px < springs_px ? "At an animator's step the continuum is the closer for the same CPU: the model's error is the larger."
+                                      : "At an animator's step the springs are the closer for the same CPU.";
+  std::string md = fmt::format(
+      "**In motion, the spring flag converged in time stays {:.0f} pixels from the continuum of its own material ({:.0f} undamped: "
+      "the springs' damping is not the difference); at equal CPU with implicit Euler, the springs at 1/60 s are {:.0f} px off and "
+      "the continuum at the same CPU {:.0f} px: {}.** {} The seeds' gusting flag ({:g} × {:g} nodes, over {:g} s) with springs and with the continuum of the springs' "
+      "measured material (E = {:.3g} Pa, ν = {:.3f}; its bending that of the {:g} mm sheet), each by implicit Euler at steps of "
+      "1/15 s and below, and the springs by rk4 at {:g} s (converged in time), against the continuum's converged run (rk4 at "
+      "{:g} s; its own error, from the run at twice the step, {:.2g} px). An offset is the largest node's at the end, in pixels "
+      "of a {:.0f}-pixel frame {:g} m tall; the other model at equal CPU is interpolated between its steps. The continuum has "
+      "no damping of its own: implicit Euler's damping of its fast membrane vibrations, which rk4 keeps, is most of its offset "
+      "({:.0f} px at 1/60 s, {:.2f} CPU s).\n\n",
+      floor_px, undamped_px, springs_px, continuum_px, closer, verdict, flag.at("rows"), flag.at("columns"), motion.t_end, springs.E,
+      continuum_of(springs).at("nu"), 1e3 * flag.at("thickness"), 2 * flag_reference_dt, flag_reference_dt, motion.reference_pixels,
+      frame_pixels, flag_frame_extent, value(continuum_frame, "pixels_off"), value(continuum_frame, "cpu_per_simulated_second"));
+  FigureSpec spec{.title = fmt::format("The flag over {:g} s against the converged continuum", motion.t_end),
+                  .panels = {{.x_label = "CPU seconds per simulated second",
+                              .y_label = "largest node offset (pixels of 720)",
+                              .log_x = true,
+                              .log_y = true,
+                              .layers = {{.table = "continuum_cloth_equal_cpu",
+                                          .x = "cpu_per_simulated_second",
+                                          .y = "pixels_off",
+                                          .series = "curve",
+                                          .hover = {{"setting", "setting"}}}}}}};
+  md += add_figure(figures, "continuum_cloth_equal_cpu", "", std::move(spec), "The flag, springs and continuum: offset against CPU time");
+  md += markdown_table(t, {{"model", "model"},
+                           {"method", "method"},
+                           {"setting", "step"},
+                           {"cpu_per_simulated_second", "CPU s per simulated s", shown_as("{:.3g}")},
+                           {"pixels_off", "offset (px)", shown_as("{:.3g}")},
+                           {"other_model_pixels_at_equal_cpu", "the other model at this CPU (px)", shown_as("{:.3g}")},
+                           {"status", "status"}});
+  return md + "\n";
 }
 
 StudyOutput continuum_cloth(const StudyContext& ctx) {
@@ -159,9 +310,10 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
     return nan;
   }();
 
+  const Params flag = resolve_params(*find_model("cloth"), {});  // the seeds' flag: the model's defaults
   std::string md = fmt::format(
       "**The spring mesh is an elastic material with Poisson's ratio {:.3f} and Young's modulus {:.3g} Pa** (the flag's "
-      "constants, 200, 100 and 20 N/m, read as a 0.5 mm sheet), measured as the finite elements are, on a strip stretched "
+      "constants, {:g}, {:g} and {:g} N/m, read as a {:g} mm sheet), measured as the finite elements are, on a strip stretched "
       "{:.1f}%; without its diagonal (shear) springs its ratio is {:.3f}. The seed's \"volume preservation\" by the diagonals is "
       "that Poisson's ratio (without them the hanging sheet, which has then no shear stiffness, is a mechanism): but hanging "
       "from its two top corners ({}², in its plane) the sheet does not shrink inside: its width halfway down changes by {:+.2f} mm "
@@ -171,7 +323,8 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
       "sag grows with every refinement, each doubling's growth {:.2f} of the last one's for the finite elements (order {} from "
       "{}², {}², {}²) and {:.2f} for the springs (order {}); at {}² the spring sheet's sag is {:+.1f}% off the continuum of its own material "
       "and its bottom width {:+.2f}%.\n\n",
-      springs->nu, springs->E, 100 * stretch, no_shear_nu, sides_side, 1e3 * widening_of("springs", nan),
+      springs->nu, springs->E, flag.at("stiffness"), flag.at("shear_stiffness"), flag.at("bend_stiffness"), 1e3 * flag.at("thickness"),
+      100 * stretch, no_shear_nu, sides_side, 1e3 * widening_of("springs", nan),
       1e3 * widening_of("continuum", 0.0), 1e3 * widening_of("continuum", 0.3), 1e3 * widening_of("continuum", 0.45),
       growth_ratio("continuum"), shown_order(order("continuum", "sag")), n1, n2, n3, growth_ratio("springs"), shown_order(order("springs", "sag")),
       n3, 100 * gap_sag, 100 * gap_width);
@@ -218,7 +371,12 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
   md += "\n";
   std::vector<Figure> figures;
   md += refinement_figure(figures);
-  return {{{"continuum_cloth_poisson", std::move(poisson)}, {"continuum_cloth_refinement", std::move(refinement)}, {"continuum_cloth_sides", std::move(narrowing)}},
+  EqualCpu motion = equal_cpu_table(ctx, continuum_of(*springs));
+  md += equal_cpu_text(motion, *springs, flag, figures);
+  return {{{"continuum_cloth_poisson", std::move(poisson)},
+           {"continuum_cloth_refinement", std::move(refinement)},
+           {"continuum_cloth_sides", std::move(narrowing)},
+           {"continuum_cloth_equal_cpu", std::move(motion.table)}},
           md, figures};
 }
 

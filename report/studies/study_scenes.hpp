@@ -54,6 +54,8 @@ inline constexpr std::string_view reference_method = "gsl-rk8pd";
 
 // the rendered frame's height in pixels (1280 x 720): half a pixel of it is the animation's error target
 inline constexpr double frame_pixels = 720;
+// the flag (1 m square, billowing out of its plane) is filmed in a 1.5 m frame
+inline constexpr double flag_frame_extent = 1.5;
 inline constexpr double verification_target = 1e-8;
 
 inline std::vector<StudyScene> ode_scenes() {
