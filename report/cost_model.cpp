@@ -12,7 +12,9 @@
 namespace stepwise {
 
 bool solves_newton_systems(const Method& method) {
-  return method.dense != DenseMatrices::none || method.needs.type == needs_mass_spring.type || method.needs.type == needs_imex_split.type;
+  // (fast-mass-spring, which needs a spring network, solves its prefactored system ten times a step)
+  return method.dense != DenseMatrices::none || method.needs.type == needs_mass_spring.type || method.needs.type == needs_spring_network.type ||
+         method.needs.type == needs_imex_split.type;
 }
 
 double expected_run_ns(const Method& method, const StepControl& control, double t_end, double time_scale, double n) {

@@ -7,7 +7,7 @@
 
 namespace stepwise {
 
-// whether the method solves Newton systems a step (dense matrices, a mass-spring system's, an IMEX split's)
+// whether the method solves linear systems a step (dense matrices, a mass-spring system's, a spring network's prefactored one, an IMEX split's)
 bool solves_newton_systems(const Method& method);
 
 // nanoseconds of one run of `method` with `control` over t_end on a state of n entries: steps (t_end / dt,

@@ -85,7 +85,8 @@ std::string run_study(const Study& study, const StudyContext& ctx, const fs::pat
 // provenance.json into dir: what ran, where, when, and how the ranks shared the sweeps
 void write_provenance(const fs::path& dir, std::string command, const StudyContext& ctx, std::chrono::system_clock::time_point start) {
   write_file_atomic(dir / "provenance.json",
-                    provenance_json({std::move(command), ctx.threads, start, std::chrono::system_clock::now(), ctx.load ? ctx.load->seconds : std::vector<double>{}}));
+                    provenance_json({std::move(command), ctx.threads, start, std::chrono::system_clock::now(), ctx.load ? ctx.load->seconds : std::vector<double>{},
+                                     ctx.progress ? ctx.progress->slowness() : 0}));
 }
 
 // Under mpirun every rank runs the command and the sweeps' points are shared among them (report/sweep.hpp);

@@ -29,6 +29,7 @@ class Progress {
   // this machine's slowness against the cost model's (report/cost_model.hpp machine_slowness): the seconds a
   // unit of expected cost takes in a group with no point done scale by it
   void set_slowness(double slowness) { slowness_ = slowness; }
+  double slowness() const { return slowness_; }
 
  private:
   void draw(const std::string& label);

@@ -75,6 +75,7 @@ std::string provenance_json(const Provenance& p) {
       {"mpi", ranks::library_version()},
   };
   j["machine"] = {{"host", host()}, {"cpu", cpu_model()}, {"cores", std::max(1u, std::thread::hardware_concurrency())}};
+  if (p.slowness > 0) j["machine"]["slowness"] = p.slowness;
   j["start"] = utc(p.start);
   j["end"] = utc(p.end);
   j["seconds"] = std::chrono::duration<double>(p.end - p.start).count();

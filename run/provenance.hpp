@@ -14,6 +14,7 @@ struct Provenance {
   int threads = 1;                                   // threads per rank
   std::chrono::system_clock::time_point start, end;
   std::vector<double> rank_seconds;                  // each rank's busy seconds in the sweeps
+  double slowness = 0;  // the machine's time for a fixed rk4 run over the reference machine's (report/cost_model.hpp; 0: not measured)
 };
 
 // the JSON text (2-space indented)
