@@ -27,13 +27,13 @@ int list_methods(bool json) {
   if (json) {
     nlohmann::json j = nlohmann::json::array();
     for (const auto& m : stepwise::methods())
-      j.push_back({{"name", m.name}, {"kind", m.description}, {"order", m.order.text}, {"source", m.source}, {"family", m.family},
+      j.push_back({{"name", m.name}, {"kind", m.description}, {"order", m.order.text}, {"source", to_string(m.source)}, {"family", to_string(m.family)},
                    {"fixed_step", m.fixed_step()}, {"adaptive", m.adaptive()}});
     std::cout << j.dump(2) << '\n';
     return 0;
   }
   fmt::print("{:<18} {:<8} {:<16} {}\n", "name", "order", "source", "kind");
-  for (const auto& m : stepwise::methods()) fmt::print("{:<18} {:<8} {:<16} {}\n", m.name, m.order.text, m.source, m.description);
+  for (const auto& m : stepwise::methods()) fmt::print("{:<18} {:<8} {:<16} {}\n", m.name, m.order.text, to_string(m.source), m.description);
   return 0;
 }
 

@@ -42,7 +42,7 @@ int main() {
     double cheapest = INFINITY, advised_full = INFINITY;
     std::string cheapest_name;
     for (const auto& method : methods()) {
-      if (method.family == "gpu" || !in_sweep(method, *model, true)) continue;
+      if (method.family == Family::gpu || !in_sweep(method, *model, true)) continue;
       for (const AdvisePoint& p : full_sweep(scene, method, target, reference ? &*reference : nullptr, 5)) {
         if (!p.error || *p.error > target) continue;
         if (p.cpu_seconds < cheapest) cheapest = p.cpu_seconds, cheapest_name = fmt::format("{} {}", p.method, p.setting());

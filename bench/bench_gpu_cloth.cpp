@@ -1,8 +1,9 @@
 // The explicit cloth (issue 9): one symplectic Euler step of the seeds' flag (the cloth model's defaults:
 // four corners pinned, the gusting wind through its normals, twelve springs a node) at N x N nodes, N = 128, 256,
 // 1024, 2048, from the flat start. In one run:
-//  - gpu-cloth's fragment pass on the GL's device (llvmpipe here, its threads LP_NUM_THREADS, by default one
-//    per core; a GPU through EGL with STEPWISE_GPU_BACKEND=egl), in float32, finished before the clock stops;
+//  - gpu-cloth's fragment pass and gpu-cloth-compute's compute pass on the GL's device (llvmpipe here, its
+//    threads LP_NUM_THREADS, by default one per core; a GPU through EGL with STEPWISE_GPU_BACKEND=egl), in
+//    float32, finished before the clock stops (4096 a side too, for a device);
 //  - the same step on one CPU core, node by node (solvers/cloth_grid.hpp), in float64 (the CPU solver) and
 //    in float32 (the shader's reference).
 // The model itself stops at 1024 a side (its sparse Jacobians' pattern), so the view is built here from the
@@ -86,10 +87,12 @@ void BM_gpu_cloth_transfer(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(view.start.size()));
 }
 
+// one step as a pass: range(1) 0 the fragment pass (gpu-cloth), 1 the compute pass (gpu-cloth-compute)
 void BM_gpu_cloth(benchmark::State& state) {
   static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
   const auto& view = flag_view(static_cast<int>(state.range(0)));
-  stepwise::gpu::GpuCloth gpu(*context, view);
+  const auto pass = state.range(1) == 0 ? stepwise::gpu::Pass::fragment : stepwise::gpu::Pass::compute;
+  stepwise::gpu::GpuCloth gpu(*context, view, pass);
   gpu.upload(stepwise::cloth_grid::spread<float>(view, flat_start(view)));
   gpu.set_constants(stepwise::cloth_grid::constants<float>(view, 0, h));
   for (auto _ : state) {
@@ -97,13 +100,13 @@ void BM_gpu_cloth(benchmark::State& state) {
     gpu.finish();
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(view.start.size()));
-  state.SetLabel(context->description());
+  state.SetLabel(fmt::format("{}, {}", pass == stepwise::gpu::Pass::fragment ? "fragment" : "compute", context->description()));
 }
 
 #define SIZES ->Arg(128)->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime()
 BENCHMARK(BM_cloth_grid_cpu<double>) SIZES;
 BENCHMARK(BM_cloth_grid_cpu<float>) SIZES;
-BENCHMARK(BM_gpu_cloth) SIZES;
+BENCHMARK(BM_gpu_cloth)->ArgsProduct({{128, 256, 1024, 2048, 4096}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_cloth_transfer)->ArgsProduct({{128, 256, 1024}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

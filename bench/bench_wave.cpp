@@ -20,6 +20,8 @@
 
 #include <fmt/format.h>
 
+#include <array>
+
 namespace {
 
 constexpr double bytes_per_cell = 24;
@@ -63,20 +65,42 @@ void BM_wave_blocked(benchmark::State& state) {
   count_cells(state, n);
 }
 
-// the same steps as fragment passes on the GL's device (llvmpipe here, its threads LP_NUM_THREADS, by
-// default one per core; a GPU through EGL with STEPWISE_GPU_BACKEND=egl, as the methods), in float32,
-// finished before the clock stops
+// the same steps as passes on the GL's device (llvmpipe here, its threads LP_NUM_THREADS, by default one per
+// core; a GPU through EGL with STEPWISE_GPU_BACKEND=egl, as the methods), in float32, finished before the clock
+// stops: range(1) 0 the fragment pass (gpu-wave), 1 the compute pass with its shared tile (gpu-wave-compute),
+// 2 the compute pass reading every z from the buffer
 void BM_gpu_wave(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
   Grids g(n);
-  stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k));
+  const auto pass = state.range(1) == 0 ? stepwise::gpu::Pass::fragment : stepwise::gpu::Pass::compute;
+  stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k), pass, state.range(1) != 2);
   gpu.upload(g.z_prev.cast<float>(), g.z.cast<float>());
   for (auto _ : state) {
     gpu.step(steps);
     gpu.finish();
   }
   count_cells(state, n);
+  state.SetLabel(fmt::format("{}, {}", std::array{"fragment", "compute, tiled", "compute, untiled"}[static_cast<size_t>(state.range(1))], context->description()));
+}
+
+// the bound a pass's memory traffic has: a device-to-device copy of a grid's plane (n^2 vec4s) between two
+// storage buffers, its bytes read and written counted (a pass reads one plane and writes one)
+void BM_gpu_copy(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
+  context->make_current();
+  const stepwise::gl::Gl& gl = context->gl();
+  const auto bytes = static_cast<GLsizeiptr>(16) * n * n;
+  GLuint buffers[2] = {0, 0};
+  gl.CreateBuffers(2, buffers);
+  for (const GLuint b : buffers) gl.NamedBufferStorage(b, bytes, nullptr, 0);
+  for (auto _ : state) {
+    gl.CopyNamedBufferSubData(buffers[0], buffers[1], 0, 0, bytes);
+    gl.Finish();
+  }
+  gl.DeleteBuffers(2, buffers);
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * 2 * static_cast<int64_t>(bytes));
   state.SetLabel(context->description());
 }
 
@@ -113,7 +137,11 @@ void grids(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_wave_step)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_wave_blocked)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_wave_step)->Args({2048, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_gpu_wave)->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_gpu_wave)->ArgsProduct({{256, 1024, 2048}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_gpu_copy)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+// the device's sizes (scripts/device-check part 4): the passes at 4096^2 and 8192^2, and their copy bound
+BENCHMARK(BM_gpu_wave)->ArgsProduct({{4096, 8192}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_gpu_copy)->Arg(4096)->Arg(8192)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_wave_transfer)->ArgsProduct({{1024, 2048}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_triad)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();
 

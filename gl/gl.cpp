@@ -42,17 +42,15 @@ GLuint compile(const Gl& gl, GLenum stage, const char* source, const std::string
   if (!ok) {
     const std::string log = info_log(gl.GetShaderiv, gl.GetShaderInfoLog, shader);
     gl.DeleteShader(shader);
-    throw GlError(fmt::format("glCompileShader ({} shader of {}): {}", stage == GL_VERTEX_SHADER ? "vertex" : stage == GL_GEOMETRY_SHADER ? "geometry" : "fragment", name, log));
+    const char* kind = stage == GL_VERTEX_SHADER ? "vertex" : stage == GL_GEOMETRY_SHADER ? "geometry" : stage == GL_COMPUTE_SHADER ? "compute" : "fragment";
+    throw GlError(fmt::format("glCompileShader ({} shader of {}): {}", kind, name, log));
   }
   return shader;
 }
 
-}  // namespace
-
-GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, const char* fragment, const std::string& name) {
+// the program of `shaders`, which it deletes; GlError with the log
+GLuint link(const Gl& gl, const std::vector<GLuint>& shaders, const std::string& name) {
   const GLuint program = gl.CreateProgram();
-  std::vector<GLuint> shaders{compile(gl, GL_VERTEX_SHADER, vertex, name), compile(gl, GL_FRAGMENT_SHADER, fragment, name)};
-  if (geometry && *geometry) shaders.push_back(compile(gl, GL_GEOMETRY_SHADER, geometry, name));
   for (const GLuint s : shaders) gl.AttachShader(program, s);
   gl.LinkProgram(program);
   for (const GLuint s : shaders) gl.DeleteShader(s);
@@ -64,6 +62,31 @@ GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, cons
     throw GlError(fmt::format("glLinkProgram ({}): {}", name, log));
   }
   return program;
+}
+
+}  // namespace
+
+GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, const char* fragment, const std::string& name) {
+  std::vector<GLuint> shaders{compile(gl, GL_VERTEX_SHADER, vertex, name), compile(gl, GL_FRAGMENT_SHADER, fragment, name)};
+  if (geometry && *geometry) shaders.push_back(compile(gl, GL_GEOMETRY_SHADER, geometry, name));
+  return link(gl, shaders, name);
+}
+
+GLuint link_compute_program(const Gl& gl, const char* compute, const std::string& name) {
+  return link(gl, {compile(gl, GL_COMPUTE_SHADER, compute, name)}, name);
+}
+
+std::string compute_problem(int major, int minor, const std::string& version) {
+  if (major > 4 || (major == 4 && minor >= 3)) return {};
+  return fmt::format("compute shaders need OpenGL 4.3; this GL is {}.{} ({})", major, minor, version);
+}
+
+std::string compute_problem(const Gl& gl) {
+  GLint major = 0, minor = 0;
+  gl.GetIntegerv(GL_MAJOR_VERSION, &major);
+  gl.GetIntegerv(GL_MINOR_VERSION, &minor);
+  const auto* text = reinterpret_cast<const char*>(gl.GetString(GL_VERSION));
+  return compute_problem(major, minor, text ? text : "no GL_VERSION");
 }
 
 GLuint make_texture(const Gl& gl, GLenum format, int width, int height, GLenum wrap) {

@@ -76,7 +76,15 @@ namespace stepwise::gl {
   X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                                                          \
   X(PFNGLNAMEDFRAMEBUFFERDRAWBUFFERSPROC, NamedFramebufferDrawBuffers)                                  \
   X(PFNGLCLEARNAMEDFRAMEBUFFERFVPROC, ClearNamedFramebufferfv)                                          \
-  X(PFNGLCLEARNAMEDFRAMEBUFFERFIPROC, ClearNamedFramebufferfi)
+  X(PFNGLCLEARNAMEDFRAMEBUFFERFIPROC, ClearNamedFramebufferfi)                                          \
+  X(PFNGLGETINTEGER64VPROC, GetInteger64v)                                                              \
+  X(PFNGLNAMEDBUFFERSTORAGEPROC, NamedBufferStorage)                                                    \
+  X(PFNGLNAMEDBUFFERSUBDATAPROC, NamedBufferSubData)                                                    \
+  X(PFNGLGETNAMEDBUFFERSUBDATAPROC, GetNamedBufferSubData)                                              \
+  X(PFNGLCOPYNAMEDBUFFERSUBDATAPROC, CopyNamedBufferSubData)                                            \
+  X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                                                            \
+  X(PFNGLDISPATCHCOMPUTEPROC, DispatchCompute)                                                          \
+  X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)
 
 // the functions, each named as in GL without its gl prefix (gl.DrawArrays)
 struct Gl {
@@ -99,6 +107,14 @@ void check_gl(const Gl& gl, const std::string& what);
 
 // a compiled and linked program from GLSL 4.50 sources (geometry may be empty); GlError with the log
 GLuint link_program(const Gl& gl, const char* vertex, const char* geometry, const char* fragment, const std::string& name);
+
+// a compiled and linked compute program from a GLSL 4.50 source; GlError with the log
+GLuint link_compute_program(const Gl& gl, const char* compute, const std::string& name);
+
+// "" or why `gl`'s context has no compute shaders (OpenGL before 4.3), the version it has named
+std::string compute_problem(const Gl& gl);
+// the same from a version's numbers and text (GL_MAJOR_VERSION, GL_MINOR_VERSION, GL_VERSION)
+std::string compute_problem(int major, int minor, const std::string& version);
 
 // a 2D texture of width x height in `format` (one level), linearly filtered, wrapping as `wrap`
 // (GL_CLAMP_TO_EDGE, GL_REPEAT) in both directions

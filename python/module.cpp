@@ -580,8 +580,8 @@ py::list method_list() {
   for (const Method& m : methods()) {
     py::dict d;
     d["name"] = std::string(m.name);
-    d["family"] = std::string(m.family);
-    d["source"] = std::string(m.source);
+    d["family"] = std::string(to_string(m.family));
+    d["source"] = std::string(to_string(m.source));
     d["description"] = std::string(m.description);
     d["order"] = std::string(m.order.text);
     d["order_min"] = m.order.min;

@@ -21,6 +21,18 @@
 
 namespace stepwise {
 
+std::string_view to_string(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::advised: return "advised";
+    case Verdict::runner_up: return "runner-up";
+    case Verdict::meets: return "meets";
+    case Verdict::too_costly: return "too costly";
+    case Verdict::unstable: return "unstable";
+    case Verdict::failed: return "failed";
+  }
+  return "unknown";
+}
+
 std::string AdvisePoint::setting() const { return dt ? fmt::format("dt {:.4g}", *dt) : fmt::format("rtol {:.3g}", rtol); }
 
 namespace {
@@ -212,7 +224,7 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
   // the candidates: every method that applies (the GPU's need a device and a grid; dense matrices within the studies' budget)
   std::vector<const Method*> candidates;
   for (const auto& method : methods())
-    if (method.family != "gpu" && in_sweep(method, *model, true)) candidates.push_back(&method);
+    if (method.family != Family::gpu && in_sweep(method, *model, true)) candidates.push_back(&method);
   const double elapsed_before = std::chrono::duration<double>(Clock::now() - start).count();
   const double sweep_seconds = std::max(0.0, budget_seconds * sweep_share - elapsed_before);
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(sweep_seconds));
@@ -257,13 +269,13 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
     const Method& method = *candidates[i];
     const auto& pts = sweeps[i];
     advice.points.insert(advice.points.end(), pts.begin(), pts.end());
-    Candidate c{std::string(method.name), "", "", std::nullopt, predicted_stable_dt(method, spectrum), searched[i]};
+    Candidate c{std::string(method.name), Verdict::failed, "", std::nullopt, predicted_stable_dt(method, spectrum), searched[i]};
     for (const auto& p : pts)
       if (p.error && *p.error <= target && (!c.cheapest || p.cpu_seconds < c.cheapest->cpu_seconds)) c.cheapest = p;
     if (c.cheapest) {
-      c.status = "meets";
+      c.status = Verdict::meets;
     } else if (pts.empty()) {
-      c.status = "too costly";
+      c.status = Verdict::too_costly;
       c.reason = "not swept: the budget ran out first (the methods expected cheapest are swept first)";
     } else {
       const auto diverged = std::count_if(pts.begin(), pts.end(), [](const AdvisePoint& p) { return p.status == Status::diverged; });
@@ -276,14 +288,14 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
                                                    advice.fastest_decay, *c.predicted_stable_dt)
                                      : "";
       if (diverged > 0 && (!best || diverged * 2 >= static_cast<long>(pts.size()) || pts.front().status == Status::diverged)) {
-        c.status = "unstable";
+        c.status = Verdict::unstable;
         c.reason = fmt::format("diverged at the cheap steps ({} of its {} settings{}){}", diverged, pts.size(),
                                best ? fmt::format("; its best error {:.2e} cost {}", *best->error, fmt_seconds(best->cpu_seconds)) : "", stable);
       } else if (failed != pts.end() && !best) {
-        c.status = "failed";
+        c.status = Verdict::failed;
         c.reason = fmt::format("{} ({})", failed->message, failed->setting());
       } else {
-        c.status = "too costly";
+        c.status = Verdict::too_costly;
         c.reason = best ? fmt::format("its best error {:.2e} (at {}) cost {} and the next setting would pass its share of the budget{}", *best->error,
                                       best->setting(), fmt_seconds(best->cpu_seconds), stable)
                         : fmt::format("no setting finished within its share of the budget{}", stable);
@@ -297,11 +309,11 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
   });
   if (!advice.candidates.empty() && advice.candidates[0].cheapest) {
     Candidate& best = advice.candidates[0];
-    best.status = "advised";
+    best.status = Verdict::advised;
     for (size_t k = 1; k < advice.candidates.size(); ++k) {
       Candidate& c = advice.candidates[k];
       if (!c.cheapest) break;
-      c.status = k == 1 ? "runner-up" : "meets";
+      c.status = k == 1 ? Verdict::runner_up : Verdict::meets;
       c.reason = fmt::format("{:.2f} times the advised method's CPU time ({} against {})", c.cheapest->cpu_seconds / best.cheapest->cpu_seconds,
                              fmt_seconds(c.cheapest->cpu_seconds), fmt_seconds(best.cheapest->cpu_seconds));
     }
@@ -391,7 +403,7 @@ AdviceTables advice_tables(const std::vector<Advice>& advices) {
                  {{"scene", "method", "verdict", "setting", "error", "cpu_seconds", "predicted_stable_dt", "searched_stable_dt", "reason"}, {}}};
   for (const Advice& a : advices) {
     for (const auto& c : a.candidates)
-      t.candidates.rows.push_back({a.scene, c.method, c.status, c.cheapest ? c.cheapest->setting() : std::string(), c.cheapest ? *c.cheapest->error : NAN,
+      t.candidates.rows.push_back({a.scene, c.method, std::string(to_string(c.status)), c.cheapest ? c.cheapest->setting() : std::string(), c.cheapest ? *c.cheapest->error : NAN,
                                    c.cheapest ? c.cheapest->cpu_seconds : NAN, c.predicted_stable_dt.value_or(NAN), c.searched_stable_dt.value_or(NAN),
                                    c.reason});
     for (const auto& p : a.points)
@@ -437,7 +449,7 @@ std::string advice_json_text(const Advice& a, const std::string& scene_file) {
   j["reproduced"] = a.reproduced ? point_json(*a.reproduced) : nlohmann::json(nullptr);
   j["candidates"] = nlohmann::json::array();
   for (const auto& c : a.candidates) {
-    nlohmann::json e{{"method", c.method}, {"status", c.status}, {"reason", c.reason}};
+    nlohmann::json e{{"method", c.method}, {"status", to_string(c.status)}, {"reason", c.reason}};
     if (c.cheapest) e["cheapest"] = point_json(*c.cheapest);
     e["predicted_stable_dt"] = c.predicted_stable_dt && std::isfinite(*c.predicted_stable_dt) ? nlohmann::json(*c.predicted_stable_dt) : nlohmann::json(nullptr);
     e["searched_stable_dt"] = c.searched_stable_dt ? nlohmann::json(*c.searched_stable_dt) : nlohmann::json(nullptr);

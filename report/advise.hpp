@@ -31,10 +31,15 @@ struct AdvisePoint {
   std::string setting() const;  // "dt 0.001" or "rtol 1e-06"
 };
 
+// a method's verdict: the cheapest to meet the error, the next, one that meets it at a higher cost, one that
+// meets it only past the budget or not within its sweep, one that diverged, one whose runs failed
+enum class Verdict { advised, runner_up, meets, too_costly, unstable, failed };
+std::string_view to_string(Verdict verdict);  // "advised", "runner-up", "meets", "too costly", "unstable", "failed"
+
 // one method's verdict
 struct Candidate {
   std::string method;
-  std::string status;  // "advised", "runner-up", "meets", "too costly", "unstable", "failed"
+  Verdict status = Verdict::failed;
   std::string reason;  // why it lost, in words (empty for the advised method)
   std::optional<AdvisePoint> cheapest;   // its cheapest point meeting E
   std::optional<double> predicted_stable_dt;  // from the spectrum and its stability function, where it has one

@@ -21,12 +21,12 @@ double expected_run_ns(const Method& method, const StepControl& control, double 
   const double order = std::max(1, method.order.max);
   const double steps = control.dt ? t_end / *control.dt : 10 * t_end / time_scale * std::pow(control.rtol, -1 / (order + 1));
   const bool implicit = solves_newton_systems(method);
-  const bool gpu = method.family == "gpu";
+  const bool gpu = method.family == Family::gpu;
   const double stages = std::min(order, 8.0);
   // a step's fixed part by whose code steps: a library's Newton iterations ~600 ns a stage (SUNDIALS' DIRK
   // and BDF, GSL's implicit steppers, on the pendulum), else SUNDIALS' ~250 ns, GSL's ~100 ns, a hand-written or
   // Boost.Odeint loop's ~10 ns (the convergence sweep's runs, measured)
-  const bool sundials = method.family == "cvode" || method.family == "arkode", gsl = method.family == "gsl";
+  const bool sundials = method.family == Family::cvode || method.family == Family::arkode, gsl = method.family == Family::gsl;
   const double fixed = implicit && (sundials || gsl) ? 600 * stages : sundials ? 250 : gsl ? 100 : 10;
   return steps * (fixed + 10 * n * stages * (implicit ? 5 : 1) + (gpu ? 1e4 : 0));
 }

@@ -120,9 +120,9 @@ void draw_figures(const std::vector<Figure>& figures, const fs::path& dir, int j
   // code steps, and ARKODE's methods by kind (IMEX: needs the model's split; DIRK: keeps Newton matrices)
   Table method_table{{"name", "order", "source", "kind", "group"}, {}};
   for (const auto& m : methods()) {
-    const std::string group = m.family != "arkode" ? std::string(m.source)
+    const std::string group = m.family != Family::arkode ? std::string(to_string(m.source))
                               : m.needs.type ? "ARKODE IMEX" : m.dense != DenseMatrices::none ? "ARKODE DIRK" : "ARKODE ERK";
-    method_table.rows.push_back({std::string(m.name), std::string(m.order.text), std::string(m.source), std::string(m.description), group});
+    method_table.rows.push_back({std::string(m.name), std::string(m.order.text), std::string(to_string(m.source)), std::string(m.description), group});
   }
   write_file_atomic(dir / "methods.csv", to_csv(method_table));
   const std::string python = STEPWISE_PYTHON, script = fs::path(STEPWISE_REPORT_DIR) / "plot.py", where = dir.string();

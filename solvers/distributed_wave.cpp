@@ -352,8 +352,8 @@ void block_rhs(DistributedWave& grid, const WaveGridView& view, const double* y,
 RunResult wave_fd_distributed(DistributedWave& grid, const WaveGridView& view, const WaveBlocksView& blocks, const StepControl& control,
                               std::span<const double> t_out) {
   static const Method method{.name = "wave-fd",
-                             .family = "wave-fd",
-                             .source = "hand-written",
+                             .family = Family::wave_fd,
+                             .source = Source::hand_written,
                              .description = "the seeds' three-level scheme on a rank's block of the grid",
                              .stepping = Stepping::fixed};
   const BlockSystem system(grid, view, blocks);

@@ -11,6 +11,43 @@
 
 namespace stepwise {
 
+std::string_view to_string(Family family) {
+  switch (family) {
+    case Family::euler: return "euler";
+    case Family::symplectic_euler: return "symplectic-euler";
+    case Family::rk4: return "rk4";
+    case Family::embedded_pairs: return "embedded-pairs";
+    case Family::odeint: return "odeint";
+    case Family::gsl: return "gsl";
+    case Family::cvode: return "cvode";
+    case Family::arkode: return "arkode";
+    case Family::rosenbrock: return "rosenbrock";
+    case Family::implicit_euler: return "implicit-euler";
+    case Family::fast_mass_spring: return "fast-mass-spring";
+    case Family::position_based: return "position-based";
+    case Family::constrained: return "constrained";
+    case Family::rigid_splitting: return "rigid-splitting";
+    case Family::sequential_impulses: return "sequential-impulses";
+    case Family::wave_fd: return "wave-fd";
+    case Family::stable_fluids: return "stable-fluids";
+    case Family::gpu: return "gpu";
+  }
+  return "unknown";
+}
+
+std::string_view to_string(Source source) {
+  switch (source) {
+    case Source::hand_written: return "hand-written";
+    case Source::gsl: return "GSL odeiv2";
+    case Source::cvode: return "SUNDIALS CVODE";
+    case Source::arkode: return "SUNDIALS ARKODE";
+    case Source::ida: return "SUNDIALS IDA";
+    case Source::odeint: return "Boost.Odeint";
+    case Source::opengl_shader: return "OpenGL shader";
+  }
+  return "unknown";
+}
+
 void MethodTable::add(Method method) {
   if (find(method.name)) throw std::logic_error(fmt::format("method '{}' registered twice", method.name));
   methods_.push_back(std::move(method));

@@ -17,6 +17,18 @@
 
 namespace stepwise {
 
+// the family file that registers a method (solvers/methods/*.cpp, solvers/gpu/); named in methods.csv and
+// `stepwise methods --json` as to_string spells it
+enum class Family {
+  euler, symplectic_euler, rk4, embedded_pairs, odeint, gsl, cvode, arkode, rosenbrock, implicit_euler, fast_mass_spring,
+  position_based, constrained, rigid_splitting, sequential_impulses, wave_fd, stable_fluids, gpu
+};
+std::string_view to_string(Family family);  // "euler", "symplectic-euler", ..., "gpu"
+
+// whose code steps a method
+enum class Source { hand_written, gsl, cvode, arkode, ida, odeint, opengl_shader };
+std::string_view to_string(Source source);  // "hand-written", "GSL odeiv2", "SUNDIALS CVODE", ..., "OpenGL shader"
+
 // how a method can be stepped
 enum class Stepping { fixed, adaptive, fixed_or_adaptive };
 
@@ -58,8 +70,8 @@ using MakeIntegrator = std::function<std::unique_ptr<Integrator>(const Method& m
 
 struct Method {
   std::string_view name;         // as DESIGN.md's table spells it, everywhere: CLI, CSV, plots
-  std::string_view family;       // the family file that registers it ("rk4", "gsl", "cvode", "gpu")
-  std::string_view source;       // whose code steps: "hand-written", "GSL odeiv2", "SUNDIALS CVODE", "OpenGL shader"
+  Family family;
+  Source source;
   std::string_view description;  // one line: what it is
   Order order;
   Stepping stepping = Stepping::fixed;
@@ -72,6 +84,10 @@ struct Method {
   // "" or why this system cannot be run on the method's device (a GPU method's grid past the largest texture),
   // asked before a run starts; empty for a method with no device of its own
   std::function<std::string(const OdeSystem& system)> device_problem;
+  // the method whose numbers this one computes to the bit by other means (a compute pass beside its fragment
+  // twin: the tests hold them equal): left out of the report's sweeps, which would only repeat the twin's
+  // points, and timed beside it in the benches; empty for most
+  std::string_view twin;
 
   bool fixed_step() const { return stepping != Stepping::adaptive; }
   bool adaptive() const { return stepping != Stepping::fixed; }

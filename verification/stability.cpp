@@ -99,7 +99,7 @@ class ComplexScalar final : public OdeSystem {
 }  // namespace
 
 std::optional<std::function<std::complex<double>(std::complex<double>)>> measured_stability_function(const Method& method) {
-  if (!method.fixed_step() || method.needs.type || method.order.min != method.order.max || method.family == "gpu") return std::nullopt;
+  if (!method.fixed_step() || method.needs.type || method.order.min != method.order.max || method.family == Family::gpu) return std::nullopt;
   const Method* m = &method;
   return [m](std::complex<double> z) {
     const ComplexScalar system(z);

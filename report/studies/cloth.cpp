@@ -45,7 +45,7 @@ StudyOutput cloth(const StudyContext& ctx) {
   // the methods whose limit on a mass-spring mode is derived (the method table's oscillator_dt): the explicit ones,
   // on the CPU (gpu-cloth runs symplectic Euler's scheme in float32)
   const std::vector<std::string> explicit_methods =
-      method_names_where([](const Method& m) { return m.source == "hand-written" && static_cast<bool>(m.stability.oscillator_dt); });
+      method_names_where([](const Method& m) { return m.source == Source::hand_written && static_cast<bool>(m.stability.oscillator_dt); });
   std::vector<std::string> labels;
   for (const double c : stiffnesses) {
     for (const auto& method : explicit_methods) labels.push_back(fmt::format("c {:g} {}", c, method));

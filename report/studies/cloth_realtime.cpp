@@ -98,9 +98,9 @@ StudyOutput cloth_realtime(const StudyContext& ctx) {
     // by the method table's attributes: an explicit fixed-step method (one with a derived mode limit) takes as
     // many stages as its order, up to rk4's four
     const Method& m = *find_method(p.method);
-    costs.push_back(m.family == "arkode"                ? 4e10
+    costs.push_back(m.family == Family::arkode                ? 4e10
                     : !p.control.dt                     ? 2e9
-                    : m.source == "OpenGL shader"       ? steps * 2.5e5
+                    : m.source == Source::opengl_shader       ? steps * 2.5e5
                     : m.substepped                      ? steps * p.control.substeps * p.control.iterations * 25 * n
                     : m.stability.oscillator_dt         ? steps * 25 * n * m.order.min
                                                         : steps * 5e6);

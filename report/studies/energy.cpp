@@ -57,7 +57,7 @@ StudyOutput energy(const StudyContext& ctx) {
   // the hand-written fixed-step methods whose stability is known in closed form (an R(z) or a mass-spring mode's
   // limit): explicit, symplectic and implicit Euler and rk4, each that applies to the model
   for (const std::string& method : method_names_where([&](const Method& m) {
-         return m.source == "hand-written" && m.stepping == Stepping::fixed && (m.stability.R || m.stability.oscillator_dt) && method_applies(m, *model);
+         return m.source == Source::hand_written && m.stepping == Stepping::fixed && (m.stability.R || m.stability.oscillator_dt) && method_applies(m, *model);
        })) {
     StepControl control;
     control.dt = dt;

@@ -123,7 +123,7 @@ StudyOutput event_times(const StudyContext& ctx) {
       StepControl control = StepControl::adaptive(rtol, rtol * 1e-3);
       control.event_location = EventLocation::restep;
       // CVODE locates events by its own root finding (the family's), the others by restepping
-      record(method, find_method(method)->family == "cvode" ? "rootfinding" : "restep", std::nullopt, rtol, control);
+      record(method, find_method(method)->family == Family::cvode ? "rootfinding" : "restep", std::nullopt, rtol, control);
     }
   const auto setting = [&](const std::vector<Cell>& row) {
     const Cell& dt = cell_of(table, row, "dt");

@@ -119,10 +119,12 @@ inline constexpr std::string_view dense_note =
     "implicit-euler on CHOLMOD and fast-mass-spring join cvode-bdf there.\n\n";
 
 // the constrained methods (xpbd, rattle, ida: a cloth's springs are compliant constraints too) are measured in the
-// constraints study, at their own settings (substeps and iterations), not in these sweeps of steps and tolerances
+// constraints study, at their own settings (substeps and iterations), not in these sweeps of steps and tolerances;
+// a method with a twin (a GPU compute pass) gives its twin's numbers, measured once
 inline bool in_sweep(const Method& method, const Model& model, bool dense) {
   const double bytes = dense_matrix_bytes(method, model);
-  return method_applies(method, model) && bytes <= dense_matrix_budget && (dense || bytes == 0) && method.needs.type != &typeid(DistanceConstraints);
+  return method_applies(method, model) && bytes <= dense_matrix_budget && (dense || bytes == 0) && method.needs.type != &typeid(DistanceConstraints) &&
+         method.twin.empty();
 }
 
 // the methods of a scene's sweeps, fixed-step ones only if asked

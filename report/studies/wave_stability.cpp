@@ -47,7 +47,7 @@ StudyOutput wave_stability_limits(const StudyContext& ctx) {
   // the methods whose limit on a height field is derived (the method table's wave_dt), on the CPU (the GPU's
   // passes run the same schemes in float32)
   for (const std::string& method :
-       method_names_where([](const Method& m) { return m.source == "hand-written" && static_cast<bool>(m.stability.wave_dt); }))
+       method_names_where([](const Method& m) { return m.source == Source::hand_written && static_cast<bool>(m.stability.wave_dt); }))
     for (const auto& [c, d] : {std::pair{1.0, 0.02}, {2.0, 0.05}})
       for (const double mu : mus) {
         plan.push_back({method, c, d, mu});

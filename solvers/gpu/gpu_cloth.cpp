@@ -16,11 +16,46 @@ namespace {
 
 // cloth_grid.hpp's step in GLSL: the same operations in the same order, every one `precise`. Texel (x, y)
 // is node (row y, column x); the tables are cloth_grid.hpp's with (row, column) offsets written (x, y)
-const char* const cloth_pass = R"(#version 450
+// how a pass reaches the grid: its size, a node's position (w = 1 where pinned) and velocity, and its outputs
+const char* const fragment_access = R"(#version 450
 layout(binding = 0) uniform sampler2D positions;
 layout(binding = 1) uniform sampler2D velocities;
 layout(location = 0) out vec4 x_next;
 layout(location = 1) out vec4 v_next;
+ivec2 grid_size() { return textureSize(positions, 0); }
+vec4 position_at(ivec2 q) { return texelFetch(positions, q, 0); }
+vec3 v_at(ivec2 q) { return texelFetch(velocities, q, 0).xyz; }
+)";
+
+const char* const compute_access = R"(
+layout(std430, binding = 0) readonly buffer Positions { vec4 positions[]; };
+layout(std430, binding = 1) readonly buffer Velocities { vec4 velocities[]; };
+layout(std430, binding = 4) writeonly buffer NextPositions { vec4 x_next[]; };
+layout(std430, binding = 5) writeonly buffer NextVelocities { vec4 v_next[]; };
+vec4 position_at(ivec2 q) { return positions[q.y * size.x + q.x]; }
+vec3 v_at(ivec2 q) { return velocities[q.y * size.x + q.x].xyz; }
+)";
+
+const char* const fragment_main = R"(
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  step_node(p, x_next, v_next);
+}
+)";
+
+const char* const compute_main = R"(
+void main() {
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (p.x >= size.x || p.y >= size.y) return;
+  int i = p.y * size.x + p.x;
+  vec4 x1, v1;
+  step_node(p, x1, v1);
+  x_next[i] = x1;
+  v_next[i] = v1;
+}
+)";
+
+const char* const cloth_node = R"(
 uniform float rest[5];
 uniform float stiffness[3];
 uniform int family_on[3];
@@ -51,9 +86,8 @@ vec3 cross3(vec3 a, vec3 b) {
   precise vec3 c = vec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
   return c;
 }
-bool inside(ivec2 q) { return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, textureSize(positions, 0))); }
-vec3 x_at(ivec2 q) { return texelFetch(positions, q, 0).xyz; }
-vec3 v_at(ivec2 q) { return texelFetch(velocities, q, 0).xyz; }
+bool inside(ivec2 q) { return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, grid_size())); }
+vec3 x_at(ivec2 q) { return position_at(q).xyz; }
 
 vec3 spring_force(vec3 x, vec3 v, vec3 xq, vec3 vq, float rest_length, float c) {
   precise vec3 r = xq - x;
@@ -82,14 +116,13 @@ vec3 stop_approach(vec3 v, vec3 n) {
   return stopped;
 }
 
-void main() {
-  ivec2 p = ivec2(gl_FragCoord.xy);
-  vec4 here = texelFetch(positions, p, 0);
+void step_node(ivec2 p, out vec4 x_out, out vec4 v_out) {
+  vec4 here = position_at(p);
   precise vec3 x = here.xyz;
   precise vec3 v = v_at(p);
   if (here.w != 0.0) {
-    x_next = here;
-    v_next = vec4(v, 0.0);
+    x_out = here;
+    v_out = vec4(v, 0.0);
     return;
   }
   precise vec3 f = vec3(0.0);
@@ -123,15 +156,24 @@ void main() {
     x1.y = ground_y;
     if (v1.y < 0.0) v1 = stop_approach(v1, vec3(0.0, 1.0, 0.0));
   }
-  x_next = vec4(x1, 0.0);
-  v_next = vec4(v1, 0.0);
+  x_out = vec4(x1, 0.0);
+  v_out = vec4(v1, 0.0);
 }
 )";
 
 }  // namespace
 
-GpuCloth::GpuCloth(const Context& context, const ClothGridView& view)
-    : GpuGrid(context, view.columns, view.rows, 2, cloth_pass, "cloth pass"), pinned_(view.free_index.size()) {
+namespace {
+
+std::string cloth_source(Pass pass) {
+  return pass == Pass::fragment ? std::string(fragment_access) + cloth_node + fragment_main : compute_prelude() + compute_access + cloth_node + compute_main;
+}
+
+}  // namespace
+
+GpuCloth::GpuCloth(const Context& context, const ClothGridView& view, Pass pass)
+    : GpuGrid(context, view.columns, view.rows, 2, pass, cloth_source(pass), pass == Pass::fragment ? "cloth pass" : "cloth compute pass"),
+      pinned_(view.free_index.size()) {
   for (size_t k = 0; k < pinned_.size(); ++k) pinned_[k] = view.free_index[k] < 0 ? 1.0f : 0.0f;
 }
 
@@ -184,18 +226,18 @@ namespace {
 // first step, an obstacle's projection on the CPU changing a node by a rounding, an event)
 class GpuClothStepper final : public FixedStepper {
  public:
-  explicit GpuClothStepper(const CountedSystem& s) : system_(s), view_(*s.as<ClothGridView>()) {}
+  GpuClothStepper(const CountedSystem& s, Pass pass, std::string_view name) : system_(s), view_(*s.as<ClothGridView>()), pass_(pass), name_(name) {}
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
     ++system_.stats().rhs_evals;
     try {
       if (!context_) context_ = make_device_context();
-      if (!gpu_) gpu_ = std::make_unique<GpuCloth>(*context_, view_);
+      if (!gpu_) gpu_ = std::make_unique<GpuCloth>(*context_, view_, pass_);
       if (!read_back(y)) gpu_->upload(cloth_grid::spread<float>(view_, y));
       gpu_->set_constants(cloth_grid::constants<float>(view_, t, h));
       gpu_->step(1);
       gpu_->download(state_);
     } catch (const GlError& e) {
-      failure = fmt::format("gpu-cloth: {}", e.what());
+      failure = fmt::format("{}: {}", name_, e.what());
       return false;
     }
     cloth_grid::gather(view_, state_, y_next);
@@ -221,6 +263,8 @@ class GpuClothStepper final : public FixedStepper {
 
   const CountedSystem& system_;
   const ClothGridView& view_;
+  Pass pass_;
+  std::string_view name_;
   std::unique_ptr<Context> context_;
   std::unique_ptr<GpuCloth> gpu_;
   cloth_grid::State<float> state_;
@@ -229,19 +273,16 @@ class GpuClothStepper final : public FixedStepper {
 }  // namespace
 
 void register_cloth_methods(MethodTable& table) {
-  table.add({
-      .name = "gpu-cloth",
-      .family = "gpu",
-      .source = "OpenGL shader",
-      .description = "the explicit mass-spring cloth (twelve springs a node, pins, gravity, wind, pick force, sphere and ground) "
-                     "as symplectic Euler in a fragment-shader pass on float32 textures (OpenGL), fixed step",
-      .order = {1, 1, "1"},
-      .stepping = Stepping::fixed,
-      .needs = needs_cloth_grid,
-      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<GpuClothStepper>(system); }),
-      .stability = {.oscillator_dt = symplectic_euler_oscillator_dt},
-      .device_problem = device_problem,
-  });
+  add_shader_methods(table, {"gpu-cloth", "gpu-cloth-compute",
+                             "the explicit mass-spring cloth (twelve springs a node, pins, gravity, wind, pick force, sphere and ground) "
+                             "as symplectic Euler in a fragment-shader pass on float32 textures (OpenGL), fixed step",
+                             "gpu-cloth as an "
+                             "OpenGL 4.3 compute pass on float32 storage buffers, a node an invocation in 16 x 16 work groups (the same "
+                             "bits), fixed step",
+                             {1, 1, "1"}, needs_cloth_grid, {.oscillator_dt = symplectic_euler_oscillator_dt},
+                             [](const CountedSystem& system, Pass pass, std::string_view name) {
+                               return std::make_unique<GpuClothStepper>(system, pass, name);
+                             }});
 }
 
 }  // namespace stepwise::gpu

@@ -6,12 +6,11 @@
 // float32, those operations in that order and marked `precise`, so a conforming GPU gives the float32 CPU
 // reference's bits (cloth_grid::step<float>; verification/gpu_references.hpp).
 //
-// A fragment pass rather than a compute shader: the step is a pure gather (each node reads its neighbours'
-// last state and writes only its own), which is exactly what a fragment pass over a render target
-// expresses, with the seeds' ping-pong and no image stores, barriers or work-group sizes to choose; it
-// shares GpuGrid with the water's passes, and the state stays in textures a renderer's vertex shader can
-// read. A compute shader would pay off only for a scatter (each spring once, its force added to both ends),
-// which needs atomics on floats that GL 4.5 does not have.
+// The step is a pure gather (each node reads its neighbours' last state and writes only its own): a fragment
+// pass over a render target expresses it with the seeds' ping-pong, and the state stays in textures a
+// renderer's vertex shader can read; the compute pass (gpu-cloth-compute) runs the same node function over
+// storage buffers, one invocation a node, on every unit of a GPU that gives fragment passes only a few. (A
+// scatter, each spring once with its force added to both ends, would need atomics on floats, not in GL 4.5.)
 #pragma once
 
 #include "gpu_grid.hpp"
@@ -21,7 +20,7 @@ namespace stepwise::gpu {
 
 class GpuCloth final : public GpuGrid {
  public:
-  GpuCloth(const Context& context, const ClothGridView& view);
+  GpuCloth(const Context& context, const ClothGridView& view, Pass pass = Pass::fragment);
   // the step's numbers (the wind at its start, h)
   void set_constants(const cloth_grid::Constants<float>& k);
   void upload(const cloth_grid::State<float>& s);
@@ -31,8 +30,8 @@ class GpuCloth final : public GpuGrid {
   std::vector<float> pinned_;  // 1 for a pinned node, 0 for a free one, grid order
 };
 
-// registers gpu-cloth (GpuCloth stepping a cloth scene, one pass a step, read back for the run's state) with
-// the solvers' method table
+// registers gpu-cloth (GpuCloth stepping a cloth scene, one pass a step, read back for the run's state) and its
+// compute twin gpu-cloth-compute with the solvers' method table
 void register_cloth_methods(MethodTable& table);
 
 }  // namespace stepwise::gpu

@@ -51,8 +51,39 @@ std::string texture_problem(const Context& context, int width, int height) {
   return {};
 }
 
-GpuGrid::GpuGrid(const Context& context, int width, int height, int planes, const std::string& fragment, const std::string& name)
-    : context_(context), gl_(context.gl()), width_(width), height_(height), planes_(planes) {
+std::string compute_prelude() {
+  return fmt::format("#version 450\nlayout(local_size_x = {0}, local_size_y = {0}) in;\nuniform ivec2 size;\nivec2 grid_size() {{ return size; }}\n", tile);
+}
+
+std::string compute_grid_problem(const Context& context, int width, int height) {
+  context.make_current();
+  const Gl& gl = context.gl();
+  if (std::string problem = gl::compute_problem(gl); !problem.empty()) return problem;
+  GLint64 max_bytes = 0;
+  gl.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_bytes);
+  const double bytes = 16.0 * width * height;
+  if (bytes > static_cast<double>(max_bytes))
+    return fmt::format("a {} x {} grid's plane ({:.3g} MB of vec4) passes this GL's largest storage buffer, GL_MAX_SHADER_STORAGE_BLOCK_SIZE = {} bytes",
+                       width, height, bytes / 1e6, max_bytes);
+  return {};
+}
+
+GpuGrid::GpuGrid(const Context& context, int width, int height, int planes, Pass pass, const std::string& source, const std::string& name)
+    : context_(context), gl_(context.gl()), width_(width), height_(height), planes_(planes), pass_(pass) {
+  if (pass == Pass::compute) {
+    if (const std::string problem = compute_grid_problem(context, width, height); !problem.empty()) throw GlError(problem);
+    const auto bytes = static_cast<GLsizeiptr>(16) * width * height;
+    for (auto& set : textures_) {
+      set.resize(planes);
+      gl_.CreateBuffers(planes, set.data());
+      for (const unsigned buffer : set) gl_.NamedBufferStorage(buffer, bytes, nullptr, GL_DYNAMIC_STORAGE_BIT);
+    }
+    program_ = gl::link_compute_program(gl_, source.c_str(), name);
+    gl_.UseProgram(program_);
+    gl_.Uniform2i(gl_.GetUniformLocation(program_, "size"), width, height);
+    check_gl(gl_, fmt::format("the {}'s buffers and program", name));
+    return;
+  }
   if (const std::string problem = texture_problem(context, width, height); !problem.empty()) throw GlError(problem);
   gl_.CreateFramebuffers(2, framebuffers_);
   std::vector<GLenum> attachments;
@@ -72,15 +103,19 @@ GpuGrid::GpuGrid(const Context& context, int width, int height, int planes, cons
       throw GlError(fmt::format("this context cannot render to float textures: glCheckNamedFramebufferStatus ({} RGBA32F {} x {}) = 0x{:04x}",
                                 planes, width, height, status));
   }
-  program_ = link_program(gl_, full_screen, nullptr, fragment.c_str(), name);
+  program_ = link_program(gl_, full_screen, nullptr, source.c_str(), name);
   gl_.CreateVertexArrays(1, &vertex_array_);
   check_gl(gl_, fmt::format("the {}'s textures and program", name));
 }
 
 GpuGrid::~GpuGrid() {
   if (!context_.try_make_current()) return;
-  gl_.DeleteVertexArrays(1, &vertex_array_);
   gl_.DeleteProgram(program_);
+  if (pass_ == Pass::compute) {
+    for (auto& set : textures_) gl_.DeleteBuffers(static_cast<GLsizei>(set.size()), set.data());
+    return;
+  }
+  gl_.DeleteVertexArrays(1, &vertex_array_);
   gl_.DeleteFramebuffers(2, framebuffers_);
   for (auto& set : textures_) gl_.DeleteTextures(static_cast<GLsizei>(set.size()), set.data());
 }
@@ -95,17 +130,37 @@ void GpuGrid::uniform(const char* name, float value) const { gl_.Uniform1f(gl_.G
 
 void GpuGrid::upload_plane(int plane, const std::vector<float>& texels) {
   context_.make_current();
+  if (pass_ == Pass::compute) {
+    gl_.NamedBufferSubData(textures_[current_][plane], 0, static_cast<GLsizeiptr>(texels.size() * sizeof(float)), texels.data());
+    check_gl(gl_, "glNamedBufferSubData (a grid's state)");
+    return;
+  }
   gl_.TextureSubImage2D(textures_[current_][plane], 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT, texels.data());
   check_gl(gl_, "glTextureSubImage2D (a grid's state)");
 }
 
 void GpuGrid::step(long count) {
   context_.make_current();
+  gl_.UseProgram(program_);
+  if (pass_ == Pass::compute) {
+    const auto groups = [](int cells) { return static_cast<GLuint>((cells + tile - 1) / tile); };
+    for (long s = 0; s < count; ++s) {
+      for (int p = 0; p < planes_; ++p) {
+        gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(p), textures_[current_][p]);
+        gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(4 + p), textures_[1 - current_][p]);
+      }
+      gl_.DispatchCompute(groups(width_), groups(height_), 1);
+      // the next pass reads what this one wrote
+      gl_.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      current_ = 1 - current_;
+    }
+    check_gl(gl_, "a grid pass (glDispatchCompute)");
+    return;
+  }
   gl_.Disable(GL_BLEND);
   gl_.Disable(GL_DEPTH_TEST);
   gl_.Disable(GL_CULL_FACE);
   gl_.Viewport(0, 0, width_, height_);
-  gl_.UseProgram(program_);
   gl_.BindVertexArray(vertex_array_);
   for (long s = 0; s < count; ++s) {
     gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffers_[1 - current_]);
@@ -126,6 +181,12 @@ void GpuGrid::finish() const {
 void GpuGrid::download_plane(int plane, std::vector<float>& texels) const {
   context_.make_current();
   texels.resize(4 * static_cast<size_t>(width_) * static_cast<size_t>(height_));
+  if (pass_ == Pass::compute) {
+    gl_.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    gl_.GetNamedBufferSubData(textures_[current_][plane], 0, static_cast<GLsizeiptr>(texels.size() * sizeof(float)), texels.data());
+    check_gl(gl_, "glGetNamedBufferSubData (a grid's state)");
+    return;
+  }
   gl_.GetTextureImage(textures_[current_][plane], 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(texels.size() * sizeof(float)), texels.data());
   check_gl(gl_, "glGetTextureImage (a grid's state)");
 }
@@ -143,15 +204,43 @@ std::unique_ptr<Context> make_device_context() {
   return make_context(backend());
 }
 
-std::string device_problem(const OdeSystem& system) {
+namespace {
+
+// the device question `problem` asked about the grid a GPU method would step for `system`
+std::string grid_problem(const OdeSystem& system, std::string (*problem)(const Context&, int, int)) {
   int width = 0, height = 0;
   if (const auto* grid = system.as<WaveGridView>()) width = height = grid->points;
   else if (const auto* cloth = system.as<ClothGridView>()) width = cloth->columns, height = cloth->rows;
   else return "no grid a GPU method steps (a water or cloth scene)";
   try {
-    return texture_problem(*make_device_context(), width, height);
+    return problem(*make_device_context(), width, height);
   } catch (const GlError& e) {
     return e.what();
+  }
+}
+
+}  // namespace
+
+std::string device_problem(const OdeSystem& system) { return grid_problem(system, texture_problem); }
+std::string compute_device_problem(const OdeSystem& system) { return grid_problem(system, compute_grid_problem); }
+
+void add_shader_methods(MethodTable& table, const ShaderMethod& m) {
+  for (const Pass pass : {Pass::fragment, Pass::compute}) {
+    const bool compute = pass == Pass::compute;
+    const std::string_view name = compute ? m.compute_name : m.name;
+    table.add({
+        .name = name,
+        .family = Family::gpu,
+        .source = Source::opengl_shader,
+        .description = compute ? m.compute_description : m.description,
+        .order = m.order,
+        .stepping = Stepping::fixed,
+        .needs = m.needs,
+        .make = fixed_steps([stepper = m.stepper, pass, name](const CountedSystem& system) { return stepper(system, pass, name); }),
+        .stability = m.stability,
+        .device_problem = compute ? compute_device_problem : device_problem,
+        .twin = compute ? m.name : std::string_view(),
+    });
   }
 }
 

@@ -1,11 +1,15 @@
-// What the GPU shader methods (issue 9) share: a grid's state in RGBA32F textures of its size, stepped by
-// full-screen fragment passes that read one set of textures and write the other, then swap (ping-pong), on
-// the GL context of gl/ (OSMesa's llvmpipe, or a GPU through EGL), which render/ uses too. They are solvers:
+// What the GPU shader methods share: a grid's state, four floats a cell, in two sets of planes, stepped by a
+// pass that reads one set and writes the other, then swaps (ping-pong), on the GL context of gl/ (OSMesa's
+// llvmpipe, or a GPU through EGL), which render/ uses too. Two kinds of pass compute the same cells with the
+// same operations: the seeds' full-screen fragment pass over RGBA32F textures (gpu-wave, gpu-symplectic-euler,
+// gpu-cloth), and a compute pass over shader storage buffers in 16 x 16 work groups (the -compute methods:
+// OpenGL 4.3), which a data-centre GPU runs on all its units where it gives fragment passes only a few. They are solvers:
 // they step model state, so they live here and not in render/. gpu_wave.cpp and gpu_cloth.cpp have the
 // passes and register their methods; this file also has the device questions a run asks before it starts.
 #pragma once
 
 #include "gl/context.hpp"
+#include "solvers/fixed_step.hpp"
 #include "solvers/method.hpp"
 
 #include <string>
@@ -16,14 +20,25 @@ namespace stepwise::gpu {
 using gl::Context;
 using gl::Gl;
 
-// a width x height grid's state in `planes` RGBA32F textures (plane p bound to texture unit p and written
-// to colour attachment p), twice over, stepped by a fragment pass from one set into the other; texel (x, y)
-// is the grid's row y, column x (the CPU grids' row-major cell y * width + x). `fragment`: the pass's GLSL
+// which kind of pass steps a grid
+enum class Pass { fragment, compute };
+// a compute pass's work group: tile x tile cells, each an invocation
+inline constexpr int tile = 16;
+// what a compute pass's GLSL opens with: the version, the work group's size, and the grid's (`size`, which
+// GpuGrid sets, as grid_size())
+std::string compute_prelude();
+
+// a width x height grid's state in `planes` planes, twice over, stepped by a pass from one set into the other;
+// cell (x, y) is the grid's row y, column x (the CPU grids' row-major cell y * width + x). A fragment pass's
+// planes are RGBA32F textures (plane p bound to texture unit p, written to colour attachment p); a compute
+// pass's are storage buffers of vec4s (the set read bound to bindings 0.., the set written to 4..), its
+// program given `size` (ivec2) and dispatched in work groups of tile x tile. `source`: the pass's GLSL
 class GpuGrid {
  public:
-  // GlError naming the limit where the grid passes GL_MAX_TEXTURE_SIZE, or where the context cannot render
-  // to RGBA32F
-  GpuGrid(const Context& context, int width, int height, int planes, const std::string& fragment, const std::string& name);
+  // GlError naming the limit where the grid passes GL_MAX_TEXTURE_SIZE (a fragment pass) or
+  // GL_MAX_SHADER_STORAGE_BLOCK_SIZE (a compute pass), where the context cannot render to RGBA32F, or where it
+  // has no compute shaders
+  GpuGrid(const Context& context, int width, int height, int planes, Pass pass, const std::string& source, const std::string& name);
   virtual ~GpuGrid();
   GpuGrid(const GpuGrid&) = delete;
   GpuGrid& operator=(const GpuGrid&) = delete;
@@ -47,7 +62,8 @@ class GpuGrid {
   const Context& context_;
   const Gl& gl_;
   int width_, height_, planes_;
-  std::vector<unsigned> textures_[2];  // each set's planes
+  Pass pass_;
+  std::vector<unsigned> textures_[2];  // each set's planes: textures, or a compute pass's storage buffers
   unsigned framebuffers_[2] = {0, 0};
   unsigned program_ = 0, vertex_array_ = 0;
   int current_ = 0;  // the set holding the state
@@ -65,11 +81,27 @@ gl::Backend backend();
 // time, and a run's cost counts only the host's part
 std::unique_ptr<Context> make_device_context();
 
-// "" or why a width x height grid cannot be stepped on `context`: past its GL_MAX_TEXTURE_SIZE, or RGBA32F
-// not a render target there; the limit named
+// "" or why a width x height grid cannot be stepped on `context` by a fragment pass: past its
+// GL_MAX_TEXTURE_SIZE, or RGBA32F not a render target there; the limit named
 std::string texture_problem(const Context& context, int width, int height);
+// "" or why it cannot be stepped by a compute pass: no compute shaders (OpenGL before 4.3, the version named),
+// or a plane past GL_MAX_SHADER_STORAGE_BLOCK_SIZE
+std::string compute_grid_problem(const Context& context, int width, int height);
 // the same asked of a context of the GPU methods' backend, made for the question, about the grid a GPU
 // method would step for `system` (its wave grid or cloth grid); a context that cannot be made is the answer
 std::string device_problem(const OdeSystem& system);
+std::string compute_device_problem(const OdeSystem& system);
+
+// a shader method's two entries in the method table: `name` as the seeds' fragment pass, and `name`-compute,
+// its compute twin (the same bits: left out of the report's sweeps), each made by `stepper` with its kind and
+// name (for its failures); the descriptions say what each pass computes, `stability` and `order` are the scheme's
+struct ShaderMethod {
+  std::string_view name, compute_name, description, compute_description;
+  Order order;
+  Requirement needs;
+  Stability stability;
+  std::function<std::unique_ptr<FixedStepper>(const CountedSystem& system, Pass pass, std::string_view name)> stepper;
+};
+void add_shader_methods(MethodTable& table, const ShaderMethod& method);
 
 }  // namespace stepwise::gpu

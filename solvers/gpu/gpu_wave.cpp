@@ -14,53 +14,94 @@ using gl::GlError;
 
 namespace {
 
-// what every grid pass shares: the state, its output, whether a texel is on the grid's boundary, and the
-// sum of a texel's four neighbours in neighbour_sum's order. Texel (x, y) is cell i * points + j with
-// x = j, y = i: rows (i) apart along y, as z[j -+ n] on the CPU
-const char* const grid_pass = R"(#version 450
+// how a pass reaches the grid: its size, z at a cell (the red channel of the state), and its output. Cell
+// (x, y) is i * points + j with x = j, y = i: rows (i) apart along y, as z[j -+ n] on the CPU. The fragment
+// pass reads the state texture; the compute pass reads z from a tile in shared memory, the work group's
+// 16 x 16 cells and a one-cell halo, loaded once (each z is read by five cells; `tiled` 0 reads the buffer)
+const char* const fragment_access = R"(#version 450
 layout(binding = 0) uniform sampler2D state;
 layout(location = 0) out vec4 next;
+ivec2 grid_size() { return textureSize(state, 0); }
+float z_at(ivec2 p) { return texelFetch(state, p, 0).r; }
+)";
+
+const char* const compute_access = R"(
+layout(std430, binding = 0) readonly buffer State { vec4 state[]; };
+layout(std430, binding = 4) writeonly buffer Next { vec4 next[]; };
+shared float tile_z[18][18];
+float z_at(ivec2 p) {
+#if TILED
+  ivec2 t = p - ivec2(gl_WorkGroupID.xy) * 16 + 1;
+  return tile_z[t.y][t.x];
+#else
+  return state[p.y * size.x + p.x].r;
+#endif
+}
+)";
+
+// what every wave pass shares: whether a cell is on the grid's boundary, and the sum of its four neighbours
+// in neighbour_sum's order
+const char* const grid_cell = R"(
 bool on_boundary(ivec2 p) {
-  ivec2 size = textureSize(state, 0);
+  ivec2 size = grid_size();
   return p.x == 0 || p.y == 0 || p.x == size.x - 1 || p.y == size.y - 1;
 }
 float neighbour_sum(ivec2 p) {
-  precise float down_up = texelFetch(state, p - ivec2(0, 1), 0).r + texelFetch(state, p + ivec2(0, 1), 0).r;
-  precise float left_right = texelFetch(state, p - ivec2(1, 0), 0).r + texelFetch(state, p + ivec2(1, 0), 0).r;
+  precise float down_up = z_at(p - ivec2(0, 1)) + z_at(p + ivec2(0, 1));
+  precise float left_right = z_at(p - ivec2(1, 0)) + z_at(p + ivec2(1, 0));
   precise float sum = down_up + left_right;
   return sum;
 }
 )";
 
-// the three-level pass: R = z^k, G = z^{k-1} in, (z^{k+1}, z^k) out; the boundary holds
-const char* const wave_pass = R"(
-uniform float k_self, k_previous, k_neighbours;
+// the passes' main: the fragment pass's cell is its pixel's; the compute pass's invocation loads its share of
+// the tile (324 values by 256 invocations; a halo cell past the grid is clamped in: only a boundary cell, which
+// holds, would read it), waits for the rest, and steps its cell if it is on the grid
+const char* const fragment_main = R"(
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
-  vec4 here = texelFetch(state, p, 0);
-  if (on_boundary(p)) {
-    next = vec4(here.r, here.r, 0.0, 0.0);
-    return;
+  next = step_cell(p, texelFetch(state, p, 0));
+}
+)";
+
+const char* const compute_main = R"(
+void main() {
+#if TILED
+  ivec2 origin = ivec2(gl_WorkGroupID.xy) * 16 - 1;
+  for (uint k = gl_LocalInvocationIndex; k < 18u * 18u; k += 256u) {
+    ivec2 t = ivec2(int(k % 18u), int(k / 18u));
+    ivec2 q = clamp(origin + t, ivec2(0), size - 1);
+    tile_z[t.y][t.x] = state[q.y * size.x + q.x].r;
   }
+  memoryBarrierShared();
+  barrier();
+#endif
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (p.x >= size.x || p.y >= size.y) return;
+  int i = p.y * size.x + p.x;
+  next[i] = step_cell(p, state[i]);
+}
+)";
+
+// the three-level step of a cell: R = z^k, G = z^{k-1} in, (z^{k+1}, z^k) out; the boundary holds
+const char* const wave_cell = R"(
+uniform float k_self, k_previous, k_neighbours;
+vec4 step_cell(ivec2 p, vec4 here) {
+  if (on_boundary(p)) return vec4(here.r, here.r, 0.0, 0.0);
   precise float sum = neighbour_sum(p);
   precise float a = k_self * here.r;
   precise float b = k_previous * here.g;
   precise float c = k_neighbours * sum;
   precise float z1 = (a + b) + c;
-  next = vec4(z1, here.r, 0.0, 0.0);
+  return vec4(z1, here.r, 0.0, 0.0);
 }
 )";
 
-// the second seed's pass: v1 = v + dt a, a = c2 ((down + up) + (left + right) - 4 z) - mu v, z1 = z + dt v1
-const char* const symplectic_pass = R"(
+// the second seed's step of a cell: v1 = v + dt a, a = c2 ((down + up) + (left + right) - 4 z) - mu v, z1 = z + dt v1
+const char* const symplectic_cell = R"(
 uniform float c2, mu, dt;
-void main() {
-  ivec2 p = ivec2(gl_FragCoord.xy);
-  vec4 here = texelFetch(state, p, 0);
-  if (on_boundary(p)) {
-    next = here;
-    return;
-  }
+vec4 step_cell(ivec2 p, vec4 here) {
+  if (on_boundary(p)) return here;
   precise float sum = neighbour_sum(p);
   precise float four_z = 4.0 * here.r;
   precise float curvature = sum - four_z;
@@ -71,14 +112,20 @@ void main() {
   precise float v1 = here.g + kick;
   precise float drift = dt * v1;
   precise float z1 = here.r + drift;
-  next = vec4(z1, v1, 0.0, 0.0);
+  return vec4(z1, v1, 0.0, 0.0);
 }
 )";
 
+// a wave pass's GLSL: the access of its kind, the shared cell functions, the scheme's step, the kind's main
+std::string wave_source(Pass pass, const char* cell, bool tiled) {
+  if (pass == Pass::fragment) return std::string(fragment_access) + grid_cell + cell + fragment_main;
+  return compute_prelude() + fmt::format("#define TILED {}\n", tiled ? 1 : 0) + compute_access + grid_cell + cell + compute_main;
+}
+
 }  // namespace
 
-GpuWaveGrid::GpuWaveGrid(const Context& context, int points, const char* pass, const std::string& name)
-    : GpuGrid(context, points, points, 1, std::string(grid_pass) + pass, name) {}
+GpuWaveGrid::GpuWaveGrid(const Context& context, int points, Pass pass, const char* cell, const std::string& name, bool tiled)
+    : GpuGrid(context, points, points, 1, pass, wave_source(pass, cell, tiled), name) {}
 
 void GpuWaveGrid::upload_channels(const Eigen::VectorXf& red, const Eigen::VectorXf& green) {
   std::vector<float> texels(4 * static_cast<size_t>(red.size()));
@@ -101,7 +148,8 @@ void GpuWaveGrid::download_channels(Eigen::VectorXf& red, Eigen::VectorXf& green
   }
 }
 
-GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k) : GpuWaveGrid(context, points, wave_pass, "wave pass") {
+GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k, Pass pass, bool tiled)
+    : GpuWaveGrid(context, points, pass, wave_cell, pass == Pass::fragment ? "wave pass" : "wave compute pass", tiled) {
   set_coefficients(k);
 }
 
@@ -111,8 +159,8 @@ void GpuWave::set_coefficients(const BasicWaveCoefficients<float>& k) {
   uniform("k_neighbours", k.neighbours);
 }
 
-GpuSymplecticWave::GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt)
-    : GpuWaveGrid(context, points, symplectic_pass, "symplectic wave pass") {
+GpuSymplecticWave::GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt, Pass pass)
+    : GpuWaveGrid(context, points, pass, symplectic_cell, pass == Pass::fragment ? "symplectic wave pass" : "symplectic wave compute pass") {
   uniform("c2", c2);
   uniform("mu", mu);
   set_step(dt);
@@ -126,7 +174,7 @@ namespace {
 // read back for the state the run samples (z^{k+1}, and the velocity from it on the CPU)
 class GpuWaveStepper final : public ThreeLevelWaveStepper {
  public:
-  using ThreeLevelWaveStepper::ThreeLevelWaveStepper;
+  GpuWaveStepper(const CountedSystem& s, Pass pass, std::string_view name) : ThreeLevelWaveStepper(s), pass_(pass), name_(name) {}
 
  private:
   bool advance(const WaveCoefficients& k, const double* z_prev, const double* z, double* z_next, bool fresh, std::string& failure) override {
@@ -134,7 +182,7 @@ class GpuWaveStepper final : public ThreeLevelWaveStepper {
     const Eigen::Index cells = static_cast<Eigen::Index>(n) * n;
     try {
       if (!context_) context_ = make_device_context();
-      if (!gpu_) gpu_ = std::make_unique<GpuWave>(*context_, n, to_float(k));
+      if (!gpu_) gpu_ = std::make_unique<GpuWave>(*context_, n, to_float(k), pass_);
       if (fresh) {
         gpu_->set_coefficients(to_float(k));
         gpu_->upload(Eigen::Map<const Eigen::VectorXd>(z_prev, cells).cast<float>(), Eigen::Map<const Eigen::VectorXd>(z, cells).cast<float>());
@@ -142,12 +190,14 @@ class GpuWaveStepper final : public ThreeLevelWaveStepper {
       gpu_->step(1);
       gpu_->download(level_prev_, level_);
     } catch (const GlError& e) {
-      failure = fmt::format("gpu-wave: {}", e.what());
+      failure = fmt::format("{}: {}", name_, e.what());
       return false;
     }
     Eigen::Map<Eigen::VectorXd>(z_next, cells) = level_.cast<double>();
     return true;
   }
+  Pass pass_;
+  std::string_view name_;
   std::unique_ptr<Context> context_;
   std::unique_ptr<GpuWave> gpu_;
   Eigen::VectorXf level_prev_, level_;
@@ -157,8 +207,8 @@ class GpuWaveStepper final : public ThreeLevelWaveStepper {
 // one pass, read back for the run's state
 class GpuSymplecticStepper final : public FixedStepper {
  public:
-  explicit GpuSymplecticStepper(const CountedSystem& s)
-      : system_(s), grid_(*s.as<WaveGridView>()), cells_(static_cast<Eigen::Index>(grid_.points) * grid_.points) {}
+  GpuSymplecticStepper(const CountedSystem& s, Pass pass, std::string_view name)
+      : system_(s), grid_(*s.as<WaveGridView>()), cells_(static_cast<Eigen::Index>(grid_.points) * grid_.points), pass_(pass), name_(name) {}
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
     ++system_.stats().rhs_evals;
     const bool continuing = gpu_ && h == h_ && std::abs(t - t_last_) <= 1e-9 * h && y.data() == last_;
@@ -166,7 +216,7 @@ class GpuSymplecticStepper final : public FixedStepper {
       if (!context_) context_ = make_device_context();
       if (!gpu_) {
         const double c2 = grid_.c * grid_.c / (grid_.spacing * grid_.spacing);
-        gpu_ = std::make_unique<GpuSymplecticWave>(*context_, grid_.points, static_cast<float>(c2), static_cast<float>(grid_.mu), static_cast<float>(h));
+        gpu_ = std::make_unique<GpuSymplecticWave>(*context_, grid_.points, static_cast<float>(c2), static_cast<float>(grid_.mu), static_cast<float>(h), pass_);
       }
       if (!continuing) {
         gpu_->set_step(static_cast<float>(h));
@@ -175,7 +225,7 @@ class GpuSymplecticStepper final : public FixedStepper {
       gpu_->step(1);
       gpu_->download(z_, v_);
     } catch (const GlError& e) {
-      failure = fmt::format("gpu-symplectic-euler: {}", e.what());
+      failure = fmt::format("{}: {}", name_, e.what());
       return false;
     }
     y_next.head(cells_) = z_.cast<double>();
@@ -191,6 +241,8 @@ class GpuSymplecticStepper final : public FixedStepper {
   const CountedSystem& system_;
   WaveGridView grid_;
   Eigen::Index cells_;
+  Pass pass_;
+  std::string_view name_;
   std::unique_ptr<Context> context_;
   std::unique_ptr<GpuSymplecticWave> gpu_;
   Eigen::VectorXf z_, v_;
@@ -201,32 +253,24 @@ class GpuSymplecticStepper final : public FixedStepper {
 }  // namespace
 
 void register_wave_methods(MethodTable& table) {
-  table.add({
-      .name = "gpu-wave",
-      .family = "gpu",
-      .source = "OpenGL shader",
-      .description = "the seeds' three-level scheme as a fragment-shader pass on float32 textures (OpenGL: llvmpipe, or a GPU "
-                     "through EGL), fixed step",
-      .order = {2, 2, "2"},
-      .stepping = Stepping::fixed,
-      .needs = needs_wave_grid,
-      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<GpuWaveStepper>(system); }),
-      .stability = {.wave_dt = wave_stable_dt},
-      .device_problem = device_problem,
-  });
-  table.add({
-      .name = "gpu-symplectic-euler",
-      .family = "gpu",
-      .source = "OpenGL shader",
-      .description = "the second seed's scheme, symplectic Euler with the damping explicit, as a fragment-shader pass on "
-                     "float32 textures (OpenGL), fixed step",
-      .order = {1, 1, "1"},
-      .stepping = Stepping::fixed,
-      .needs = needs_wave_grid,
-      .make = fixed_steps([](const CountedSystem& system) { return std::make_unique<GpuSymplecticStepper>(system); }),
-      .stability = {.wave_dt = symplectic_euler_wave_dt},
-      .device_problem = device_problem,
-  });
+  add_shader_methods(table, {"gpu-wave", "gpu-wave-compute",
+                             "the seeds' three-level scheme as a fragment-shader pass on float32 textures (OpenGL: llvmpipe, or a GPU "
+                             "through EGL), fixed step",
+                             "gpu-wave as an OpenGL 4.3 compute pass on float32 storage buffers, 16 x 16 work "
+                             "groups sharing a tile of z (the same bits), fixed step",
+                             {2, 2, "2"}, needs_wave_grid, {.wave_dt = wave_stable_dt},
+                             [](const CountedSystem& system, Pass pass, std::string_view name) {
+                               return std::make_unique<GpuWaveStepper>(system, pass, name);
+                             }});
+  add_shader_methods(table, {"gpu-symplectic-euler", "gpu-symplectic-euler-compute",
+                             "the second seed's scheme, symplectic Euler with the damping explicit, as a fragment-shader pass on "
+                             "float32 textures (OpenGL), fixed step",
+                             "gpu-symplectic-euler as an OpenGL 4.3 compute pass on float32 "
+                             "storage buffers, 16 x 16 work groups sharing a tile of z (the same bits), fixed step",
+                             {1, 1, "1"}, needs_wave_grid, {.wave_dt = symplectic_euler_wave_dt},
+                             [](const CountedSystem& system, Pass pass, std::string_view name) {
+                               return std::make_unique<GpuSymplecticStepper>(system, pass, name);
+                             }});
 }
 
 }  // namespace stepwise::gpu

@@ -1,8 +1,8 @@
-// The seeds' wave schemes on the GPU (issue 9), as solvers: they step model state, so they live here and
-// not in render/, which only lends them its GL context. The three-level scheme keeps the height field's
-// two time levels in one RGBA32F texture of the grid's size (R = z^k, G = z^{k-1}), stepped by a
-// full-screen fragment pass that reads texture A and writes texture B, then the two swap (ping-pong). A
-// pass computes
+// The seeds' wave schemes on the GPU, as solvers: they step model state, so they live here and not in
+// render/, which only lends them its GL context. The three-level scheme keeps the height field's two time
+// levels in one plane of the grid's size (R = z^k, G = z^{k-1}), stepped by a pass that reads plane A and
+// writes plane B, then the two swap (ping-pong): a full-screen fragment pass over RGBA32F textures (the
+// seeds'), or a compute pass over storage buffers whose work groups share a tile of z. A pass computes
 //
 //   z^{k+1} = self z^k + previous z^{k-1} + neighbours ((z_down + z_up) + (z_left + z_right))
 //
@@ -21,11 +21,12 @@
 
 namespace stepwise::gpu {
 
-// a square grid's two channels (R, G) in one plane of GpuGrid, the pass's GLSL main after the shared
-// part (gpu_wave.cpp's grid_pass)
+// a square grid's two channels (R, G) in one plane of GpuGrid, stepped by `cell` (the GLSL of a cell's step,
+// gpu_wave.cpp's) in a pass of either kind; a compute pass reads z from a tile in shared memory unless `tiled`
+// is false (the bench's comparison)
 class GpuWaveGrid : public GpuGrid {
  public:
-  GpuWaveGrid(const Context& context, int points, const char* pass, const std::string& name);
+  GpuWaveGrid(const Context& context, int points, Pass pass, const char* cell, const std::string& name, bool tiled = true);
 
  protected:
   // the two channels, points^2 each, row-major (the CPU grids' layout)
@@ -36,7 +37,7 @@ class GpuWaveGrid : public GpuGrid {
 // the seeds' three-level scheme: R = z^k, G = z^{k-1}
 class GpuWave final : public GpuWaveGrid {
  public:
-  GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k);
+  GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k, Pass pass = Pass::fragment, bool tiled = true);
   // the coefficients of another step size
   void set_coefficients(const BasicWaveCoefficients<float>& k);
   void upload(const Eigen::VectorXf& z_prev, const Eigen::VectorXf& z) { upload_channels(z, z_prev); }
@@ -47,14 +48,15 @@ class GpuWave final : public GpuWaveGrid {
 // z += v dt (models/height_field.hpp's wave_acceleration, in float32, `precise`); R = z, G = v
 class GpuSymplecticWave final : public GpuWaveGrid {
  public:
-  GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt);  // c2 = c^2 / d^2
+  GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt, Pass pass = Pass::fragment);  // c2 = c^2 / d^2
   void set_step(float dt);
   void upload(const Eigen::VectorXf& z, const Eigen::VectorXf& v) { upload_channels(z, v); }
   void download(Eigen::VectorXf& z, Eigen::VectorXf& v) const { download_channels(z, v); }
 };
 
 // registers gpu-wave (GpuWave stepping a wave scene, three_level_wave.hpp's start and velocities around it) and
-// gpu-symplectic-euler (GpuSymplecticWave) with the solvers' method table
+// gpu-symplectic-euler (GpuSymplecticWave) with the solvers' method table, and their compute twins
+// gpu-wave-compute and gpu-symplectic-euler-compute
 void register_wave_methods(MethodTable& table);
 
 }  // namespace stepwise::gpu

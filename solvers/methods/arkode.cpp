@@ -233,8 +233,8 @@ void register_arkode_methods(MethodTable& table) {
   for (const Table& t : tables) {
     table.add({
         .name = t.name,
-        .family = "arkode",
-        .source = "SUNDIALS ARKODE",
+        .family = Family::arkode,
+        .source = Source::arkode,
         .description = t.description,
         // the order text outlives the table: one static string per order
         .order = {t.order, t.order, std::array<std::string_view, 9>{"0", "1", "2", "3", "4", "5", "6", "7", "8"}[static_cast<size_t>(t.order)]},

@@ -171,16 +171,16 @@ void register_cvode_methods(MethodTable& table) {
     };
   };
   table.add({.name = "cvode-adams",
-             .family = "cvode",
-             .source = "SUNDIALS CVODE",
+             .family = Family::cvode,
+             .source = Source::cvode,
              .description = "adaptive, variable order Adams-Moulton, fixed-point iteration",
              .order = {1, 12, "1-12"},
              .stepping = Stepping::adaptive,
              .on_ranks = OnRanks::cvode_adams,
              .make = cvode(false)});
   table.add({.name = "cvode-bdf",
-             .family = "cvode",
-             .source = "SUNDIALS CVODE",
+             .family = Family::cvode,
+             .source = Source::cvode,
              .description = "adaptive, variable order BDF, Newton + dense LU or KLU",
              .order = {1, 5, "1-5"},
              .stepping = Stepping::adaptive,

@@ -287,15 +287,15 @@ MakeIntegrator pair_integrator() {
 
 void register_embedded_pair_methods(MethodTable& table) {
   table.add({.name = "tsitouras54",
-             .family = "embedded-pairs",
-             .source = "hand-written",
+             .family = Family::embedded_pairs,
+             .source = Source::hand_written,
              .description = "Tsitouras 5(4), 7 stages FSAL, PI control, 4th-order dense output",
              .order = {5, 5, "5"},
              .stepping = Stepping::fixed_or_adaptive,
              .make = pair_integrator<tableau::Tsitouras54>()});
   table.add({.name = "verner98",
-             .family = "embedded-pairs",
-             .source = "hand-written",
+             .family = Family::embedded_pairs,
+             .source = Source::hand_written,
              .description = "Verner's most efficient 9(8), 16 stages, PI control, 8th-order dense output (5 more stages)",
              .order = {9, 9, "9"},
              .stepping = Stepping::fixed_or_adaptive,

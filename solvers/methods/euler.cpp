@@ -55,8 +55,8 @@ class Euler final : public PlainStepping<Euler<N, F>> {
 void register_euler_methods(MethodTable& table) {
   table.add({
       .name = "euler",
-      .family = "euler",
-      .source = "hand-written",
+      .family = Family::euler,
+      .source = Source::hand_written,
       .description = "explicit, fixed step",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,

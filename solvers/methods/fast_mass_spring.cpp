@@ -142,8 +142,8 @@ std::unique_ptr<FixedStepper> make_fast_mass_spring(const CountedSystem& system)
 void register_fast_mass_spring_methods(MethodTable& table) {
   table.add({
       .name = "fast-mass-spring",
-      .family = "fast-mass-spring",
-      .source = "hand-written",
+      .family = Family::fast_mass_spring,
+      .source = Source::hand_written,
       .description = "mass-spring systems: prefactored local/global implicit Euler of the springs (Liu et al. 2013), "
                      "other forces explicit, fixed step",
       .order = {1, 1, "1"},

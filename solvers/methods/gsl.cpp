@@ -215,8 +215,8 @@ void register_gsl_methods(MethodTable& table) {
   };
   for (const auto& s : steppers)
     table.add({.name = s.name,
-               .family = "gsl",
-               .source = "GSL odeiv2",
+               .family = Family::gsl,
+               .source = Source::gsl,
                .description = s.description,
                .order = s.order,
                .stepping = Stepping::fixed_or_adaptive,

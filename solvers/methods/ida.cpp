@@ -229,8 +229,8 @@ class IdaIntegrator final : public Integrator {
 
 void register_ida_methods(MethodTable& table) {
   table.add({.name = "ida",
-             .family = "constrained",
-             .source = "SUNDIALS IDA",
+             .family = Family::constrained,
+             .source = Source::ida,
              .description = "adaptive, variable order BDF on the constrained scene as a DAE (stabilised index 2), Newton + dense LU; constrained scenes only",
              .order = {1, 5, "1-5"},
              .stepping = Stepping::adaptive,

@@ -70,8 +70,8 @@ std::unique_ptr<FixedStepper> make_implicit_euler_newton(const CountedSystem& sy
 void register_implicit_euler_methods(MethodTable& table) {
   table.add({
       .name = "implicit-euler",
-      .family = "implicit-euler",
-      .source = "hand-written",
+      .family = Family::implicit_euler,
+      .source = Source::hand_written,
       .description = "implicit, fixed step; Newton + dense LU, or for mass-spring systems Baraff-Witkin's linearised step "
                      "on CHOLMOD (a kept factor preconditioning CG)",
       .order = {1, 1, "1"},
@@ -82,8 +82,8 @@ void register_implicit_euler_methods(MethodTable& table) {
   });
   table.add({
       .name = "implicit-euler-newton",
-      .family = "implicit-euler",
-      .source = "hand-written",
+      .family = Family::implicit_euler,
+      .source = Source::hand_written,
       .description = "implicit, fixed step, Newton to convergence (CHOLMOD for mass-spring systems, else dense LU)",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,

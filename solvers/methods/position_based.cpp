@@ -97,8 +97,8 @@ MakeIntegrator position_based(Multiplier multiplier) {
 void register_position_based_methods(MethodTable& table) {
   table.add({
       .name = "pbd",
-      .family = "position-based",
-      .source = "hand-written",
+      .family = Family::position_based,
+      .source = Source::hand_written,
       .description = "position-based dynamics (Müller 2007): constraints projected, stiffness per iteration",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
@@ -108,8 +108,8 @@ void register_position_based_methods(MethodTable& table) {
   });
   table.add({
       .name = "xpbd",
-      .family = "position-based",
-      .source = "hand-written",
+      .family = Family::position_based,
+      .source = Source::hand_written,
       .description = "extended position-based dynamics (Macklin 2016): compliant constraints, Hooke's law at any iteration count",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,

@@ -72,8 +72,8 @@ class Rattle final : public PlainStepping<Rattle> {
 void register_rattle_methods(MethodTable& table) {
   table.add({
       .name = "rattle",
-      .family = "constrained",
-      .source = "hand-written",
+      .family = Family::constrained,
+      .source = Source::hand_written,
       .description = "RATTLE (Andersen 1983): constrained Störmer-Verlet, symplectic and on the constraint manifold; constrained scenes only",
       .order = {2, 2, "2"},
       .stepping = Stepping::fixed,

@@ -62,8 +62,8 @@ class RigidSplitting final : public FixedStepper {
 void register_rigid_splitting_methods(MethodTable& table) {
   table.add({
       .name = "rigid-splitting",
-      .family = "rigid-splitting",
-      .source = "hand-written",
+      .family = Family::rigid_splitting,
+      .source = Source::hand_written,
       .description = "the free rigid body split into exact rotations about its principal axes, Strang-composed (symplectic, fixed step)",
       .order = {2, 2, "2"},
       .stepping = Stepping::fixed,

@@ -82,8 +82,8 @@ std::complex<double> rk4_stability(std::complex<double> z) { return 1.0 + z * (1
 void register_rk4_methods(MethodTable& table) {
   table.add({
       .name = "rk4",
-      .family = "rk4",
-      .source = "hand-written",
+      .family = Family::rk4,
+      .source = Source::hand_written,
       .description = "explicit, fixed step",
       .order = {4, 4, "4"},
       .stepping = Stepping::fixed,

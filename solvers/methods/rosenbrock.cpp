@@ -338,8 +338,8 @@ MakeIntegrator rosenbrock_integrator() {
 
 void register_rosenbrock_methods(MethodTable& table) {
   table.add({.name = "rodas4",
-             .family = "rosenbrock",
-             .source = "hand-written",
+             .family = Family::rosenbrock,
+             .source = Source::hand_written,
              .description = "Rodas4 (Hairer & Wanner): L-stable Rosenbrock 4(3), 6 stages, one Jacobian and LU a step (dense, or sparse LU on a "
                             "sparse Jacobian), PI control",
              .order = {4, 4, "4"},
@@ -348,8 +348,8 @@ void register_rosenbrock_methods(MethodTable& table) {
              .make = rosenbrock_integrator<rodas4>(),
              .stability = {.R = stability<rodas4>}});
   table.add({.name = "rodas5",
-             .family = "rosenbrock",
-             .source = "hand-written",
+             .family = Family::rosenbrock,
+             .source = Source::hand_written,
              .description = "Rodas5 (Di Marzo 1993): L-stable Rosenbrock 5(4), 8 stages, one Jacobian and LU a step (dense, or sparse LU on a "
                             "sparse Jacobian), PI control",
              .order = {5, 5, "5"},

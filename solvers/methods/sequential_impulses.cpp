@@ -73,8 +73,8 @@ class ContactStepping final : public FixedStepper {
 void register_sequential_impulses_methods(MethodTable& table) {
   table.add({
       .name = "sequential-impulses",
-      .family = "sequential-impulses",
-      .source = "hand-written",
+      .family = Family::sequential_impulses,
+      .source = Source::hand_written,
       .description = "rigid bodies in contact: kick, contact impulses by projected Gauss-Seidel (restitution, Coulomb "
                      "friction), drift (velocity-level time stepping, fixed step)",
       .order = {1, 1, "1"},

@@ -126,8 +126,8 @@ void register_stable_fluids_methods(MethodTable& table) {
   for (const bool maccormack : {false, true})
     table.add({
         .name = maccormack ? "stable-fluids-maccormack" : "stable-fluids",
-        .family = "stable-fluids",
-        .source = "hand-written",
+        .family = Family::stable_fluids,
+        .source = Source::hand_written,
         .description = maccormack ? "Stable Fluids with MacCormack advection (Selle et al. 2008, clamped): sharper smoke, same stability"
                                   : "Stam's Stable Fluids: forces, semi-Lagrangian advection (bilinear), diffusion and projection by FFT; fixed step",
         .order = maccormack ? Order{1, 2, "1-2"} : Order{1, 1, "1"},

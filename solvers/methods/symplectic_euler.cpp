@@ -123,8 +123,8 @@ using Stepper = std::conditional_t<std::is_void_v<F>, SymplecticEuler, InlineSym
 void register_symplectic_euler_methods(MethodTable& table) {
   table.add({
       .name = "symplectic-euler",
-      .family = "symplectic-euler",
-      .source = "hand-written",
+      .family = Family::symplectic_euler,
+      .source = Source::hand_written,
       .description = "semi-implicit, fixed step",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,

@@ -24,8 +24,8 @@ class WaveFd final : public ThreeLevelWaveStepper {
 void register_wave_fd_methods(MethodTable& table) {
   table.add({
       .name = "wave-fd",
-      .family = "wave-fd",
-      .source = "hand-written",
+      .family = Family::wave_fd,
+      .source = Source::hand_written,
       .description = "explicit three-level finite differences for the damped wave equation (the seeds' scheme), fixed step",
       .order = {2, 2, "2"},
       .stepping = Stepping::fixed,

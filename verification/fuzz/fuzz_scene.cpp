@@ -29,7 +29,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Scene scene = load_scene_text(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.toml");
     PreparedRun p = prepare_run(RunOptions{}, std::move(scene));
     // a GPU method needs a GL context (its own tests draw through llvmpipe), and a large grid is slow, not wrong
-    if (find_method(p.method)->family == "gpu" || p.model->size() > 20000) return 0;
+    if (find_method(p.method)->family == Family::gpu || p.model->size() > 20000) return 0;
     StepControl control = p.control;
     control.max_steps = 200;
     const double t_end = control.dt ? std::min(p.t_end, 20 * *control.dt) : std::min(p.t_end, 0.05);

@@ -57,10 +57,10 @@ TEST_F(Equations, ThePendulumWrittenAsEquationsRunsAsTheBuiltInOneOnEveryMethod)
   ASSERT_TRUE(equations_evaluation(*written)->compiled) << equations_evaluation(*written)->detail;
   int compared = 0, applying = 0;
   for (const auto& method : methods()) {
-    applying += method_applies(method, *builtin) && method.family != "gpu";
+    applying += method_applies(method, *builtin) && method.family != Family::gpu;
     const bool written_applies = method_applies(method, *written), builtin_applies = method_applies(method, *builtin);
     // every method that takes the built-in pendulum takes the written one (x' = v is found: symplectic-euler and friends)
-    if (method.family == "gpu") continue;  // float32 passes on a device, the same to float32 (test_gpu_shader)
+    if (method.family == Family::gpu) continue;  // float32 passes on a device, the same to float32 (test_gpu_shader)
     EXPECT_EQ(written_applies, builtin_applies) << method.name;
     if (!written_applies || !builtin_applies) continue;
     const StepControl control = method.fixed_step() ? StepControl::fixed(1e-3) : StepControl::adaptive(1e-8, 1e-11);
@@ -212,7 +212,7 @@ TEST_F(Equations, FixedStepMethodsKeepTheirOrderOnAnEquationsScene) {
   ASSERT_TRUE(model->has_exact());
   int checked = 0;
   for (const auto& method : methods()) {
-    if (!method.fixed_step() || !method_applies(method, *model) || method.order.min != method.order.max || method.order.max > 5 || method.family == "gpu" ||
+    if (!method.fixed_step() || !method_applies(method, *model) || method.order.min != method.order.max || method.order.max > 5 || method.family == Family::gpu ||
         long_run(method.name))
       continue;
     const ConvergenceSweep sweep = convergence_sweep(*model, method, 5.0, 6, coarse_dt(method, 0.25));

@@ -2,7 +2,9 @@
 // STEPWISE_GPU_BACKEND=egl, where the bitwise claims that hold for llvmpipe alone are not made): the wave schemes'
 // fragment passes against the float32 CPU loops step for step, against float64 to show what precision
 // costs, and against the exactly evolved DST modes; the cloth's pass against its float32 CPU step, that step
-// in float64 against the model's own symplectic Euler, and gpu-cloth as `run` takes it.
+// in float64 against the model's own symplectic Euler, and gpu-cloth as `run` takes it. Every pass twice: the
+// seeds' fragment pass and its compute twin (OpenGL 4.3 storage buffers; the wave's with a shared-memory tile),
+// which on llvmpipe give the float32 CPU loops' bits.
 #include "models/height_field.hpp"
 #include "models/model.hpp"
 #include "solvers/gpu/gpu_cloth.hpp"
@@ -13,6 +15,7 @@
 #include "verification/tolerances.hpp"
 #include "verification/wave_modes.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -28,6 +31,12 @@ gl::Context& context() {
   return *c;
 }
 
+// llvmpipe: IEEE float32 with the operations kept in order, the CPU's bits
+bool on_llvmpipe() { return context().description().find("llvmpipe") != std::string::npos; }
+
+constexpr gpu::Pass passes[] = {gpu::Pass::fragment, gpu::Pass::compute};
+const char* pass_name(gpu::Pass pass) { return pass == gpu::Pass::fragment ? "fragment pass" : "compute pass"; }
+
 // sin theta of the scheme's slowest mode (1, 1) at mu = 0: 2 cos theta = 2 - c^2 dt^2 lambda_11
 double sin_theta_min(const WaveGridView& grid, double dt) {
   const double lambda = laplacian_eigenvalue(grid.points - 1, grid.spacing, 1, 1);
@@ -40,13 +49,13 @@ double coefficient_sum(const BasicWaveCoefficients<float>& k) { return std::abs(
 // an undamped grid of `points` (d = 0.02, c = 1) at `fraction` of its step limit, two random levels in
 // float, uploaded to the shader
 struct Shader {
-  Shader(int points, double fraction, unsigned seed)
+  Shader(int points, double fraction, unsigned seed, gpu::Pass pass = gpu::Pass::fragment)
       : grid{points, 0.02, 1.0, 0.0},
         dt(fraction * wave_stable_dt(grid)),
         k(to_float(wave_coefficients(grid, dt))),
         z0(random_wave_field(points, 1.0, seed).cast<float>()),
         z1(random_wave_field(points, 1.0, seed + 1).cast<float>()),
-        gpu(context(), points, k) {
+        gpu(context(), points, k, pass) {
     gpu.upload(z0, z1);
   }
   // the round-off bound after `steps` (extra roundings per cell and step beyond the scheme's own)
@@ -62,24 +71,49 @@ struct Shader {
 };
 
 TEST(GpuShader, WavePassMatchesTheFloat32CpuLoopStepForStep) {
-  Shader shader(64, 0.9, 3);
-  Eigen::VectorXf cpu_prev = shader.z0, cpu = shader.z1, gpu_prev, gpu_z;
-  Eigen::VectorXd wide_prev = shader.z0.cast<double>(), wide = shader.z1.cast<double>();
-  long done = 0;
-  for (const long steps : {1L, 10L, 100L, 1000L}) {
-    shader.gpu.step(steps - done);
-    run_wave_scheme_float32(shader.grid, shader.dt, steps - done, cpu_prev, cpu);
-    run_wave_scheme(shader.grid, shader.dt, steps - done, wide_prev, wide);
-    done = steps;
-    shader.gpu.download(gpu_prev, gpu_z);
-    const double bound = shader.bound(steps);
-    const double shader_cpu = (gpu_z - cpu).cast<double>().norm(), cpu_wide = (cpu.cast<double>() - wide).norm();
-    std::cout << steps << " steps: |shader - cpu float32| = " << shader_cpu << ", |cpu float32 - float64| = " << cpu_wide
-              << ", bound " << bound << " (|z| = " << wide.norm() << ")\n";
-    EXPECT_LE(shader_cpu, bound) << steps << " steps";
-    EXPECT_LE((gpu_prev - cpu_prev).cast<double>().norm(), bound) << steps << " steps, the previous level";
-    EXPECT_LE(cpu_wide, bound) << steps << " steps: float32's own round-off";
+  for (const gpu::Pass pass : passes) {
+    Shader shader(64, 0.9, 3, pass);
+    Eigen::VectorXf cpu_prev = shader.z0, cpu = shader.z1, gpu_prev, gpu_z;
+    Eigen::VectorXd wide_prev = shader.z0.cast<double>(), wide = shader.z1.cast<double>();
+    long done = 0;
+    for (const long steps : {1L, 10L, 100L, 1000L}) {
+      shader.gpu.step(steps - done);
+      run_wave_scheme_float32(shader.grid, shader.dt, steps - done, cpu_prev, cpu);
+      run_wave_scheme(shader.grid, shader.dt, steps - done, wide_prev, wide);
+      done = steps;
+      shader.gpu.download(gpu_prev, gpu_z);
+      const double bound = shader.bound(steps);
+      const double shader_cpu = (gpu_z - cpu).cast<double>().norm(), cpu_wide = (cpu.cast<double>() - wide).norm();
+      std::cout << pass_name(pass) << ", " << steps << " steps: |shader - cpu float32| = " << shader_cpu << ", |cpu float32 - float64| = " << cpu_wide
+                << ", bound " << bound << " (|z| = " << wide.norm() << ")\n";
+      EXPECT_LE(shader_cpu, bound) << pass_name(pass) << ", " << steps << " steps";
+      EXPECT_LE((gpu_prev - cpu_prev).cast<double>().norm(), bound) << pass_name(pass) << ", " << steps << " steps, the previous level";
+      EXPECT_LE(cpu_wide, bound) << steps << " steps: float32's own round-off";
+      if (on_llvmpipe()) {
+        EXPECT_EQ(shader_cpu, 0) << pass_name(pass) << ", " << steps << " steps: llvmpipe gives the float32 CPU loop's bits";
+      }
+    }
   }
+}
+
+TEST(GpuShader, TheWaveComputePassGivesTheSameBitsWithAndWithoutItsSharedTile) {
+  // the tile is a copy of z in shared memory: reading it or the buffer is the same value, so the same cells;
+  // 70 points: work groups that overhang the grid, and a tile's halo clamped at its edges
+  const WaveGridView grid{70, 0.02, 1.0, 0.0};
+  const double dt = 0.9 * wave_stable_dt(grid);
+  const auto k = to_float(wave_coefficients(grid, dt));
+  const Eigen::VectorXf z0 = random_wave_field(grid.points, 1.0, 11).cast<float>(), z1 = random_wave_field(grid.points, 1.0, 12).cast<float>();
+  gpu::GpuWave tiled(context(), grid.points, k, gpu::Pass::compute, true), direct(context(), grid.points, k, gpu::Pass::compute, false);
+  tiled.upload(z0, z1);
+  direct.upload(z0, z1);
+  tiled.step(300);
+  direct.step(300);
+  Eigen::VectorXf a_prev, a, b_prev, b;
+  tiled.download(a_prev, a);
+  direct.download(b_prev, b);
+  EXPECT_EQ((a - b).cwiseAbs().maxCoeff(), 0);
+  EXPECT_EQ((a_prev - b_prev).cwiseAbs().maxCoeff(), 0);
+  EXPECT_GT(a.cwiseAbs().maxCoeff(), 0);
 }
 
 TEST(GpuShader, ShaderStateMatchesTheExactlyEvolvedDstModes) {
@@ -106,23 +140,29 @@ TEST(GpuShader, SymplecticPassMatchesTheFloat32CpuLoopStepForStep) {
   const double dt = 0.9 * symplectic_euler_wave_dt(grid), c2 = grid.c * grid.c / (grid.spacing * grid.spacing);
   const Eigen::VectorXf z0 = random_wave_field(grid.points, 1.0, 7).cast<float>();
   const Eigen::VectorXf v0 = random_wave_field(grid.points, 2 / dt, 8).cast<float>();
-  gpu::GpuSymplecticWave gpu(context(), grid.points, static_cast<float>(c2), 0.0f, static_cast<float>(dt));
-  gpu.upload(z0, v0);
-  Eigen::VectorXf z = z0, v = v0, gpu_z, gpu_v;
-  double max_z = z0.cwiseAbs().maxCoeff(), max_v = v0.cwiseAbs().maxCoeff();
-  long done = 0;
-  for (const long steps : {1L, 10L, 100L, 1000L}) {
-    gpu.step(steps - done);
-    for (; done < steps; ++done) {
-      run_symplectic_wave_float32(grid, dt, 1, z, v);
-      max_z = std::max(max_z, static_cast<double>(z.cwiseAbs().maxCoeff()));
-      max_v = std::max(max_v, static_cast<double>(v.cwiseAbs().maxCoeff()));
+  for (const gpu::Pass pass : passes) {
+    gpu::GpuSymplecticWave gpu(context(), grid.points, static_cast<float>(c2), 0.0f, static_cast<float>(dt), pass);
+    gpu.upload(z0, v0);
+    Eigen::VectorXf z = z0, v = v0, gpu_z, gpu_v;
+    double max_z = z0.cwiseAbs().maxCoeff(), max_v = v0.cwiseAbs().maxCoeff();
+    long done = 0;
+    for (const long steps : {1L, 10L, 100L, 1000L}) {
+      gpu.step(steps - done);
+      for (; done < steps; ++done) {
+        run_symplectic_wave_float32(grid, dt, 1, z, v);
+        max_z = std::max(max_z, static_cast<double>(z.cwiseAbs().maxCoeff()));
+        max_v = std::max(max_v, static_cast<double>(v.cwiseAbs().maxCoeff()));
+      }
+      gpu.download(gpu_z, gpu_v);
+      const double bound = tolerance::float32_symplectic_wave_bound(steps, sin_theta_min(grid, dt), dt, c2, max_z, max_v, static_cast<double>(z0.size()));
+      const double difference = (gpu_z - z).cast<double>().norm();
+      std::cout << pass_name(pass) << ", " << steps << " steps: |shader z - cpu float32 z| = " << difference << ", bound " << bound << " (|z| = " << z.norm() << ")\n";
+      EXPECT_LE(difference, bound) << pass_name(pass) << ", " << steps << " steps";
+      if (on_llvmpipe()) {
+        EXPECT_EQ(difference, 0) << pass_name(pass) << ", " << steps << " steps: llvmpipe gives the float32 CPU loop's bits";
+        EXPECT_EQ((gpu_v - v).cwiseAbs().maxCoeff(), 0) << pass_name(pass) << ", " << steps << " steps, v";
+      }
     }
-    gpu.download(gpu_z, gpu_v);
-    const double bound = tolerance::float32_symplectic_wave_bound(steps, sin_theta_min(grid, dt), dt, c2, max_z, max_v, static_cast<double>(z0.size()));
-    const double difference = (gpu_z - z).cast<double>().norm();
-    std::cout << steps << " steps: |shader z - cpu float32 z| = " << difference << ", bound " << bound << " (|z| = " << z.norm() << ")\n";
-    EXPECT_LE(difference, bound) << steps << " steps";
   }
 }
 
@@ -136,16 +176,37 @@ TEST(GpuShader, GpuWaveMethodFollowsWaveFdToFloat32RoundOff) {
   const long steps = 400;
   const std::vector<double> t_out{steps * dt};
   const auto run = [&](const char* method) { return make_integrator(method, StepControl::fixed(dt))->integrate(*model, 0, model->initial_state(), t_out); };
-  const RunResult gpu = run("gpu-wave"), cpu = run("wave-fd");
-  ASSERT_EQ(gpu.status, Status::ok) << gpu.message;
+  const RunResult cpu = run("wave-fd"), fragment = run("gpu-wave");
   const Eigen::Index cells = static_cast<Eigen::Index>(grid.points) * grid.points;
-  const double difference = (gpu.y_stop.head(cells) - cpu.y_stop.head(cells)).norm();
   const auto k = to_float(wave_coefficients(grid, dt));
   const double bound = tolerance::float32_wave_bound(steps, sin_theta_min(grid, dt), coefficient_sum(k), model->initial_state().head(cells).cwiseAbs().maxCoeff(),
                                                      static_cast<double>(cells)) *
                        (tolerance::float32_wave_roundings + 2) / tolerance::float32_wave_roundings;
-  std::cout << "gpu-wave against wave-fd after " << steps << " steps: " << difference << " (|z| = " << cpu.y_stop.head(cells).norm() << "), bound " << bound << '\n';
-  EXPECT_LE(difference, bound);
+  for (const char* method : {"gpu-wave", "gpu-wave-compute"}) {
+    const RunResult gpu = run(method);
+    ASSERT_EQ(gpu.status, Status::ok) << gpu.message;
+    const double difference = (gpu.y_stop.head(cells) - cpu.y_stop.head(cells)).norm();
+    std::cout << method << " against wave-fd after " << steps << " steps: " << difference << " (|z| = " << cpu.y_stop.head(cells).norm() << "), bound " << bound << '\n';
+    EXPECT_LE(difference, bound) << method;
+    // the twins: the same state, the same bits
+    if (on_llvmpipe()) {
+      EXPECT_EQ((gpu.y_stop - fragment.y_stop).cwiseAbs().maxCoeff(), 0) << method;
+    }
+  }
+}
+
+TEST(GpuShader, ComputePassesAreRefusedWithoutOpenGl43AndPastTheLargestStorageBufferNamingWhy) {
+  // the check a run makes before a compute method starts (exit 2): the version found, or the limit
+  EXPECT_EQ(gl::compute_problem(4, 3, "4.3"), "");
+  EXPECT_EQ(gl::compute_problem(4, 5, "4.5 (Core Profile) Mesa"), "");
+  const std::string old = gl::compute_problem(4, 2, "4.2 (Core Profile) Mesa 22.3.6");
+  EXPECT_NE(old.find("OpenGL 4.3"), std::string::npos) << old;
+  EXPECT_NE(old.find("4.2 (Core Profile) Mesa 22.3.6"), std::string::npos) << old;
+  EXPECT_NE(gl::compute_problem(3, 3, "3.3").find("this GL is 3.3"), std::string::npos);
+  EXPECT_EQ(gpu::compute_grid_problem(context(), 64, 64), "");
+  const std::string huge = gpu::compute_grid_problem(context(), 1 << 16, 1 << 16);
+  std::cout << huge << '\n';
+  EXPECT_NE(huge.find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE = "), std::string::npos) << huge;
 }
 
 TEST(GpuShader, AGridPastTheLargestTextureIsRefusedNamingTheLimit) {
@@ -177,12 +238,14 @@ TEST(GpuShader, ClothPassMatchesTheFloat32CpuStepStepForStep) {
   // step for step: each of 400 steps from the same float32 state on both sides (the CPU's, uploaded), one
   // pass against one CPU step, held to one step's round-off bound; and the device left to run on its own
   // state, which on llvmpipe (IEEE float32 with the operations kept in order) is the CPU's to the bit
-  const bool llvmpipe = context().description().find("llvmpipe") != std::string::npos;
-  for (const auto& [name, params] : {std::pair{"flag", flag_params()}, std::pair{"draping sheet", draping_params()}}) {
+  const bool llvmpipe = on_llvmpipe();
+  for (const gpu::Pass pass : passes)
+  for (const auto& [sheet, params] : {std::pair{"flag", flag_params()}, std::pair{"draping sheet", draping_params()}}) {
+    const std::string name = fmt::format("{}, {}", sheet, pass_name(pass));
     const auto model = make_model("cloth", params);
     const ClothGridView& view = *model->as<ClothGridView>();
     const double h = half_limit(*model), nodes = static_cast<double>(view.start.size());
-    gpu::GpuCloth stepped(context(), view), running(context(), view);
+    gpu::GpuCloth stepped(context(), view, pass), running(context(), view, pass);
     cloth_grid::State<float> cpu = cloth_grid::spread<float>(view, model->initial_state()), next, shader;
     running.upload(cpu);
     tolerance::ClothRoundoffScale scale;
@@ -222,7 +285,7 @@ TEST(GpuShader, ClothPassMatchesTheFloat32CpuStepStepForStep) {
     if (llvmpipe) {
       EXPECT_EQ(chained, 0) << name << ": llvmpipe computes the CPU's float32 operations in the CPU's order";
     }
-    if (name == std::string("draping sheet")) {
+    if (sheet == std::string("draping sheet")) {
       // the sheet met the sphere: some node lies on it (to float rounding), none inside
       double closest = 1e9;
       for (const auto& x : shader.x) closest = std::min(closest, double(norm(x)));
@@ -266,19 +329,26 @@ TEST(GpuShader, GpuClothMethodFollowsSymplecticEulerToFloat32RoundOff) {
     const long steps = 200;
     const std::vector<double> t_out{steps * h};
     const auto run = [&](const char* method) { return make_integrator(method, StepControl::fixed(h))->integrate(*model, 0, model->initial_state(), t_out); };
-    const RunResult gpu = run("gpu-cloth"), cpu = run("symplectic-euler");
-    ASSERT_EQ(gpu.status, Status::ok) << gpu.message;
+    const RunResult cpu = run("symplectic-euler"), fragment = run("gpu-cloth");
     const ClothGridView& view = *model->as<ClothGridView>();
     tolerance::ClothRoundoffScale scale;
     run_cloth_grid<double>(view, model->initial_state(), 0, h, steps, scale);
-    const double difference = position_difference(cloth_grid::spread<double>(view, gpu.y_stop), cloth_grid::spread<double>(view, cpu.y_stop));
     const double bound = tolerance::cloth_steps_bound(tolerance::float32_unit_roundoff, steps, h, static_cast<double>(view.start.size()), scale);
-    std::cout << "gpu-cloth against symplectic-euler after " << steps << " steps: " << difference << ", bound " << bound << '\n';
-    EXPECT_LE(difference, bound);
+    for (const char* method : {"gpu-cloth", "gpu-cloth-compute"}) {
+      const RunResult gpu = run(method);
+      ASSERT_EQ(gpu.status, Status::ok) << gpu.message;
+      const double difference = position_difference(cloth_grid::spread<double>(view, gpu.y_stop), cloth_grid::spread<double>(view, cpu.y_stop));
+      std::cout << method << " against symplectic-euler after " << steps << " steps: " << difference << ", bound " << bound << '\n';
+      EXPECT_LE(difference, bound) << method;
+      if (on_llvmpipe()) {
+        EXPECT_EQ((gpu.y_stop - fragment.y_stop).cwiseAbs().maxCoeff(), 0) << method << ": the twins' bits";
+      }
+    }
   }
   // and only on a cloth
   const auto water = make_model("standing-wave", {});
   EXPECT_FALSE(method_applies(*find_method("gpu-cloth"), *water));
+  EXPECT_FALSE(method_applies(*find_method("gpu-cloth-compute"), *water));
   EXPECT_NE(method_requirement(*find_method("gpu-cloth"), *water).find("cloth"), std::string::npos);
 }
 
