@@ -68,20 +68,24 @@ void BM_wave_blocked(benchmark::State& state) {
 // the same steps as passes on the GL's device (llvmpipe here, its threads LP_NUM_THREADS, by default one per
 // core; a GPU through EGL with STEPWISE_GPU_BACKEND=egl, as the methods), in float32, finished before the clock
 // stops: range(1) 0 the fragment pass (gpu-wave), 1 the compute pass with its shared tile (gpu-wave-compute),
-// 2 the compute pass reading every z from the buffer
+// 2 the compute pass reading every z from the buffer, 3 the compute pass taking four steps a dispatch on a tile
+// with a four-cell halo
 void BM_gpu_wave(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
   Grids g(n);
   const auto pass = state.range(1) == 0 ? stepwise::gpu::Pass::fragment : stepwise::gpu::Pass::compute;
-  stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k), pass, state.range(1) != 2);
+  using stepwise::gpu::Tiling;
+  const Tiling tiling = std::array{Tiling::tile, Tiling::tile, Tiling::none, Tiling::four_steps}[static_cast<size_t>(state.range(1))];
+  stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k), pass, tiling);
   gpu.upload(g.z_prev.cast<float>(), g.z.cast<float>());
   for (auto _ : state) {
     gpu.step(steps);
     gpu.finish();
   }
   count_cells(state, n);
-  state.SetLabel(fmt::format("{}, {}", std::array{"fragment", "compute, tiled", "compute, untiled"}[static_cast<size_t>(state.range(1))], context->description()));
+  state.SetLabel(fmt::format("{}, {}", std::array{"fragment", "compute, tiled", "compute, untiled", "compute, four steps a dispatch"}[static_cast<size_t>(state.range(1))],
+                             context->description()));
 }
 
 // the bound a pass's memory traffic has: a device-to-device copy of a grid's plane (n^2 vec4s) between two
@@ -137,10 +141,10 @@ void grids(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_wave_step)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_wave_blocked)->Apply(grids)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_wave_step)->Args({2048, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_gpu_wave)->ArgsProduct({{256, 1024, 2048}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_gpu_wave)->ArgsProduct({{256, 1024, 2048}, {0, 1, 2, 3}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_copy)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
 // the device's sizes (scripts/device-check part 4): the passes at 4096^2 and 8192^2, and their copy bound
-BENCHMARK(BM_gpu_wave)->ArgsProduct({{4096, 8192}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_gpu_wave)->ArgsProduct({{4096, 8192}, {0, 1, 3}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_copy)->Arg(4096)->Arg(8192)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_wave_transfer)->ArgsProduct({{1024, 2048}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_triad)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -11,6 +11,7 @@
 #include "stepwise/stepwise.hpp"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -470,7 +471,33 @@ RunOptions run_options(const std::string& scene, const std::map<std::string, dou
   return o;
 }
 
-// a scene run as `stepwise run` runs it: the trajectory's columns and rows (trajectory.csv's numbers) and summary.json's text
+// a JSON value as Python's: objects as dicts, arrays as lists, numbers as int or float; a number that is not
+// finite as None, as summary.json and advice.json write it
+py::object to_python(const nlohmann::json& j) {
+  switch (j.type()) {
+    case nlohmann::json::value_t::object: {
+      py::dict d;
+      for (const auto& [key, value] : j.items()) d[py::str(key)] = to_python(value);
+      return d;
+    }
+    case nlohmann::json::value_t::array: {
+      py::list l;
+      for (const auto& value : j) l.append(to_python(value));
+      return l;
+    }
+    case nlohmann::json::value_t::string: return py::str(j.get<std::string>());
+    case nlohmann::json::value_t::boolean: return py::bool_(j.get<bool>());
+    case nlohmann::json::value_t::number_integer: return py::int_(j.get<long long>());
+    case nlohmann::json::value_t::number_unsigned: return py::int_(j.get<unsigned long long>());
+    case nlohmann::json::value_t::number_float: {
+      const double x = j.get<double>();
+      return std::isfinite(x) ? py::object(py::float_(x)) : py::object(py::none());
+    }
+    default: return py::none();
+  }
+}
+
+// a scene run as `stepwise run` runs it: the trajectory's columns and rows (trajectory.csv's numbers) and summary.json's fields
 py::dict run(const std::string& scene, const std::optional<std::string>& method, std::optional<double> dt, std::optional<double> rtol, std::optional<double> atol,
              std::optional<double> t_end, std::optional<double> output_dt, const std::map<std::string, double>& sets, std::optional<double> max_steps) {
   RunOptions o = run_options(scene, sets);
@@ -508,7 +535,7 @@ py::dict run(const std::string& scene, const std::optional<std::string>& method,
   py::dict d;
   d["columns"] = rows.columns();
   d["values"] = values;
-  d["summary"] = summary_text(p, m, rows.constraint_drift());
+  d["summary"] = to_python(summary_json(p, m, rows.constraint_drift()));
   return d;
 }
 
@@ -547,7 +574,7 @@ py::dict advise_scene(const std::string& scene, double error, double budget, con
     tables = advice_tables({a});
   }
   py::dict d;
-  d["advice"] = advice_json_text(a, o.scene_file);
+  d["advice"] = to_python(advice_json(a, o.scene_file));
   d["markdown"] = markdown;
   d["sweep"] = table_dict(tables.sweep);
   return d;

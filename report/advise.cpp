@@ -416,7 +416,7 @@ AdviceTables advice_tables(const std::vector<Advice>& advices) {
   return t;
 }
 
-std::string advice_json_text(const Advice& a, const std::string& scene_file) {
+nlohmann::json advice_json(const Advice& a, const std::string& scene_file) {
   nlohmann::json j;
   j["scene"] = a.scene;
   j["scene_file"] = scene_file;
@@ -455,8 +455,10 @@ std::string advice_json_text(const Advice& a, const std::string& scene_file) {
     e["searched_stable_dt"] = c.searched_stable_dt ? nlohmann::json(*c.searched_stable_dt) : nlohmann::json(nullptr);
     j["candidates"].push_back(e);
   }
-  return j.dump(2) + "\n";
+  return j;
 }
+
+std::string advice_json_text(const Advice& a, const std::string& scene_file) { return advice_json(a, scene_file).dump(2) + "\n"; }
 
 void check_advice_request(double error, double budget_seconds) {
   if (!(std::isfinite(error) && error > 0)) throw InputError(fmt::format("--error: must be a positive finite number, got {}", error));

@@ -11,6 +11,8 @@
 #include "run/prepare.hpp"
 #include "solvers/stability.hpp"  // stiffness_threshold
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <optional>
 #include <string>
 #include <vector>
@@ -76,6 +78,7 @@ std::string advice_markdown(const Advice& advice, const std::string& command, co
 
 // advice.json's text: the contract's fields (method, dt or rtol and atol, error, cpu_seconds, stiff, runner_up,
 // candidates) and the spectrum, reference and reproduction behind them; `scene_file` as the user gave it
+nlohmann::json advice_json(const Advice& advice, const std::string& scene_file);
 std::string advice_json_text(const Advice& advice, const std::string& scene_file);
 
 // the sweeps' points (advice_sweep.csv) and one row per advice (advice_summary.csv: what plot.py marks)

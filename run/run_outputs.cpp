@@ -19,6 +19,8 @@ std::vector<std::string> sample_names(const Model& model) {
   return names.empty() ? model.state_names() : names;
 }
 
+}  // namespace
+
 nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::optional<double> constraint_drift) {
   const RunResult& r = m.result;
   nlohmann::json j;
@@ -88,8 +90,6 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
   }
   return j;
 }
-
-}  // namespace
 
 TrajectoryRows::TrajectoryRows(const Model& model) : model_(model), columns_{"t"} {
   for (const auto& name : sample_names(model)) columns_.push_back(name);

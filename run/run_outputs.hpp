@@ -12,6 +12,8 @@
 #include "run/measure.hpp"
 #include "run/prepare.hpp"
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -45,7 +47,9 @@ class TrajectoryRows {
   mutable double drift_ = 0;
 };
 
-// summary.json's text (DESIGN.md's fields) for a finished run; `constraint_drift` where the scene has constraints
+// summary.json (DESIGN.md's fields) for a finished run, as a value and as its text; `constraint_drift` where the
+// scene has constraints
+nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::optional<double> constraint_drift = std::nullopt);
 std::string summary_text(const PreparedRun& p, const Measured& m, std::optional<double> constraint_drift = std::nullopt);
 
 class RunOutputs {

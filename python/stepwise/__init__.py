@@ -9,7 +9,6 @@ equations compiled once (``Equations``) with no Python in the loop.
 Use Debian's /usr/bin/python3 (its dist-packages hold numpy); docs/library.md says how to install it.
 """
 
-import json
 import warnings
 
 import numpy as np
@@ -60,7 +59,7 @@ def run(scene, method=None, dt=None, rtol=None, atol=None, t_end=None, output_dt
     """Run a scene file (a path, or a shipped scene by name: "pendulum") as ``stepwise run`` runs it, with
     the same overrides; the numbers equal trajectory.csv's and summary.json's to the bit."""
     out = _stepwise.run(str(scene), method, dt, rtol, atol, t_end, output_dt, _sets(set), max_steps)
-    return RunResult(out["columns"], out["values"], json.loads(out["summary"]))
+    return RunResult(out["columns"], out["values"], out["summary"])
 
 
 def advise(scene, error, budget=10.0, set=None, threads=0):
@@ -69,7 +68,7 @@ def advise(scene, error, budget=10.0, set=None, threads=0):
     runner_up, candidates: each method's verdict and reason), with markdown (advice.md's text) and sweep (every
     run: advice_sweep.csv's columns as numpy arrays)."""
     out = _stepwise.advise(str(scene), float(error), float(budget), _sets(set), int(threads))
-    advice = json.loads(out["advice"])
+    advice = out["advice"]
     advice["markdown"] = out["markdown"]
     advice["sweep"] = out["sweep"]
     return advice

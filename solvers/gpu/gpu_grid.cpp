@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <mutex>
 
@@ -68,8 +69,9 @@ std::string compute_grid_problem(const Context& context, int width, int height) 
   return {};
 }
 
-GpuGrid::GpuGrid(const Context& context, int width, int height, int planes, Pass pass, const std::string& source, const std::string& name)
-    : context_(context), gl_(context.gl()), width_(width), height_(height), planes_(planes), pass_(pass) {
+GpuGrid::GpuGrid(const Context& context, int width, int height, int planes, Pass pass, const std::string& source, const std::string& name,
+                 int steps_per_dispatch)
+    : context_(context), gl_(context.gl()), width_(width), height_(height), planes_(planes), pass_(pass), steps_per_dispatch_(steps_per_dispatch) {
   if (pass == Pass::compute) {
     if (const std::string problem = compute_grid_problem(context, width, height); !problem.empty()) throw GlError(problem);
     const auto bytes = static_cast<GLsizeiptr>(16) * width * height;
@@ -144,7 +146,11 @@ void GpuGrid::step(long count) {
   gl_.UseProgram(program_);
   if (pass_ == Pass::compute) {
     const auto groups = [](int cells) { return static_cast<GLuint>((cells + tile - 1) / tile); };
-    for (long s = 0; s < count; ++s) {
+    const GLint pass_steps = steps_per_dispatch_ > 1 ? gl_.GetUniformLocation(program_, "pass_steps") : -1;
+    for (long left = count; left > 0;) {
+      const long steps = std::min<long>(left, steps_per_dispatch_);
+      if (pass_steps >= 0) gl_.Uniform1i(pass_steps, static_cast<GLint>(steps));
+      left -= steps;
       for (int p = 0; p < planes_; ++p) {
         gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(p), textures_[current_][p]);
         gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(4 + p), textures_[1 - current_][p]);

@@ -38,7 +38,10 @@ class GpuGrid {
   // GlError naming the limit where the grid passes GL_MAX_TEXTURE_SIZE (a fragment pass) or
   // GL_MAX_SHADER_STORAGE_BLOCK_SIZE (a compute pass), where the context cannot render to RGBA32F, or where it
   // has no compute shaders
-  GpuGrid(const Context& context, int width, int height, int planes, Pass pass, const std::string& source, const std::string& name);
+  // `steps_per_dispatch` > 1: a compute pass takes up to that many steps a dispatch, told how many by its
+  // uniform int `pass_steps`
+  GpuGrid(const Context& context, int width, int height, int planes, Pass pass, const std::string& source, const std::string& name,
+          int steps_per_dispatch = 1);
   virtual ~GpuGrid();
   GpuGrid(const GpuGrid&) = delete;
   GpuGrid& operator=(const GpuGrid&) = delete;
@@ -63,6 +66,7 @@ class GpuGrid {
   const Gl& gl_;
   int width_, height_, planes_;
   Pass pass_;
+  int steps_per_dispatch_;
   std::vector<unsigned> textures_[2];  // each set's planes: textures, or a compute pass's storage buffers
   unsigned framebuffers_[2] = {0, 0};
   unsigned program_ = 0, vertex_array_ = 0;

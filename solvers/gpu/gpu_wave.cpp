@@ -17,7 +17,10 @@ namespace {
 // how a pass reaches the grid: its size, z at a cell (the red channel of the state), and its output. Cell
 // (x, y) is i * points + j with x = j, y = i: rows (i) apart along y, as z[j -+ n] on the CPU. The fragment
 // pass reads the state texture; the compute pass reads z from a tile in shared memory, the work group's
-// 16 x 16 cells and a one-cell halo, loaded once (each z is read by five cells; `tiled` 0 reads the buffer)
+// 16 x 16 cells and a one-cell halo, loaded once (each z is read by five cells; TILED 0 reads the buffer). With
+// STEPS > 1 the tile holds both channels of a 16 x 16 block with a halo of STEPS cells, twice (ping-pong in
+// shared memory), and a dispatch takes up to STEPS steps on it, the region it gets right shrinking by a cell a
+// step, before writing its 16 x 16 block: a block's cells are read from memory once every STEPS steps
 const char* const fragment_access = R"(#version 450
 layout(binding = 0) uniform sampler2D state;
 layout(location = 0) out vec4 next;
@@ -28,6 +31,17 @@ float z_at(ivec2 p) { return texelFetch(state, p, 0).r; }
 const char* const compute_access = R"(
 layout(std430, binding = 0) readonly buffer State { vec4 state[]; };
 layout(std430, binding = 4) writeonly buffer Next { vec4 next[]; };
+#if STEPS > 1
+#define T (16 + 2 * STEPS)
+shared vec2 levels[2][T][T];
+uniform int pass_steps;
+int level = 0;
+ivec2 tile_origin() { return ivec2(gl_WorkGroupID.xy) * 16 - STEPS; }
+float z_at(ivec2 p) {
+  ivec2 t = p - tile_origin();
+  return levels[level][t.y][t.x].x;
+}
+#else
 shared float tile_z[18][18];
 float z_at(ivec2 p) {
 #if TILED
@@ -37,6 +51,7 @@ float z_at(ivec2 p) {
   return state[p.y * size.x + p.x].r;
 #endif
 }
+#endif
 )";
 
 // what every wave pass shares: whether a cell is on the grid's boundary, and the sum of its four neighbours
@@ -65,6 +80,35 @@ void main() {
 )";
 
 const char* const compute_main = R"(
+#if STEPS > 1
+void main() {
+  ivec2 origin = tile_origin();
+  for (uint k = gl_LocalInvocationIndex; k < uint(T * T); k += 256u) {
+    ivec2 t = ivec2(int(k % uint(T)), int(k / uint(T)));
+    ivec2 q = clamp(origin + t, ivec2(0), size - 1);
+    levels[0][t.y][t.x] = state[q.y * size.x + q.x].rg;
+  }
+  memoryBarrierShared();
+  barrier();
+  for (int s = 1; s <= pass_steps; ++s) {
+    for (uint k = gl_LocalInvocationIndex; k < uint(T * T); k += 256u) {
+      ivec2 t = ivec2(int(k % uint(T)), int(k / uint(T)));
+      ivec2 p = origin + t;
+      vec2 here = levels[level][t.y][t.x];
+      bool inner = all(greaterThanEqual(t, ivec2(s))) && all(lessThan(t, ivec2(T - s)));
+      bool on_grid = all(greaterThanEqual(p, ivec2(0))) && all(lessThan(p, size));
+      levels[1 - level][t.y][t.x] = inner && on_grid ? step_cell(p, vec4(here, 0.0, 0.0)).rg : here;
+    }
+    memoryBarrierShared();
+    barrier();
+    level = 1 - level;
+  }
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (p.x >= size.x || p.y >= size.y) return;
+  ivec2 t = p - origin;
+  next[p.y * size.x + p.x] = vec4(levels[level][t.y][t.x], 0.0, 0.0);
+}
+#else
 void main() {
 #if TILED
   ivec2 origin = ivec2(gl_WorkGroupID.xy) * 16 - 1;
@@ -81,6 +125,7 @@ void main() {
   int i = p.y * size.x + p.x;
   next[i] = step_cell(p, state[i]);
 }
+#endif
 )";
 
 // the three-level step of a cell: R = z^k, G = z^{k-1} in, (z^{k+1}, z^k) out; the boundary holds
@@ -117,15 +162,18 @@ vec4 step_cell(ivec2 p, vec4 here) {
 )";
 
 // a wave pass's GLSL: the access of its kind, the shared cell functions, the scheme's step, the kind's main
-std::string wave_source(Pass pass, const char* cell, bool tiled) {
+std::string wave_source(Pass pass, const char* cell, Tiling tiling) {
   if (pass == Pass::fragment) return std::string(fragment_access) + grid_cell + cell + fragment_main;
-  return compute_prelude() + fmt::format("#define TILED {}\n", tiled ? 1 : 0) + compute_access + grid_cell + cell + compute_main;
+  return compute_prelude() + fmt::format("#define TILED {}\n#define STEPS {}\n", tiling == Tiling::none ? 0 : 1, steps_per_dispatch(tiling)) +
+         compute_access + grid_cell + cell + compute_main;
 }
 
 }  // namespace
 
-GpuWaveGrid::GpuWaveGrid(const Context& context, int points, Pass pass, const char* cell, const std::string& name, bool tiled)
-    : GpuGrid(context, points, points, 1, pass, wave_source(pass, cell, tiled), name) {}
+int steps_per_dispatch(Tiling tiling) { return tiling == Tiling::four_steps ? 4 : 1; }
+
+GpuWaveGrid::GpuWaveGrid(const Context& context, int points, Pass pass, const char* cell, const std::string& name, Tiling tiling)
+    : GpuGrid(context, points, points, 1, pass, wave_source(pass, cell, tiling), name, pass == Pass::compute ? steps_per_dispatch(tiling) : 1) {}
 
 void GpuWaveGrid::upload_channels(const Eigen::VectorXf& red, const Eigen::VectorXf& green) {
   std::vector<float> texels(4 * static_cast<size_t>(red.size()));
@@ -148,8 +196,8 @@ void GpuWaveGrid::download_channels(Eigen::VectorXf& red, Eigen::VectorXf& green
   }
 }
 
-GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k, Pass pass, bool tiled)
-    : GpuWaveGrid(context, points, pass, wave_cell, pass == Pass::fragment ? "wave pass" : "wave compute pass", tiled) {
+GpuWave::GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k, Pass pass, Tiling tiling)
+    : GpuWaveGrid(context, points, pass, wave_cell, pass == Pass::fragment ? "wave pass" : "wave compute pass", tiling) {
   set_coefficients(k);
 }
 
@@ -159,8 +207,8 @@ void GpuWave::set_coefficients(const BasicWaveCoefficients<float>& k) {
   uniform("k_neighbours", k.neighbours);
 }
 
-GpuSymplecticWave::GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt, Pass pass)
-    : GpuWaveGrid(context, points, pass, symplectic_cell, pass == Pass::fragment ? "symplectic wave pass" : "symplectic wave compute pass") {
+GpuSymplecticWave::GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt, Pass pass, Tiling tiling)
+    : GpuWaveGrid(context, points, pass, symplectic_cell, pass == Pass::fragment ? "symplectic wave pass" : "symplectic wave compute pass", tiling) {
   uniform("c2", c2);
   uniform("mu", mu);
   set_step(dt);

@@ -21,12 +21,18 @@
 
 namespace stepwise::gpu {
 
+// how a compute pass reads z: from the buffer, five reads a cell (none); from a tile of its work group's cells
+// and a one-cell halo in shared memory, loaded once a step (tile); or from a tile of both channels with a
+// four-cell halo, on which a dispatch takes up to four steps (four_steps: the block read from memory once in
+// four steps, its halo's cells computed by more than one work group)
+enum class Tiling { none, tile, four_steps };
+int steps_per_dispatch(Tiling tiling);
+
 // a square grid's two channels (R, G) in one plane of GpuGrid, stepped by `cell` (the GLSL of a cell's step,
-// gpu_wave.cpp's) in a pass of either kind; a compute pass reads z from a tile in shared memory unless `tiled`
-// is false (the bench's comparison)
+// gpu_wave.cpp's) in a pass of either kind, a compute pass's reads as `tiling` says
 class GpuWaveGrid : public GpuGrid {
  public:
-  GpuWaveGrid(const Context& context, int points, Pass pass, const char* cell, const std::string& name, bool tiled = true);
+  GpuWaveGrid(const Context& context, int points, Pass pass, const char* cell, const std::string& name, Tiling tiling = Tiling::tile);
 
  protected:
   // the two channels, points^2 each, row-major (the CPU grids' layout)
@@ -37,7 +43,7 @@ class GpuWaveGrid : public GpuGrid {
 // the seeds' three-level scheme: R = z^k, G = z^{k-1}
 class GpuWave final : public GpuWaveGrid {
  public:
-  GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k, Pass pass = Pass::fragment, bool tiled = true);
+  GpuWave(const Context& context, int points, const BasicWaveCoefficients<float>& k, Pass pass = Pass::fragment, Tiling tiling = Tiling::tile);
   // the coefficients of another step size
   void set_coefficients(const BasicWaveCoefficients<float>& k);
   void upload(const Eigen::VectorXf& z_prev, const Eigen::VectorXf& z) { upload_channels(z, z_prev); }
@@ -48,7 +54,8 @@ class GpuWave final : public GpuWaveGrid {
 // z += v dt (models/height_field.hpp's wave_acceleration, in float32, `precise`); R = z, G = v
 class GpuSymplecticWave final : public GpuWaveGrid {
  public:
-  GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt, Pass pass = Pass::fragment);  // c2 = c^2 / d^2
+  GpuSymplecticWave(const Context& context, int points, float c2, float mu, float dt, Pass pass = Pass::fragment,
+                    Tiling tiling = Tiling::tile);  // c2 = c^2 / d^2
   void set_step(float dt);
   void upload(const Eigen::VectorXf& z, const Eigen::VectorXf& v) { upload_channels(z, v); }
   void download(Eigen::VectorXf& z, Eigen::VectorXf& v) const { download_channels(z, v); }
