@@ -67,11 +67,12 @@ void BM_cloth_grid_cpu(benchmark::State& state) {
 }
 
 // the transfers a run adds to the passes, counted apart from them: range(1) 0 the state uploaded (a run's
-// start), 1 read back (each output of a run; a frame of a picture)
+// start), 1 read back (each output of a run; a frame of a picture); range(2) 0 the fragment pass's textures, 1 the
+// compute pass's storage buffers
 void BM_gpu_cloth_transfer(benchmark::State& state) {
   static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
   const auto& view = flag_view(static_cast<int>(state.range(0)));
-  stepwise::gpu::GpuCloth gpu(*context, view);
+  stepwise::gpu::GpuCloth gpu(*context, view, state.range(2) == 0 ? stepwise::gpu::Pass::fragment : stepwise::gpu::Pass::compute);
   const auto s = stepwise::cloth_grid::spread<float>(view, flat_start(view));
   auto back = s;
   gpu.upload(s);
@@ -107,7 +108,7 @@ void BM_gpu_cloth(benchmark::State& state) {
 BENCHMARK(BM_cloth_grid_cpu<double>) SIZES;
 BENCHMARK(BM_cloth_grid_cpu<float>) SIZES;
 BENCHMARK(BM_gpu_cloth)->ArgsProduct({{128, 256, 1024, 2048, 4096}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_gpu_cloth_transfer)->ArgsProduct({{128, 256, 1024}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_gpu_cloth_transfer)->ArgsProduct({{128, 256, 1024}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

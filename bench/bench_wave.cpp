@@ -109,12 +109,14 @@ void BM_gpu_copy(benchmark::State& state) {
 }
 
 // the transfers a run adds to the passes, counted apart from them: range(1) 0 both levels uploaded (a run's
-// start), 1 both read back (each output of a run; a frame of a picture)
+// start), 1 both read back (each output of a run; a frame of a picture); range(2) 0 the fragment pass's
+// textures, 1 the compute pass's storage buffers
 void BM_gpu_wave_transfer(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
   Grids g(n);
-  stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k));
+  const auto pass = state.range(2) == 0 ? stepwise::gpu::Pass::fragment : stepwise::gpu::Pass::compute;
+  stepwise::gpu::GpuWave gpu(*context, n, stepwise::to_float(g.k), pass);
   const Eigen::VectorXf z_prev = g.z_prev.cast<float>(), z = g.z.cast<float>();
   Eigen::VectorXf back_prev, back;
   gpu.upload(z_prev, z);
@@ -128,6 +130,7 @@ void BM_gpu_wave_transfer(benchmark::State& state) {
     }
   }
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * 2 * static_cast<int64_t>(z.size()) * static_cast<int64_t>(sizeof(float)));
+  state.SetLabel(pass == stepwise::gpu::Pass::fragment ? "fragment pass's textures" : "compute pass's buffers");
 }
 
 // a[i] = b[i] + s c[i] over three arrays of range(0)^2, eight times an iteration
@@ -146,7 +149,7 @@ BENCHMARK(BM_gpu_copy)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->Use
 // the device's sizes (scripts/device-check part 4): the passes at 4096^2 and 8192^2, and their copy bound
 BENCHMARK(BM_gpu_wave)->ArgsProduct({{4096, 8192}, {0, 1, 3}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_copy)->Arg(4096)->Arg(8192)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_gpu_wave_transfer)->ArgsProduct({{1024, 2048}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_gpu_wave_transfer)->ArgsProduct({{1024, 2048}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_triad)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // the standing wave (65^2, mu = 0.5, 2 s) by `run`'s path: wave-fd at dt = limit/2, and CVODE at the
