@@ -26,7 +26,15 @@
 namespace stepwise {
 namespace {
 
-StudyOutput cloth(const StudyContext& ctx) {
+// a section of the study: its table and its Markdown
+struct Section {
+  Table table;
+  std::string md;
+};
+
+// the explicit methods' limits on the 8 x 8 sheet against its stiffness, measured by bisection and predicted from
+// its stiffest mode, and implicit Euler at 100 times symplectic Euler's limit
+Section stability_section(const StudyContext& ctx, std::vector<Figure>& figures) {
   const bool quick = ctx.quick;
   const long steps = 2000;
   const std::vector<double> stiffnesses = quick ? std::vector<double>{10, 100, 1000} : std::vector<double>{10, 100, 1000, 10000};
@@ -90,7 +98,6 @@ StudyOutput cloth(const StudyContext& ctx) {
                         {"measured_dt", "measured dt (s)", shown_as("{:.4g}")},
                         {"measured_over_predicted", "measured / predicted", shown_as("{:.3f}")}},
                        [&](size_t row) { return std::get<std::string>(limits.rows[row][1]) != "implicit-euler"; });
-  std::vector<Figure> figures;
   md += "\n";
   // the explicit methods' limits (implicit Euler's rows have no prediction: it is stable at every step)
   const auto limit = [](std::string column, std::string label, std::string mark) {
@@ -112,7 +119,12 @@ StudyOutput cloth(const StudyContext& ctx) {
       100 * worst_symplectic, std::sqrt(stiffnesses.back() / stiffnesses.front()), 100 * (rk4_low - 1), 100 * (rk4_high - 1), steps,
       euler_low, euler_high, implicit_all_ok ? "stays bounded" : "did NOT stay bounded everywhere");
 
-  // implicit Euler's numerical damping on one linear spring: amplitude per step against 1 / sqrt(1 + w^2 h^2)
+  return {std::move(limits), md};
+}
+
+// implicit Euler's numerical damping on one linear spring: amplitude per step against 1 / sqrt(1 + w^2 h^2)
+Section damping_section(std::vector<Figure>& figures) {
+  std::string md;
   Table damping{{"omega_h", "measured_ratio", "predicted_ratio", "periods_to_halve"}, {}};
   md += "Implicit Euler's numerical damping: one mass on one undamped spring (w = 20 rad/s), the amplitude sqrt(w^2 u^2 + v^2) "
         "kept per step against 1 / sqrt(1 + w^2 h^2).\n\n";
@@ -145,7 +157,12 @@ StudyOutput cloth(const StudyContext& ctx) {
       "implicit Euler is stable there by removing them.\n\n",
       worst_damping, halving[0.01], halving[0.1]);
 
-  // what each spring family adds: the sheet hanging from two corners, 16 x 16, 3 s
+  return {std::move(damping), md};
+}
+
+// what each spring family adds: the sheet hanging from two corners, 16 x 16, 3 s
+Section families_section() {
+  std::string md;
   Table families{{"structural", "shear", "bend", "y_min", "max_stretch", "cpu_seconds", "status"}, {}};
   md += "What each spring family adds: the 16 x 16 sheet hanging from two corners for 3 s (implicit-euler, dt = 0.01).\n\n";
   std::vector<Eigen::VectorXd> ends;
@@ -170,7 +187,12 @@ StudyOutput cloth(const StudyContext& ctx) {
       "in its own plane barely bends, so for this scene they are model it does not need.\n\n",
       ends[1][5] - ends[0][5], ends[0][6], ends[1][6], ends[2][5] - ends[1][5]);
 
-  // momentum: a free sheet (no pins, gravity, drag or wind) pulled by one corner; its momentum is exactly F t
+  return {std::move(families), md};
+}
+
+// momentum: a free sheet (no pins, gravity, drag or wind) pulled by one corner; its momentum is exactly F t
+Section momentum_section(const StudyContext& ctx) {
+  std::string md;
   Table momentum{{"method", "dt", "momentum_error", "cpu_seconds", "status"}, {}};
   const Params free_sheet{{"rows", 16}, {"columns", 16}, {"pin_corners", 0}, {"pin_top_corners", 0}, {"g", 0}, {"drag", 0},
                           {"wind_coefficient", 0}, {"pick_row", 0}, {"pick_column", 0}, {"pick_fz", 1}};
@@ -212,9 +234,18 @@ StudyOutput cloth(const StudyContext& ctx) {
       "Euler's K and D have zero block-row sums (the springs do not care where the sheet is), so each of its solves adds h F to the "
       "momentum: {} with CG from a kept factor, {} with Newton. Liu's method keeps it to {}: the truncation of its 10 iterations.\n\n",
       sci(momentum_error(0)), sci(momentum_error(1)), sci(momentum_error(2)), sci(momentum_error(3)), sci(momentum_error(4)));
-  return {{{"cloth_stability", std::move(limits)}, {"cloth_implicit_damping", std::move(damping)}, {"cloth_families", std::move(families)},
-           {"cloth_momentum", std::move(momentum)}},
-          md, figures};
+  return {std::move(momentum), md};
+}
+
+StudyOutput cloth(const StudyContext& ctx) {
+  std::vector<Figure> figures;
+  Section stability = stability_section(ctx, figures), damping = damping_section(figures), families = families_section(), momentum = momentum_section(ctx);
+  return {{{"cloth_stability", std::move(stability.table)},
+           {"cloth_implicit_damping", std::move(damping.table)},
+           {"cloth_families", std::move(families.table)},
+           {"cloth_momentum", std::move(momentum.table)}},
+          stability.md + damping.md + families.md + momentum.md,
+          figures};
 }
 
 }  // namespace
