@@ -1,18 +1,30 @@
 // The report's study: stability regions: each method's region in the complex plane against the scenes' spectra.
 #include "report/studies/study_scenes.hpp"
 
+#include <optional>
+
 namespace stepwise {
 namespace {
 
-StudyOutput stability_regions(const StudyContext& ctx) {
-  const long steps = 2000;
-  struct SpectrumScene {
-    std::string label;
-    std::shared_ptr<const Model> model;
-    Eigen::VectorXd y0;
-    std::function<bool(std::string_view method, double dt)> bounded;  // the measured side
-  };
-  // the standing wave's grid from a random field (every mode excited) and the cloth's stability sheet from rest
+constexpr long steps = 2000;  // a probe's steps, from which a run must stay within 1e6 of its start
+
+struct SpectrumScene {
+  std::string label;
+  std::shared_ptr<const Model> model;
+  Eigen::VectorXd y0;
+  std::function<bool(std::string_view method, double dt)> bounded;  // the measured side
+};
+
+// a method's predicted and measured largest stable step on a scene
+struct Limit {
+  size_t scene;
+  std::string method;
+  double predicted = NAN, measured = NAN;
+};
+
+// the scenes whose spectra are drawn: the user's, or the standing wave's grid from a random field (every mode
+// excited) and the cloth's stability sheet from rest
+std::vector<SpectrumScene> spectrum_scenes(const StudyContext& ctx) {
   std::vector<SpectrumScene> scenes;
   if (ctx.scenes) {
     // the user's scene: its exact Jacobian's spectrum at the start, and runs from its initial state
@@ -35,43 +47,15 @@ StudyOutput stability_regions(const StudyContext& ctx) {
                         return stays_bounded(*sheet, method, sheet->initial_state(), dt, steps);
                       }});
   }
-  // the regions drawn: the fixed-step methods with a stability function R(z) (one-step methods on y' = lambda y)
-  const std::vector<std::string> region_methods =
-      method_names_where([](const Method& m) { return m.stability.R != nullptr && m.stepping == Stepping::fixed; });
+  return scenes;
+}
 
-  std::vector<std::string> labels;
-  for (const auto& s : scenes) labels.push_back(s.label + " spectrum");
-  const auto spectra = ctx.sweep<Eigen::VectorXcd>(labels, [&](size_t i) { return jacobian_spectrum(*scenes[i].model, 0, scenes[i].y0); });
-
-  struct Limit {
-    size_t scene;
-    std::string method;
-    double predicted = NAN, measured = NAN;
-  };
-  std::vector<Limit> limits;
-  labels.clear();
-  for (size_t i = 0; i < scenes.size(); ++i)
-    for (const auto& method : region_methods) {
-      limits.push_back({i, method, *spectrum_stable_dt(method, spectra[i])});
-      labels.push_back(fmt::format("{} {}", scenes[i].label, method));
-    }
-  const auto measured = ctx.sweep<double>(labels, [&](size_t k) {
-    const Limit& l = limits[k];
-    // an A-stable method (no largest stable step) is not probed: implicit Euler's Newton solves on 578 unknowns
-    // would cost more than the rest of the study
-    if (!std::isfinite(l.predicted) || l.predicted <= 0) return std::numeric_limits<double>::quiet_NaN();
-    const auto& s = scenes[l.scene];
-    return bisect_stability([&](double dt) { return s.bounded(l.method, dt); }, l.predicted / 4, l.predicted * 16,
-                            tolerance::stability_bisection_width);
-  });
-
-  Table spectrum{{"scene", "re", "im"}, {}};
-  for (size_t i = 0; i < scenes.size(); ++i)
-    for (const auto& lambda : spectra[i]) spectrum.rows.push_back({scenes[i].label, lambda.real(), lambda.imag()});
-  // the figure's plane, per scene: the spectrum times rk4's predicted step h (and 1.5 h), and |R(z)| of each
-  // region's method on a grid reaching past the farthest h lambda (the figure draws its level 1)
+// the figure's plane, per scene: the spectrum times rk4's predicted step h (and 1.5 h) into `plane_spectrum`, and
+// |R(z)| of each region's method on a grid reaching past the farthest h lambda into a table (the figure draws
+// its level 1), which is returned
+Table region_plane(const std::vector<SpectrumScene>& scenes, const std::vector<Eigen::VectorXcd>& spectra, const std::vector<Limit>& limits,
+                   const std::vector<std::string>& region_methods, Table& plane_spectrum) {
   const size_t grid = 81;
-  Table plane_spectrum{{"scene", "step", "re", "im"}, {}};
   std::vector<std::string> plane_columns{"scene", "re", "im"};
   std::vector<std::complex<double> (*)(std::complex<double>)> regions;  // each region method's R
   for (const auto& method : region_methods) {
@@ -96,6 +80,55 @@ StudyOutput stability_regions(const StudyContext& ctx) {
         plane.rows.push_back(std::move(row));
       }
   }
+  return plane;
+}
+
+// the finding: rk4's measured limits against its predicted ones; empty where it has none
+std::optional<std::string> rk4_finding(const Table& table) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& row : table.rows)
+    if (const double r = std::get<double>(cell_of(table, row, "measured_over_spectrum"));
+        std::get<std::string>(cell_of(table, row, "method")) == "rk4" && std::isfinite(r)) {
+      lo = std::min(lo, r);
+      hi = std::max(hi, r);
+    }
+  if (!std::isfinite(lo)) return std::nullopt;
+  return fmt::format("**A step fails when h lambda leaves the method's stability region**: rk4's largest stable step, found by "
+                     "bisection, is {:.3f} to {:.3f} times the one its region and the scene's spectrum predict.", lo, hi);
+}
+
+StudyOutput stability_regions(const StudyContext& ctx) {
+  const std::vector<SpectrumScene> scenes = spectrum_scenes(ctx);
+  // the regions drawn: the fixed-step methods with a stability function R(z) (one-step methods on y' = lambda y)
+  const std::vector<std::string> region_methods =
+      method_names_where([](const Method& m) { return m.stability.R != nullptr && m.stepping == Stepping::fixed; });
+
+  std::vector<std::string> labels;
+  for (const auto& s : scenes) labels.push_back(s.label + " spectrum");
+  const auto spectra = ctx.sweep<Eigen::VectorXcd>(labels, [&](size_t i) { return jacobian_spectrum(*scenes[i].model, 0, scenes[i].y0); });
+
+  std::vector<Limit> limits;
+  labels.clear();
+  for (size_t i = 0; i < scenes.size(); ++i)
+    for (const auto& method : region_methods) {
+      limits.push_back({i, method, *spectrum_stable_dt(method, spectra[i])});
+      labels.push_back(fmt::format("{} {}", scenes[i].label, method));
+    }
+  const auto measured = ctx.sweep<double>(labels, [&](size_t k) {
+    const Limit& l = limits[k];
+    // an A-stable method (no largest stable step) is not probed: implicit Euler's Newton solves on 578 unknowns
+    // would cost more than the rest of the study
+    if (!std::isfinite(l.predicted) || l.predicted <= 0) return std::numeric_limits<double>::quiet_NaN();
+    const auto& s = scenes[l.scene];
+    return bisect_stability([&](double dt) { return s.bounded(l.method, dt); }, l.predicted / 4, l.predicted * 16,
+                            tolerance::stability_bisection_width);
+  });
+
+  Table spectrum{{"scene", "re", "im"}, {}};
+  for (size_t i = 0; i < scenes.size(); ++i)
+    for (const auto& lambda : spectra[i]) spectrum.rows.push_back({scenes[i].label, lambda.real(), lambda.imag()});
+  Table plane_spectrum{{"scene", "step", "re", "im"}, {}};
+  Table plane = region_plane(scenes, spectra, limits, region_methods, plane_spectrum);
   Table table{{"scene", "method", "spectrum_dt", "measured_dt", "measured_over_spectrum"}, {}};
   StudyOutput out;
   const std::string subject = ctx.scenes ? fmt::format("The spectrum of {}'s exact Jacobian at its initial state is drawn", scenes.front().label)
@@ -133,17 +166,7 @@ StudyOutput stability_regions(const StudyContext& ctx) {
                   "bracket's 16): near its limit its growth per step, |1 + h lambda| - 1, is so small on the weakly damped modes that "
                   "2000 steps do not show it, the cloth study's finding. Symplectic Euler has no R(z): it maps (x, v) pairs, and on an undamped oscillator it is stable for h omega < 2, "
                   "the segment of the imaginary axis |z| < 2 (the cloth study's table).\n\n";
-  // the finding: rk4's measured limits against its predicted ones
-  double lo = INFINITY, hi = -INFINITY;
-  for (const auto& row : table.rows)
-    if (const double r = std::get<double>(cell_of(table, row, "measured_over_spectrum"));
-        std::get<std::string>(cell_of(table, row, "method")) == "rk4" && std::isfinite(r)) {
-      lo = std::min(lo, r);
-      hi = std::max(hi, r);
-    }
-  if (std::isfinite(lo))
-    out.findings.push_back(fmt::format("**A step fails when h lambda leaves the method's stability region**: rk4's largest stable step, found by "
-                                       "bisection, is {:.3f} to {:.3f} times the one its region and the scene's spectrum predict.", lo, hi));
+  if (auto finding = rk4_finding(table)) out.findings.push_back(std::move(*finding));
   out.tables = {{"stability_spectrum", std::move(spectrum)}, {"stability_limits", std::move(table)},
                 {"stability_plane", std::move(plane)}, {"stability_plane_spectrum", std::move(plane_spectrum)}};
   return out;
