@@ -195,6 +195,50 @@ std::vector<AdvisePoint> full_sweep(const StudyScene& scene, const Method& metho
                       seconds, 1);
 }
 
+namespace {
+
+// a method's verdict from its sweep's points: its cheapest point meeting the target, or why it has none (it diverged
+// at the cheap steps, its runs failed, or it would cost more than its share of the budget); `searched` its stable
+// step found by bisection, beside the spectrum's prediction
+Candidate verdict(const Method& method, const std::vector<AdvisePoint>& pts, double target, const Eigen::VectorXcd& spectrum, std::optional<double> searched,
+                  double fastest_decay) {
+  Candidate c{std::string(method.name), Verdict::failed, "", std::nullopt, predicted_stable_dt(method, spectrum), searched};
+  for (const auto& p : pts)
+    if (p.error && *p.error <= target && (!c.cheapest || p.cpu_seconds < c.cheapest->cpu_seconds)) c.cheapest = p;
+  if (c.cheapest) {
+    c.status = Verdict::meets;
+  } else if (pts.empty()) {
+    c.status = Verdict::too_costly;
+    c.reason = "not swept: the budget ran out first (the methods expected cheapest are swept first)";
+  } else {
+    const auto diverged = std::count_if(pts.begin(), pts.end(), [](const AdvisePoint& p) { return p.status == Status::diverged; });
+    const auto failed = std::find_if(pts.begin(), pts.end(), [](const AdvisePoint& p) { return p.status == Status::failed; });
+    const AdvisePoint* best = nullptr;
+    for (const auto& p : pts)
+      if (p.error && (!best || *p.error < *best->error)) best = &p;
+    const std::string stable = c.predicted_stable_dt && std::isfinite(*c.predicted_stable_dt)
+                                   ? fmt::format("; the spectrum (fastest decay {:.3g}/s) and its stability function predict stability for dt < {:.3g} s",
+                                                 fastest_decay, *c.predicted_stable_dt)
+                                   : "";
+    if (diverged > 0 && (!best || diverged * 2 >= static_cast<long>(pts.size()) || pts.front().status == Status::diverged)) {
+      c.status = Verdict::unstable;
+      c.reason = fmt::format("diverged at the cheap steps ({} of its {} settings{}){}", diverged, pts.size(),
+                             best ? fmt::format("; its best error {:.2e} cost {}", *best->error, fmt_seconds(best->cpu_seconds)) : "", stable);
+    } else if (failed != pts.end() && !best) {
+      c.status = Verdict::failed;
+      c.reason = fmt::format("{} ({})", failed->message, failed->setting());
+    } else {
+      c.status = Verdict::too_costly;
+      c.reason = best ? fmt::format("its best error {:.2e} (at {}) cost {} and the next setting would pass its share of the budget{}", *best->error,
+                                    best->setting(), fmt_seconds(best->cpu_seconds), stable)
+                      : fmt::format("no setting finished within its share of the budget{}", stable);
+    }
+  }
+  return c;
+}
+
+}  // namespace
+
 Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads) {
   const auto start = Clock::now();
   Advice advice;
@@ -269,38 +313,7 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
     const Method& method = *candidates[i];
     const auto& pts = sweeps[i];
     advice.points.insert(advice.points.end(), pts.begin(), pts.end());
-    Candidate c{std::string(method.name), Verdict::failed, "", std::nullopt, predicted_stable_dt(method, spectrum), searched[i]};
-    for (const auto& p : pts)
-      if (p.error && *p.error <= target && (!c.cheapest || p.cpu_seconds < c.cheapest->cpu_seconds)) c.cheapest = p;
-    if (c.cheapest) {
-      c.status = Verdict::meets;
-    } else if (pts.empty()) {
-      c.status = Verdict::too_costly;
-      c.reason = "not swept: the budget ran out first (the methods expected cheapest are swept first)";
-    } else {
-      const auto diverged = std::count_if(pts.begin(), pts.end(), [](const AdvisePoint& p) { return p.status == Status::diverged; });
-      const auto failed = std::find_if(pts.begin(), pts.end(), [](const AdvisePoint& p) { return p.status == Status::failed; });
-      const AdvisePoint* best = nullptr;
-      for (const auto& p : pts)
-        if (p.error && (!best || *p.error < *best->error)) best = &p;
-      const std::string stable = c.predicted_stable_dt && std::isfinite(*c.predicted_stable_dt)
-                                     ? fmt::format("; the spectrum (fastest decay {:.3g}/s) and its stability function predict stability for dt < {:.3g} s",
-                                                   advice.fastest_decay, *c.predicted_stable_dt)
-                                     : "";
-      if (diverged > 0 && (!best || diverged * 2 >= static_cast<long>(pts.size()) || pts.front().status == Status::diverged)) {
-        c.status = Verdict::unstable;
-        c.reason = fmt::format("diverged at the cheap steps ({} of its {} settings{}){}", diverged, pts.size(),
-                               best ? fmt::format("; its best error {:.2e} cost {}", *best->error, fmt_seconds(best->cpu_seconds)) : "", stable);
-      } else if (failed != pts.end() && !best) {
-        c.status = Verdict::failed;
-        c.reason = fmt::format("{} ({})", failed->message, failed->setting());
-      } else {
-        c.status = Verdict::too_costly;
-        c.reason = best ? fmt::format("its best error {:.2e} (at {}) cost {} and the next setting would pass its share of the budget{}", *best->error,
-                                      best->setting(), fmt_seconds(best->cpu_seconds), stable)
-                        : fmt::format("no setting finished within its share of the budget{}", stable);
-      }
-    }
+    Candidate c = verdict(method, pts, target, spectrum, searched[i], advice.fastest_decay);
     advice.candidates.push_back(std::move(c));
   }
   std::stable_sort(advice.candidates.begin(), advice.candidates.end(), [](const Candidate& a, const Candidate& b) {
