@@ -122,6 +122,37 @@ class Cloth final : public Model {
     const int nodes = rows_ * columns_;
     node_mass_ = p.at("mass") / nodes;
     const double dx = p.at("width") / (columns_ - 1), dz = p.at("height") / (rows_ - 1);
+    place_nodes(p, dx, dz);
+    number_free_nodes(p, pins);
+    const int picked_node = pick_node(p);
+    if (!continuum_) add_springs(p);
+    for (int r = 0; r + 1 < rows_; ++r)
+      for (int c = 0; c + 1 < columns_; ++c) {
+        const int k = r * columns_ + c;
+        triangles_.push_back({k, k + columns_, k + 1});
+        triangles_.push_back({k + columns_, k + columns_ + 1, k + 1});
+      }
+    view_.nodes = free_;
+    view_.mass.assign(free_, node_mass_);
+    if (continuum_) set_up_continuum(dx, dz, p.at("density"));
+    mass3_.resize(3 * free_);
+    for (int i = 0; i < free_; ++i) mass3_.segment<3>(3 * i).setConstant(view_.mass[i]);
+    grid_ = ClothGridView{rows_, columns_, rest_, free_index_, dx, dz,
+                          {p.at("stiffness"), p.at("shear_stiffness"), p.at("bend_stiffness")},
+                          {p.at("structural") == 1, p.at("shear") == 1, p.at("bend") == 1}, p.at("damping"), node_mass_, drag_, g_, wind_, wind_k_,
+                          gust_, gust_frequency_, picked_node, pick_force_, sphere_radius_, sphere_centre_, ground_, ground_y_, friction_};
+    set_up_jacobian_pattern();
+    second_order_.positions = 3 * free_;
+    second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
+    view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                                   Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
+    set_up_split();
+    if (!continuum_) read_springs_as_constraints();
+  }
+
+ private:
+  // the grid's rest positions: hanging from its top row in the x-y plane, or lying flat in the x-z plane
+  void place_nodes(const Params& p, double dx, double dz) {
     const bool horizontal = p.at("horizontal") == 1;
     for (int r = 0; r < rows_; ++r)
       for (int c = 0; c < columns_; ++c) {
@@ -129,8 +160,11 @@ class Cloth final : public Model {
         rest_.push_back(horizontal ? Eigen::Vector3d(across, p.at("elevation"), r * dz - p.at("height") / 2)
                                    : Eigen::Vector3d(across, p.at("elevation") - r * dz, 0));
       }
+  }
 
-    // pins, then the free nodes' numbering
+  // the pins (by parameter and by the scene's list), then the free nodes' numbering
+  void number_free_nodes(const Params& p, std::span<const GridNode> pins) {
+    const int nodes = rows_ * columns_;
     std::vector<bool> pinned(nodes, false);
     const auto pin = [&](int r, int c) { pinned[r * columns_ + c] = true; };
     if (p.at("pin_corners") == 1) {
@@ -158,12 +192,19 @@ class Cloth final : public Model {
         ++free_;
       }
     if (free_ == 0) throw BadParameter("pin_corners", "every node of the cloth is pinned: nothing moves");
+  }
+
+  // the node the pick force pulls (its free index in picked_), as a grid node; -1 for none
+  int pick_node(const Params& p) {
     const int pick_row = grid_index(p, "pick_row", 0, rows_ - 1, true), pick_column = grid_index(p, "pick_column", 0, columns_ - 1, true);
     if ((pick_row < 0) != (pick_column < 0))
       throw BadParameter(pick_row < 0 ? "pick_row" : "pick_column", "parameters 'pick_row' and 'pick_column' go together: give both or neither");
     picked_ = pick_row >= 0 ? free_index_[pick_row * columns_ + pick_column] : -1;
+    return pick_row >= 0 ? pick_row * columns_ + pick_column : -1;
+  }
 
-    // the springs, family by family (offsets in rows and columns), each once
+  // the springs, family by family (offsets in rows and columns), each once
+  void add_springs(const Params& p) {
     const double gamma = p.at("damping");
     const auto join = [&](int r, int c, int dr, int dc, double stiffness) {
       const int r2 = r + dr, c2 = c + dc;
@@ -176,47 +217,38 @@ class Cloth final : public Model {
       else if (fb < 0) view_.springs.push_back(Spring{-1, fa, rest, stiffness, gamma, rest_[b]});
       else view_.springs.push_back(Spring{fa, fb, rest, stiffness, gamma});
     };
-    for (int r = 0; r < rows_ && !continuum_; ++r)
+    for (int r = 0; r < rows_; ++r)
       for (int c = 0; c < columns_; ++c) {
         if (p.at("structural") == 1) join(r, c, 0, 1, p.at("stiffness")), join(r, c, 1, 0, p.at("stiffness"));
         if (p.at("shear") == 1) join(r, c, 1, 1, p.at("shear_stiffness")), join(r, c, 1, -1, p.at("shear_stiffness"));
         if (p.at("bend") == 1) join(r, c, 0, 2, p.at("bend_stiffness")), join(r, c, 2, 0, p.at("bend_stiffness"));
       }
-    for (int r = 0; r + 1 < rows_; ++r)
-      for (int c = 0; c + 1 < columns_; ++c) {
-        const int k = r * columns_ + c;
-        triangles_.push_back({k, k + columns_, k + 1});
-        triangles_.push_back({k + columns_, k + columns_ + 1, k + 1});
-      }
-    view_.nodes = free_;
-    view_.mass.assign(free_, node_mass_);
-    if (continuum_) set_up_continuum(dx, dz, p.at("density"));
-    mass3_.resize(3 * free_);
-    for (int i = 0; i < free_; ++i) mass3_.segment<3>(3 * i).setConstant(view_.mass[i]);
-    grid_ = ClothGridView{rows_, columns_, rest_, free_index_, dx, dz,
-                          {p.at("stiffness"), p.at("shear_stiffness"), p.at("bend_stiffness")},
-                          {p.at("structural") == 1, p.at("shear") == 1, p.at("bend") == 1}, gamma, node_mass_, drag_, g_, wind_, wind_k_, gust_,
-                          gust_frequency_, pick_row >= 0 ? pick_row * columns_ + pick_column : -1, pick_force_, sphere_radius_, sphere_centre_,
-                          ground_, ground_y_, friction_};
+  }
+
+  // the Jacobians' block pattern (springs, bending stencils, and triangles where wind or the continuum couples
+  // their nodes) and each term's slots in it
+  void set_up_jacobian_pattern() {
+    const bool triangles = wind_k_ > 0 || continuum_;
+    const auto both_free = [&](int a, int b) { return free_index_[a] >= 0 && free_index_[b] >= 0; };
     auto pairs = spring_pairs(view_.springs);
     for (const auto& s : stencils_)
       for (size_t i = 0; i < s.node.size(); ++i)
         for (size_t j = i + 1; j < s.node.size(); ++j)
-          if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0) pairs.emplace_back(free_index_[s.node[i]], free_index_[s.node[j]]);
-    if (wind_k_ > 0 || continuum_)
+          if (both_free(s.node[i], s.node[j])) pairs.emplace_back(free_index_[s.node[i]], free_index_[s.node[j]]);
+    if (triangles)
       for (const auto& tri : triangles_)
         for (int i = 0; i < 3; ++i)
           for (int j = i + 1; j < 3; ++j)
-            if (free_index_[tri[i]] >= 0 && free_index_[tri[j]] >= 0) pairs.emplace_back(free_index_[tri[i]], free_index_[tri[j]]);
+            if (both_free(tri[i], tri[j])) pairs.emplace_back(free_index_[tri[i]], free_index_[tri[j]]);
     pattern_ = std::make_unique<BlockPattern>(free_, pairs);
     spring_slots_ = spring_slots(view_.springs, *pattern_);
     for (int i = 0; i < free_; ++i) diagonal_slots_.push_back(pattern_->slot(i, i));
-    if (wind_k_ > 0 || continuum_)
+    if (triangles)
       for (const auto& tri : triangles_) {
         std::array<BlockPattern::Slot, 9> slots{};
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j)
-            if (free_index_[tri[i]] >= 0 && free_index_[tri[j]] >= 0) slots[3 * i + j] = pattern_->slot(free_index_[tri[i]], free_index_[tri[j]]);
+            if (both_free(tri[i], tri[j])) slots[3 * i + j] = pattern_->slot(free_index_[tri[i]], free_index_[tri[j]]);
         triangle_slots_.push_back(slots);
       }
     for (const auto& s : stencils_) {
@@ -224,16 +256,12 @@ class Cloth final : public Model {
       std::vector<BlockPattern::Slot> slots(m * m);
       for (size_t i = 0; i < m; ++i)
         for (size_t j = 0; j < m; ++j)
-          if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0) slots[m * i + j] = pattern_->slot(free_index_[s.node[i]], free_index_[s.node[j]]);
+          if (both_free(s.node[i], s.node[j])) slots[m * i + j] = pattern_->slot(free_index_[s.node[i]], free_index_[s.node[j]]);
       stencil_slots_.push_back(std::move(slots));
     }
-    second_order_.positions = 3 * free_;
-    second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
-    view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
-                                   Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
-    set_up_split();
-    if (!continuum_) read_springs_as_constraints();
   }
+
+ public:
   Cloth(const Cloth&) = delete;  // its capabilities hold `this`
   Cloth& operator=(const Cloth&) = delete;
 

@@ -529,119 +529,138 @@ class TapeBuilder {
   // or product of both kinds has its parameter-only operands gathered into one derived slot
   Emitted emit(const GiNaC::ex& e, Tape& tape) {
     using namespace GiNaC;
-    const auto push = [&](Op op, int arg, double value, std::string key, bool varying) {
-      tape.code.push_back({op, arg, value});
-      return Emitted{std::move(key), varying};
-    };
+    if (is_a<numeric>(e) || is_a<constant>(e) || is_a<symbol>(e)) return emit_leaf(e, tape);
+    if (is_a<add>(e) || is_a<mul>(e)) return emit_sum_or_product(e, tape);
+    if (is_a<power>(e)) return emit_power(e, tape);
+    if (is_a<function>(e)) return emit_function(e, tape);
+    throw BadEquations(fmt::format("{}: cannot evaluate {} (a formula may use numbers, its symbols, + - * / ^ and {})", where_, text_of(e), function_list));
+  }
+
+  struct Operand {
+    Emitted emitted;
+    Tape part;
+  };
+
+  static Emitted push(Tape& tape, Op op, int arg, double value, std::string key, bool varying) {
+    tape.code.push_back({op, arg, value});
+    return Emitted{std::move(key), varying};
+  }
+
+  // a number, a constant, a variable, a parameter or the time
+  Emitted emit_leaf(const GiNaC::ex& e, Tape& tape) const {
+    using namespace GiNaC;
     if (is_a<numeric>(e)) {
       const numeric& n = ex_to<numeric>(e);
       if (!n.is_real()) throw BadEquations(fmt::format("{}: {} is not a real number", at("I"), text_of(e)));
       const double v = n.to_double();
       if (!std::isfinite(v)) throw BadEquations(fmt::format("{}: the number {} is beyond the range of a double", where_, text_of(e)));
-      return push(Op::number, 0, v, fmt::format("{:a}", v), false);
+      return push(tape, Op::number, 0, v, fmt::format("{:a}", v), false);
     }
     if (is_a<constant>(e)) {
       const ex value = e.evalf();
       if (!is_a<numeric>(value) || !ex_to<numeric>(value).is_real()) throw BadEquations(fmt::format("{}: the constant {} is not a real number", at(text_of(e)), text_of(e)));
       const double v = ex_to<numeric>(value).to_double();
-      return push(Op::number, 0, v, fmt::format("{:a}", v), false);
+      return push(tape, Op::number, 0, v, fmt::format("{:a}", v), false);
     }
-    if (is_a<symbol>(e)) {
-      // by name: one symbol a name (symbol_named), and a comparison of symbols costs a copy of each
-      if (const auto it = s_.index.find(ex_to<symbol>(e).get_name()); it != s_.index.end()) {
-        const auto [variable, i] = it->second;
-        return variable ? push(Op::variable, i, 0, fmt::format("y{}", i), true) : push(Op::parameter, i, 0, fmt::format("p{}", i), false);
-      }
-      if (e.is_equal(s_.t)) return push(Op::time, 0, 0, "t", true);
-      throw BadEquations(fmt::format("{}: unknown symbol {}", where_, text_of(e)));
+    // a symbol, by name: one symbol a name (symbol_named), and a comparison of symbols costs a copy of each
+    if (const auto it = s_.index.find(ex_to<symbol>(e).get_name()); it != s_.index.end()) {
+      const auto [variable, i] = it->second;
+      return variable ? push(tape, Op::variable, i, 0, fmt::format("y{}", i), true) : push(tape, Op::parameter, i, 0, fmt::format("p{}", i), false);
     }
-    if (is_a<add>(e) || is_a<mul>(e)) {
-      const Op op = is_a<add>(e) ? Op::add : Op::mul;
-      struct Operand {
-        Emitted emitted;
-        Tape part;
-      };
-      std::vector<Operand> operands(e.nops());
-      for (size_t i = 0; i < e.nops(); ++i) operands[i].emitted = emit(e.op(i), operands[i].part);
-      std::stable_sort(operands.begin(), operands.end(), [](const Operand& a, const Operand& b) { return a.emitted.key < b.emitted.key; });
-      const bool varying = std::any_of(operands.begin(), operands.end(), [](const Operand& o) { return o.emitted.varying; });
-      const std::string name = op == Op::add ? "+" : "*";
-      if (varying) {
-        // the parameter-only operands as one (their sum or product, in key order), then the others
-        Operand fixed{{name + "c(", false}, {}};
-        std::vector<Operand> kept;
-        int count = 0;
-        for (auto& o : operands) {
-          if (o.emitted.varying) {
-            kept.push_back(std::move(o));
-            continue;
-          }
-          fixed.part.code.insert(fixed.part.code.end(), o.part.code.begin(), o.part.code.end());
-          fixed.emitted.key += o.emitted.key + ",";
-          ++count;
-        }
-        if (count > 1) fixed.part.code.push_back({op, count, 0});
-        fixed.emitted.key += ")";
-        if (count > 0) {
-          fixed.emitted = folded(fixed.emitted, fixed.part);
-          kept.insert(kept.begin(), std::move(fixed));
-        }
-        operands = std::move(kept);
-      }
-      std::string key = name + "(";
-      for (const auto& o : operands) {
-        tape.code.insert(tape.code.end(), o.part.code.begin(), o.part.code.end());
-        key += o.emitted.key + ",";
-      }
-      if (operands.size() > 1) tape.code.push_back({op, static_cast<int>(operands.size()), 0});
-      return {key + ")", varying};
-    }
-    // an operand of a node that varies: folded where it is on the parameters alone
-    const auto operand = [&](const ex& x, bool& varying) {
-      Tape part;
-      Emitted emitted = emit(x, part);
-      varying = varying || emitted.varying;
-      return std::pair{emitted, part};
-    };
-    const auto append = [&](std::pair<Emitted, Tape>& o, bool varying) {
-      if (varying) o.first = folded(o.first, o.second);
-      tape.code.insert(tape.code.end(), o.second.code.begin(), o.second.code.end());
-      return o.first.key;
-    };
-    if (is_a<power>(e)) {
-      const ex exponent = e.op(1);
-      bool varying = false;
-      auto base = operand(e.op(0), varying);
-      if (is_a<numeric>(exponent) && ex_to<numeric>(exponent).is_integer() && abs(ex_to<numeric>(exponent)) <= 64) {
-        const int n = ex_to<numeric>(exponent).to_int();
-        const std::string b = append(base, varying);
-        return push(Op::integer_power, n, 0, fmt::format("^({},{})", b, n), varying);
-      }
-      if (exponent.is_equal(numeric(1, 2)) || exponent.is_equal(numeric(-1, 2))) {
-        const std::string b = append(base, varying);
-        const Emitted root = push(Op::call, function_index("sqrt"), 0, fmt::format("sqrt({})", b), varying);
-        return exponent.is_equal(numeric(1, 2)) ? root : push(Op::integer_power, -1, 0, fmt::format("^({},-1)", root.key), varying);
-      }
-      auto power_of = operand(exponent, varying);
-      const std::string b = append(base, varying), x = append(power_of, varying);
-      return push(Op::power, 0, 0, fmt::format("pow({},{})", b, x), varying);
-    }
-    if (is_a<function>(e)) {
-      const std::string name = ex_to<function>(e).get_name();
-      bool varying = false;
-      if (name == functions2 && e.nops() == 2) {
-        auto y = operand(e.op(0), varying), x = operand(e.op(1), varying);
-        const std::string ky = append(y, varying), kx = append(x, varying);
-        return push(Op::atan2, 0, 0, fmt::format("atan2({},{})", ky, kx), varying);
-      }
-      const int f = function_index(name);
-      if (f < 0 || e.nops() != 1) throw BadEquations(fmt::format("{}: the function {} is not one a formula may call ({})", at(name), name, function_list));
-      auto argument = operand(e.op(0), varying);
-      const std::string k = append(argument, varying);
-      return push(Op::call, f, 0, fmt::format("{}({})", name, k), varying);
-    }
-    throw BadEquations(fmt::format("{}: cannot evaluate {} (a formula may use numbers, its symbols, + - * / ^ and {})", where_, text_of(e), function_list));
+    if (e.is_equal(s_.t)) return push(tape, Op::time, 0, 0, "t", true);
+    throw BadEquations(fmt::format("{}: unknown symbol {}", where_, text_of(e)));
   }
+
+  // the parameter-only operands of a varying sum or product as one (their sum or product, in key order), then the others
+  std::vector<Operand> gather_fixed(std::vector<Operand> operands, Op op, const std::string& name) {
+    Operand fixed{{name + "c(", false}, {}};
+    std::vector<Operand> kept;
+    int count = 0;
+    for (auto& o : operands) {
+      if (o.emitted.varying) {
+        kept.push_back(std::move(o));
+        continue;
+      }
+      fixed.part.code.insert(fixed.part.code.end(), o.part.code.begin(), o.part.code.end());
+      fixed.emitted.key += o.emitted.key + ",";
+      ++count;
+    }
+    if (count > 1) fixed.part.code.push_back({op, count, 0});
+    fixed.emitted.key += ")";
+    if (count > 0) {
+      fixed.emitted = folded(fixed.emitted, fixed.part);
+      kept.insert(kept.begin(), std::move(fixed));
+    }
+    return kept;
+  }
+
+  Emitted emit_sum_or_product(const GiNaC::ex& e, Tape& tape) {
+    const Op op = GiNaC::is_a<GiNaC::add>(e) ? Op::add : Op::mul;
+    std::vector<Operand> operands(e.nops());
+    for (size_t i = 0; i < e.nops(); ++i) operands[i].emitted = emit(e.op(i), operands[i].part);
+    std::stable_sort(operands.begin(), operands.end(), [](const Operand& a, const Operand& b) { return a.emitted.key < b.emitted.key; });
+    const bool varying = std::any_of(operands.begin(), operands.end(), [](const Operand& o) { return o.emitted.varying; });
+    const std::string name = op == Op::add ? "+" : "*";
+    if (varying) operands = gather_fixed(std::move(operands), op, name);
+    std::string key = name + "(";
+    for (const auto& o : operands) {
+      tape.code.insert(tape.code.end(), o.part.code.begin(), o.part.code.end());
+      key += o.emitted.key + ",";
+    }
+    if (operands.size() > 1) tape.code.push_back({op, static_cast<int>(operands.size()), 0});
+    return {key + ")", varying};
+  }
+
+  // an operand of a node, on a tape of its own; `varying` says whether any of the node's operands varies
+  Operand operand(const GiNaC::ex& x, bool& varying) {
+    Operand o;
+    o.emitted = emit(x, o.part);
+    varying = varying || o.emitted.varying;
+    return o;
+  }
+
+  // an operand's tape appended, folded where the node varies and the operand is on the parameters alone; its key
+  std::string append(Operand& o, bool varying, Tape& tape) {
+    if (varying) o.emitted = folded(o.emitted, o.part);
+    tape.code.insert(tape.code.end(), o.part.code.begin(), o.part.code.end());
+    return o.emitted.key;
+  }
+
+  Emitted emit_power(const GiNaC::ex& e, Tape& tape) {
+    using namespace GiNaC;
+    const ex exponent = e.op(1);
+    bool varying = false;
+    Operand base = operand(e.op(0), varying);
+    if (is_a<numeric>(exponent) && ex_to<numeric>(exponent).is_integer() && abs(ex_to<numeric>(exponent)) <= 64) {
+      const int n = ex_to<numeric>(exponent).to_int();
+      const std::string b = append(base, varying, tape);
+      return push(tape, Op::integer_power, n, 0, fmt::format("^({},{})", b, n), varying);
+    }
+    if (exponent.is_equal(numeric(1, 2)) || exponent.is_equal(numeric(-1, 2))) {
+      const std::string b = append(base, varying, tape);
+      const Emitted root = push(tape, Op::call, function_index("sqrt"), 0, fmt::format("sqrt({})", b), varying);
+      return exponent.is_equal(numeric(1, 2)) ? root : push(tape, Op::integer_power, -1, 0, fmt::format("^({},-1)", root.key), varying);
+    }
+    Operand power_of = operand(exponent, varying);
+    const std::string b = append(base, varying, tape), x = append(power_of, varying, tape);
+    return push(tape, Op::power, 0, 0, fmt::format("pow({},{})", b, x), varying);
+  }
+
+  Emitted emit_function(const GiNaC::ex& e, Tape& tape) {
+    const std::string name = GiNaC::ex_to<GiNaC::function>(e).get_name();
+    bool varying = false;
+    if (name == functions2 && e.nops() == 2) {
+      Operand y = operand(e.op(0), varying), x = operand(e.op(1), varying);
+      const std::string ky = append(y, varying, tape), kx = append(x, varying, tape);
+      return push(tape, Op::atan2, 0, 0, fmt::format("atan2({},{})", ky, kx), varying);
+    }
+    const int f = function_index(name);
+    if (f < 0 || e.nops() != 1) throw BadEquations(fmt::format("{}: the function {} is not one a formula may call ({})", at(name), name, function_list));
+    Operand argument = operand(e.op(0), varying);
+    const std::string k = append(argument, varying, tape);
+    return push(tape, Op::call, f, 0, fmt::format("{}({})", name, k), varying);
+  }
+
   static int function_index(std::string_view name) {
     const auto f = std::find_if(functions1.begin(), functions1.end(), [&](const Function1& g) { return g.name == name; });
     return f == functions1.end() ? -1 : static_cast<int>(f - functions1.begin());

@@ -130,168 +130,213 @@ std::vector<std::vector<size_t>> share_by_cost(const std::vector<double>& costs,
   return shares;
 }
 
-void StudyContext::run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point,
-                              const std::vector<double>& costs, const std::vector<std::string>& groups,
-                              const std::function<void(size_t, pack::Writer&)>& put, const std::function<void(size_t, pack::Reader&)>& get) const {
-  const std::vector<double> weights = costs.empty() ? std::vector<double>(labels.size(), 1.0) : costs;
-  const int ranks = distribute ? ranks::size() : 1, me = distribute ? ranks::rank() : 0;
-  std::vector<std::exception_ptr> errors(labels.size());
-  std::vector<double> took(labels.size(), 0.0);  // each point's seconds (every rank's, once handed over)
+namespace {
 
+std::string message_of(const std::exception_ptr& e) {
+  try {
+    std::rethrow_exception(e);
+  } catch (const std::exception& x) {
+    return std::string(x.what());
+  } catch (...) {
+    return std::string("an unknown exception");
+  }
+}
+
+std::vector<size_t> indices(size_t n) {
+  std::vector<size_t> all(n);
+  for (size_t i = 0; i < n; ++i) all[i] = i;
+  return all;
+}
+
+// One call of run_points: its points run on this rank's threads, and under mpirun shared among the ranks, each
+// rank's results handed to every rank
+class PointSweep {
+ public:
+  PointSweep(const StudyContext& ctx, const std::vector<std::string>& labels, const std::function<void(size_t)>& point,
+             const std::vector<double>& costs, const std::vector<std::string>& groups,
+             const std::function<void(size_t, pack::Writer&)>& put, const std::function<void(size_t, pack::Reader&)>& get)
+      : ctx_(ctx), labels_(labels), point_(point), costs_(costs), groups_(groups), put_(put), get_(get),
+        weights_(costs.empty() ? std::vector<double>(labels.size(), 1.0) : costs),
+        ranks_(ctx.distribute ? ranks::size() : 1), me_(ctx.distribute ? ranks::rank() : 0),
+        errors_(labels.size()), took_(labels.size(), 0.0) {}
+
+  void run() {
+    if (ranks_ == 1) {
+      add_load({run_here(share_by_cost(weights_, 1)[0])});  // every point, the costliest first
+      for (const auto& e : errors_)
+        if (e) std::rethrow_exception(e);
+      return;
+    }
+    std::vector<size_t> rest = indices(labels_.size());
+    std::vector<double> cost_of(weights_);
+    if (!costs_.empty() && !groups_.empty()) calibrate(rest, cost_of);
+    std::vector<double> rest_costs;
+    for (const size_t i : rest) rest_costs.push_back(cost_of[i]);
+    round(rest, rest_costs);
+    if (!failed_.empty()) throw SweepError(failed_.begin()->second);
+  }
+
+ private:
   // these points (the costliest first) on this rank's threads; the seconds until the last is done
-  const auto run_here = [&](const std::vector<size_t>& mine) {
-    const size_t n = std::min(mine.size(), static_cast<size_t>(std::max(threads, 1)));
-    if (progress) {
+  double run_here(const std::vector<size_t>& mine) {
+    const size_t n = std::min(mine.size(), static_cast<size_t>(std::max(ctx_.threads, 1)));
+    if (ctx_.progress) {
       std::vector<double> my_weights;
       std::vector<std::string> my_groups;
       for (const size_t i : mine) {
-        my_weights.push_back(weights[i]);
-        if (!groups.empty()) my_groups.push_back(groups[i]);
+        my_weights.push_back(weights_[i]);
+        if (!groups_.empty()) my_groups.push_back(groups_[i]);
       }
-      progress->begin_sweep(my_weights, my_groups, static_cast<int>(std::max<size_t>(n, 1)), !costs.empty());
+      ctx_.progress->begin_sweep(my_weights, my_groups, static_cast<int>(std::max<size_t>(n, 1)), !costs_.empty());
     }
     const auto start = std::chrono::steady_clock::now();
     std::atomic<size_t> next{0};
     auto worker = [&] {
-      for (size_t k = next++; k < mine.size(); k = next++) {
-        const size_t i = mine[k];
-        const auto begun = std::chrono::steady_clock::now();
-        if (progress) progress->point_started(k);
-        try {
-          point(i);
-        } catch (...) {
-          errors[i] = std::current_exception();
-        }
-        took[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - begun).count();
-        if (progress) progress->point_done(k, labels[i], took[i]);
-      }
+      for (size_t k = next++; k < mine.size(); k = next++) run_one(k, mine[k]);
     };
     std::vector<std::jthread> pool;
     for (size_t k = 1; k < n; ++k) pool.emplace_back(worker);
     worker();
     pool.clear();
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  };
-  const auto add_load = [&](const std::vector<double>& seconds) {
-    if (!load) return;
-    load->seconds.resize(std::max(load->seconds.size(), seconds.size()));
-    for (size_t r = 0; r < seconds.size(); ++r) load->seconds[r] += seconds[r];
-  };
-
-  if (ranks == 1) {
-    add_load({run_here(share_by_cost(weights, 1)[0])});  // every point, the costliest first
-    for (const auto& e : errors)
-      if (e) std::rethrow_exception(e);
-    return;
   }
-  std::vector<size_t> all(labels.size());
-  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+
+  // point i, the k-th of this rank's share: its error kept, its seconds measured
+  void run_one(size_t k, size_t i) {
+    const auto begun = std::chrono::steady_clock::now();
+    if (ctx_.progress) ctx_.progress->point_started(k);
+    try {
+      point_(i);
+    } catch (...) {
+      errors_[i] = std::current_exception();
+    }
+    took_[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - begun).count();
+    if (ctx_.progress) ctx_.progress->point_done(k, labels_[i], took_[i]);
+  }
+
+  void add_load(const std::vector<double>& seconds) {
+    if (!ctx_.load) return;
+    ctx_.load->seconds.resize(std::max(ctx_.load->seconds.size(), seconds.size()));
+    for (size_t r = 0; r < seconds.size(); ++r) ctx_.load->seconds[r] += seconds[r];
+  }
 
   // Under mpirun: hand this rank's results to every rank (its busy time, then for each point its index, its
   // seconds, whether it failed, and the error's message or the result) and take theirs
-  std::map<size_t, std::string> failed;  // point -> "rank r, point label: message", in point order
-  const auto message = [](const std::exception_ptr& e) {
-    try {
-      std::rethrow_exception(e);
-    } catch (const std::exception& x) {
-      return std::string(x.what());
-    } catch (...) {
-      return std::string("an unknown exception");
-    }
-  };
-  const auto hand_over = [&](const std::vector<size_t>& mine, double busy) {
+  void hand_over(const std::vector<size_t>& mine, double busy) {
     pack::Writer w;
     pack::put(w, busy);
     for (const size_t i : mine) {
       pack::put(w, i);
-      pack::put(w, took[i]);
-      pack::put(w, errors[i] != nullptr);
-      if (errors[i]) pack::put(w, message(errors[i]));
-      else put(i, w);
+      pack::put(w, took_[i]);
+      pack::put(w, errors_[i] != nullptr);
+      if (errors_[i]) pack::put(w, message_of(errors_[i]));
+      else put_(i, w);
     }
     const std::vector<std::string> bytes = ranks::all_gather(w.bytes());
-    std::vector<double> seconds(static_cast<size_t>(ranks));
-    for (int r = 0; r < ranks; ++r) {
+    std::vector<double> seconds(static_cast<size_t>(ranks_));
+    for (int r = 0; r < ranks_; ++r) {
       pack::Reader reader(bytes[static_cast<size_t>(r)]);
       pack::get(reader, seconds[static_cast<size_t>(r)]);
-      while (!reader.done()) {
-        size_t i = 0;
-        bool error = false;
-        pack::get(reader, i);
-        if (i >= labels.size()) throw std::runtime_error(fmt::format("rank {} handed over point {} of a sweep of {}: the ranks run different sweeps", r, i, labels.size()));
-        pack::get(reader, took[i]);
-        pack::get(reader, error);
-        if (error) {
-          std::string what;
-          pack::get(reader, what);
-          failed[i] = fmt::format("rank {}, point {}: {}", r, labels[i], what);
-        } else {
-          get(i, reader);  // this rank's own too: every rank's results come through the same bytes
-        }
-      }
+      while (!reader.done()) take_point(r, reader);
     }
     add_load(seconds);
-  };
+  }
+
+  // one point's result as rank r handed it over (this rank's own too: every rank's come through the same bytes)
+  void take_point(int r, pack::Reader& reader) {
+    size_t i = 0;
+    bool error = false;
+    pack::get(reader, i);
+    if (i >= labels_.size())
+      throw std::runtime_error(fmt::format("rank {} handed over point {} of a sweep of {}: the ranks run different sweeps", r, i, labels_.size()));
+    pack::get(reader, took_[i]);
+    pack::get(reader, error);
+    if (error) {
+      std::string what;
+      pack::get(reader, what);
+      failed_[i] = fmt::format("rank {}, point {}: {}", r, labels_[i], what);
+    } else {
+      get_(i, reader);
+    }
+  }
+
   // `points` shared by these costs (one per point), run, handed over
-  const auto round = [&](const std::vector<size_t>& points, const std::vector<double>& by) {
-    const auto shares = share_by_cost(by, ranks);  // kept: a range-for over a temporary's element would dangle
+  void round(const std::vector<size_t>& points, const std::vector<double>& by) {
+    const auto shares = share_by_cost(by, ranks_);
     std::vector<size_t> mine;
-    for (const size_t k : shares[static_cast<size_t>(me)]) mine.push_back(points[k]);
-    // a rank that dies (killed, out of memory) takes its point with it: mpirun names the rank and stops the
-    // others; rank 0's last words name the points each other rank had in hand, the one it was running among them
+    for (const size_t k : shares[static_cast<size_t>(me_)]) mine.push_back(points[k]);
     std::optional<interrupt::OnInterrupt> last_words;
-    if (me == 0)
-      last_words.emplace([&labels, &shares, &points, ranks] {
-        for (int r = 1; r < ranks; ++r) {
-          const auto& share = shares[static_cast<size_t>(r)];
-          std::string names;
-          for (size_t k = 0; k < std::min<size_t>(share.size(), 3); ++k) names += (k ? "; " : "") + labels[points[share[k]]];
-          std::fputs(fmt::format("stepwise: stopped while rank {} had {} point(s) of this sweep in hand{}{}{}{}\n", r, share.size(),
-                                 share.empty() ? "" : " (run costliest first: ", names, share.size() > 3 ? "; ..." : "", share.empty() ? "" : ")")
-                         .c_str(),
-                     stderr);
-        }
-      });
+    if (me_ == 0) last_words.emplace([this, &shares, &points] { name_points_in_hand(shares, points); });
     hand_over(mine, run_here(mine));
-  };
+  }
+
+  // A rank that dies (killed, out of memory) takes its point with it: mpirun names the rank and stops the others;
+  // rank 0's last words name the points each other rank had in hand, the one it was running among them
+  void name_points_in_hand(const std::vector<std::vector<size_t>>& shares, const std::vector<size_t>& points) const {
+    for (int r = 1; r < ranks_; ++r) {
+      const auto& share = shares[static_cast<size_t>(r)];
+      std::string names;
+      for (size_t k = 0; k < std::min<size_t>(share.size(), 3); ++k) names += (k ? "; " : "") + labels_[points[share[k]]];
+      std::fputs(fmt::format("stepwise: stopped while rank {} had {} point(s) of this sweep in hand{}{}{}{}\n", r, share.size(),
+                             share.empty() ? "" : " (run costliest first: ", names, share.size() > 3 ? "; ..." : "", share.empty() ? "" : ")")
+                     .c_str(),
+                 stderr);
+    }
+  }
 
   // Where the sweep has cost models and groups (points that cost alike relative to their model), each group's
   // cheapest point runs first, and the rest are shared by their model's cost times what their group's first
   // point took per unit of it (the whole first round's ratio for a group it did not reach): the models err by
-  // group (measured: a rank 1.2 times the mean on the quick report with the models alone), and the first round
-  // costs little. The seconds are handed over with the results, so every rank computes the same shares.
-  std::vector<size_t> rest = all;
-  std::vector<double> cost_of(weights);
-  if (!costs.empty() && !groups.empty()) {
+  // group, and the first round costs little. The seconds are handed over with the results, so every rank
+  // computes the same shares. Leaves in `rest` the points still to run, in `cost_of` their calibrated costs.
+  void calibrate(std::vector<size_t>& rest, std::vector<double>& cost_of) {
     std::map<std::string, size_t> cheapest;
-    for (const size_t i : all)
-      if (const auto it = cheapest.find(groups[i]); it == cheapest.end() || weights[i] < weights[it->second]) cheapest[groups[i]] = i;
+    for (const size_t i : rest)
+      if (const auto it = cheapest.find(groups_[i]); it == cheapest.end() || weights_[i] < weights_[it->second]) cheapest[groups_[i]] = i;
     std::vector<size_t> first;
     for (const auto& [group, i] : cheapest) first.push_back(i);
     std::sort(first.begin(), first.end());
     std::vector<double> first_costs;
-    for (const size_t i : first) first_costs.push_back(weights[i]);
+    for (const size_t i : first) first_costs.push_back(weights_[i]);
     round(first, first_costs);
     double seconds = 0, expected = 0;
     std::map<std::string, double> ratio;
     for (const size_t i : first) {
-      seconds += took[i];
-      expected += weights[i];
-      if (weights[i] > 0) ratio[groups[i]] = took[i] / weights[i];
+      seconds += took_[i];
+      expected += weights_[i];
+      if (weights_[i] > 0) ratio[groups_[i]] = took_[i] / weights_[i];
     }
     const double overall = expected > 0 ? seconds / expected : 1;
-    rest.clear();
-    for (const size_t i : all)
+    std::vector<size_t> left;
+    for (const size_t i : rest)
       if (!std::binary_search(first.begin(), first.end(), i)) {
-        rest.push_back(i);
-        const auto it = ratio.find(groups[i]);
-        cost_of[i] = weights[i] * (it != ratio.end() && it->second > 0 ? it->second : overall);
+        left.push_back(i);
+        const auto it = ratio.find(groups_[i]);
+        cost_of[i] = weights_[i] * (it != ratio.end() && it->second > 0 ? it->second : overall);
       }
+    rest = std::move(left);
   }
-  std::vector<double> rest_costs;
-  for (const size_t i : rest) rest_costs.push_back(cost_of[i]);
-  round(rest, rest_costs);
-  if (!failed.empty()) throw SweepError(failed.begin()->second);
+
+  const StudyContext& ctx_;
+  const std::vector<std::string>& labels_;
+  const std::function<void(size_t)>& point_;
+  const std::vector<double>& costs_;
+  const std::vector<std::string>& groups_;
+  const std::function<void(size_t, pack::Writer&)>& put_;
+  const std::function<void(size_t, pack::Reader&)>& get_;
+  const std::vector<double> weights_;
+  const int ranks_, me_;
+  std::vector<std::exception_ptr> errors_;
+  std::vector<double> took_;  // each point's seconds (every rank's, once handed over)
+  std::map<size_t, std::string> failed_;  // point -> "rank r, point label: message", in point order
+};
+
+}  // namespace
+
+void StudyContext::run_points(const std::vector<std::string>& labels, const std::function<void(size_t)>& point,
+                              const std::vector<double>& costs, const std::vector<std::string>& groups,
+                              const std::function<void(size_t, pack::Writer&)>& put, const std::function<void(size_t, pack::Reader&)>& get) const {
+  PointSweep(*this, labels, point, costs, groups, put, get).run();
 }
 
 }  // namespace stepwise

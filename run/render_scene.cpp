@@ -202,6 +202,67 @@ RenderPlan plan_render(const RenderOptions& options) {
   return r;
 }
 
+// the frames: every stride-th sample, and the last one if the run stopped between frames (diverged)
+struct Frames {
+  std::vector<Shapes> shapes;
+  std::vector<size_t> samples;  // the sample each frame shows
+};
+
+Frames pick_frames(const PreparedRun& p, const Samples& samples) {
+  Frames frames;
+  for (size_t k = 0; k < samples.y.size(); ++k)
+    if (k % samples.stride == 0 || k + 1 == samples.y.size()) frames.samples.push_back(k);
+  for (const size_t k : frames.samples) frames.shapes.push_back(*p.model->shapes(samples.y[k]));
+  return frames;
+}
+
+// render.json's facts of the run and the picture, before its frames
+nlohmann::json render_facts(const PreparedRun& p, const Samples& samples, const RenderOptions& options, const RenderPlan& planned,
+                            const gl::Context& context, const render::Camera& camera, double simulate_seconds) {
+  nlohmann::json summary;
+  summary["scene"] = p.scene.name;
+  summary["model"] = std::string(p.model->name());
+  summary["method"] = p.method;
+  summary["status"] = std::string(to_string(samples.result.status));
+  summary["message"] = samples.result.message.empty() ? nlohmann::json(nullptr) : nlohmann::json(samples.result.message);
+  summary["width"] = planned.width;
+  summary["height"] = planned.height;
+  summary["backend"] = options.backend;
+  summary["renderer"] = context.description();
+  summary["simulate_seconds"] = simulate_seconds;
+  summary["camera"] = {{"eye", {camera.eye.x(), camera.eye.y(), camera.eye.z()}},
+                       {"target", {camera.target.x(), camera.target.y(), camera.target.z()}},
+                       {"up", {camera.up.x(), camera.up.y(), camera.up.z()}},
+                       {"fov_deg", camera.fov_deg}};
+  summary["frames"] = nlohmann::json::array();
+  return summary;
+}
+
+// the balls' trails up to frame f's sample: `sampled` counts the samples already on them
+void extend_trails(std::vector<std::vector<Eigen::Vector3d>>& trails, size_t& sampled, const PreparedRun& p, const Samples& samples,
+                   const Frames& frames, size_t f) {
+  for (; sampled <= frames.samples[f]; ++sampled) {
+    const Shapes at = sampled == frames.samples[f] ? frames.shapes[f] : *p.model->shapes(samples.y[sampled]);
+    size_t trail = 0;
+    for (const auto& ball : at.balls)
+      if (ball.trail) {
+        if (trails.size() <= trail) trails.emplace_back();
+        trails[trail++].push_back(ball.center);
+      }
+  }
+}
+
+// a frame of a few pixels is one colour whatever the camera sees (a 1 x 1 frame always): said as such
+void say_empty_frames(size_t empty_frames, size_t frames, int width, int height) {
+  constexpr double fewest_telling_pixels = 32 * 32;
+  if (empty_frames == 0) return;
+  print_error("render", static_cast<double>(width) * height < fewest_telling_pixels
+                            ? fmt::format("{} of {} frames show one colour only: a {} x {} frame is too small to show the scene", empty_frames,
+                                          frames, width, height)
+                            : fmt::format("{} of {} frames show one colour only: the scene is outside the camera's view (see render.json's camera)",
+                                          empty_frames, frames));
+}
+
 }  // namespace
 
 void check_render(const RenderOptions& options) { plan_render(options); }
@@ -229,12 +290,8 @@ RenderedRun render_scene(const RenderOptions& options) {
   Samples samples = simulate(p, plan);
   const double simulate_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  // the frames: every stride-th sample, and the last one if the run stopped between frames (diverged)
-  std::vector<Shapes> shapes;
-  std::vector<size_t> frame_samples;
-  for (size_t k = 0; k < samples.y.size(); ++k)
-    if (k % samples.stride == 0 || k + 1 == samples.y.size()) frame_samples.push_back(k);
-  for (const size_t k : frame_samples) shapes.push_back(*p.model->shapes(samples.y[k]));
+  const Frames frames = pick_frames(p, samples);
+  const std::vector<Shapes>& shapes = frames.shapes;
   // one view for the whole animation: the union of the frames' bounds
   const render::View view = render::make_view(shapes, p.scene.look, width, height);
   check_camera(view.camera, p.scene);
@@ -247,23 +304,8 @@ RenderedRun render_scene(const RenderOptions& options) {
 
   // render.json: the run's and the picture's facts, then the frames as their PNGs are written; an interruption
   // writes it with the frames finished so far
-  nlohmann::json summary;
+  nlohmann::json summary = render_facts(p, samples, options, planned, *context, view.camera, simulate_seconds);
   std::mutex summary_mutex;
-  summary["scene"] = p.scene.name;
-  summary["model"] = std::string(p.model->name());
-  summary["method"] = p.method;
-  summary["status"] = std::string(to_string(samples.result.status));
-  summary["message"] = samples.result.message.empty() ? nlohmann::json(nullptr) : nlohmann::json(samples.result.message);
-  summary["width"] = width;
-  summary["height"] = height;
-  summary["backend"] = options.backend;
-  summary["renderer"] = context->description();
-  summary["simulate_seconds"] = simulate_seconds;
-  summary["camera"] = {{"eye", {view.camera.eye.x(), view.camera.eye.y(), view.camera.eye.z()}},
-                       {"target", {view.camera.target.x(), view.camera.target.y(), view.camera.target.z()}},
-                       {"up", {view.camera.up.x(), view.camera.up.y(), view.camera.up.z()}},
-                       {"fov_deg", view.camera.fov_deg}};
-  summary["frames"] = nlohmann::json::array();
   std::vector<nlohmann::json> drawn;  // each frame's entry, joining summary["frames"] once its PNG is written
   const interrupt::OnInterrupt last_words([&] {
     std::lock_guard lock(summary_mutex);
@@ -285,25 +327,17 @@ RenderedRun render_scene(const RenderOptions& options) {
     double draw_seconds = 0;
     size_t sampled = 0;  // samples already on the trails
     for (size_t f = 0; f < shapes.size(); ++f) {
-      for (; has_trails && sampled <= frame_samples[f]; ++sampled) {
-        const Shapes at = sampled == frame_samples[f] ? shapes[f] : *p.model->shapes(samples.y[sampled]);
-        size_t trail = 0;
-        for (const auto& ball : at.balls)
-          if (ball.trail) {
-            if (trails.size() <= trail) trails.emplace_back();
-            trails[trail++].push_back(ball.center);
-          }
-      }
+      if (has_trails) extend_trails(trails, sampled, p, samples, frames, f);
       const auto before = std::chrono::steady_clock::now();
       render::Image image = renderer.draw(shapes[f], trails, view);
       draw_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
-      const double t = samples.t[frame_samples[f]];
+      const double t = samples.t[frames.samples[f]];
       if (one_colour(image)) ++empty_frames;
       drawn.push_back({{"file", fmt::format("frame_{:04d}.png", f)}, {"t", t}, {"hash", render::pixel_hash(image)}});
       queue.push(std::move(image));
     }
     queue.finish();
-    const double span = samples.t[frame_samples.back()];
+    const double span = samples.t[frames.samples.back()];
     const int fps = span > 0 ? std::clamp(static_cast<int>(std::lround((shapes.size() - 1) / span)), 1, 60) : 1;
     if (shapes.size() > 1 && movies && options.animations) encode_movies(out, fps);
     std::lock_guard lock(summary_mutex);
@@ -316,14 +350,7 @@ RenderedRun render_scene(const RenderOptions& options) {
     throw InputError(e.what());
   }
 
-  // a frame of a few pixels is one colour whatever the camera sees (a 1 x 1 frame always): said as such
-  constexpr double fewest_telling_pixels = 32 * 32;
-  if (empty_frames > 0)
-    print_error("render", static_cast<double>(width) * height < fewest_telling_pixels
-                              ? fmt::format("{} of {} frames show one colour only: a {} x {} frame is too small to show the scene", empty_frames,
-                                            shapes.size(), width, height)
-                              : fmt::format("{} of {} frames show one colour only: the scene is outside the camera's view (see render.json's camera)",
-                                            empty_frames, shapes.size()));
+  say_empty_frames(empty_frames, shapes.size(), width, height);
   // written outside summary_mutex: a file's temporary registers with the interruption's registry, whose lock the
   // cleaning thread holds while it runs the last words above, which take summary_mutex (the inverse order
   // deadlocked a SIGTERM'd `study pictures` for good, one try in a few hundred)
