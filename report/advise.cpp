@@ -484,7 +484,7 @@ Figure advice_figure(const Advice& advice) {
   FigureSpec::Panel panel{.title = fmt::format("{}: the advice's sweep (dashed: adaptive; x: failed or diverged)", advice.scene),
                           .x_label = "CPU time (s)", .y_label = "max-norm error at t_end", .log_x = true, .log_y = true, .layers = by_mode(sweep),
                           .lines = {{'y', advice.target, "the error asked"}}};
-  panel.layers.push_back({.table = "advice_summary", .x = "cpu_seconds", .y = "error", .series = "method", .label = "advised: {}", .mark = "star",
+  panel.layers.push_back({.table = "advice_summary", .x = "cpu_seconds", .y = "error", .series = "method", .label = "advised: {}", .mark = FigureMark::star,
                           .where = {{"scene", {advice.scene}}}, .hover = {{"setting", "setting"}}});
   return {"advice", advice.scene, {.title = "The advice's sweep, " + advice.scene, .panels = {std::move(panel)}}};
 }

@@ -5,12 +5,75 @@ for both of its drawers, plot.py's PNG and interactive.py's plotly figure.
 A row counts where its `status` (if the table has one) is ok, its layer's `where` and the panel's facet keep it,
 its `complete` columns are finite numbers, and its x and y are finite (and positive on a log axis) after the
 layer's transform and floor; a line's points are sorted by x, each (x, y) once. A layer with `failures` keeps its
-rows whose status is not ok apart: their x, drawn as crosses at the panel's top."""
+rows whose status is not ok apart: their x, drawn as crosses at the panel's top.
+
+Each line's style (colour, marker, dash, width) is resolved here once, for the figure as a whole; the drawers only
+translate a Style into matplotlib's or plotly's words. A method's colour is a shade of its group's (the method
+table's `group`, in Okabe and Ito's colour-blind-safe palette) by its place in the group, and so is its marker,
+the same in every figure and in both drawers."""
+import colorsys
 import csv
+import enum
 import json
 import math
 import os
 from dataclasses import dataclass, field
+
+
+class Mark(enum.Enum):
+    """how a line is drawn, as figures.json names it (report/studies.hpp's FigureMark), and the slope guide"""
+    LINE = "line"
+    POINTS = "points"
+    LINE_POINTS = "line+points"
+    STAR = "star"          # a point marked out (the advised method)
+    CONTOUR = "contour"    # z's level 1 over the grid of x and y
+    FRONT = "front"        # a Pareto front: broad and pale, behind
+    GUIDE = "guide"        # the panel's y ~ x^slope guide
+
+
+@dataclass(frozen=True)
+class Style:
+    """a line's look, in the drawers' common terms: a colour "#rrggbb"; a marker by MARKERS' names (an "-open"
+    suffix: its outline alone), None for none; a dash "solid", "dash" or "dot", None for points alone; sizes in
+    points (1/72 inch)"""
+    colour: str
+    marker: str | None = None
+    dash: str | None = "solid"
+    width: float = 1.0
+    size: float = 4.0
+    opacity: float = 1.0
+    edge: str | None = None   # the marker's outline colour, where it differs from the fill
+    behind: bool = False      # drawn beneath the other lines
+
+
+# Okabe & Ito (2008): eight colours told apart under the common colour-vision deficiencies
+PALETTE = ["#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000"]
+# a line that is not a method's, beside methods' lines: black and greys (alone, such lines take PALETTE)
+GREYS = ["#000000", "#808080", "#A9A9A9", "#696969"]
+MARKERS = ["circle", "square", "diamond", "triangle-up", "triangle-down", "triangle-left", "triangle-right", "pentagon", "hexagon",
+           "cross", "x", "diamond-tall"]
+GUIDE_STYLE = Style("#000000", dash="dot")
+STAR_STYLE = Style("#FFD700", marker="star", dash=None, size=12, edge="#000000")
+FRONT_STYLE = Style("#AAAAAA", dash="solid", width=6, opacity=0.5, behind=True)
+
+
+def reference_style(i, labelled):
+    """a panel's i-th reference line: a labelled one dotted or dashed in turn, black or grey; another faint"""
+    return Style(("#000000", "#808080")[i % 2], dash=("dot", "dash")[i % 2], width=0.8) if labelled else Style("#BBBBBB", width=0.5)
+
+
+def shade(colour, place, count):
+    """the place-th of `count` shades of a colour (the colour itself alone): lightness and hue moved by
+    low-discrepancy sequences, so that neighbours in the method table, often drawn together, differ most"""
+    if count <= 1:
+        return colour
+    r, g, b = (int(colour[i:i + 2], 16) / 255 for i in (1, 3, 5))
+    hue, lightness, saturation = colorsys.rgb_to_hls(r, g, b)
+    t, u = (place * 0.6180339887) % 1, (place * 0.7548776662) % 1
+    # lightness over +-0.25 about the colour's, kept within [0.12, 0.78] so that every shade shows on white; hue +-0.05
+    low, high = max(0.12, lightness - 0.25), min(0.78, lightness + 0.25)
+    r, g, b = colorsys.hls_to_rgb((hue + 0.1 * (u - 0.5)) % 1, low + (high - low) * t, saturation)
+    return "#{:02X}{:02X}{:02X}".format(*(round(255 * c) for c in (r, g, b)))
 
 
 @dataclass
@@ -18,11 +81,12 @@ class Line:
     name: str          # the legend's
     key: str           # what styles it: a method (coloured by its group, marked by itself), else its name
     method: bool       # its series is a method
-    mark: str          # "line", "points", "line+points", "star", "front", "guide"
+    mark: Mark
     dashed: bool
     x: list
     y: list
     hover: list = field(default_factory=list)  # a point's other values, as "heading value" lines
+    style: Style = None  # resolved by panels()
 
 
 @dataclass
@@ -32,6 +96,7 @@ class Contour:
     x: list            # the grid's columns
     y: list            # and rows
     z: list            # z[row][column]; the contour drawn is its level 1
+    style: Style = None
 
 
 @dataclass
@@ -40,6 +105,7 @@ class Failed:
     key: str
     method: bool
     x: list
+    style: Style = None
 
 
 @dataclass
@@ -55,6 +121,70 @@ class Panel:
     contours: list
     failed: list
     references: list   # {"axis": "x" or "y", "value", "label"}
+    failed_y: float = math.nan  # where the failed runs' crosses go: above the panel's highest point
+
+
+class Methods:
+    """each method's group, colour and marker, fixed by the method table's order (methods.csv): a group takes the
+    next PALETTE colour, its k-th method the k-th of its shades and MARKERS' k-th marker (outlined past the list)"""
+
+    def __init__(self, directory):
+        path = os.path.join(directory, "methods.csv")
+        table = list(csv.DictReader(open(path, newline=""))) if os.path.exists(path) else []
+        self.group = {r["name"]: r.get("group") or r["source"] for r in table}
+        self.order = list(dict.fromkeys(self.group.values()))
+        self.colour, self.marker = {}, {}
+        for i, g in enumerate(self.order):
+            members = [n for n in self.group if self.group[n] == g]
+            for k, name in enumerate(members):
+                self.colour[name] = shade(PALETTE[i % len(PALETTE)], k, len(members))
+                self.marker[name] = MARKERS[k % len(MARKERS)] + ("-open" if k // len(MARKERS) % 2 else "")
+
+    def of(self, method):
+        return self.group.get(method, "other")
+
+
+class Styler:
+    """one figure's styles: a method's from Methods, another line's a colour and marker of its own by name (the
+    same in every panel): greys beside methods' lines, PALETTE alone"""
+
+    def __init__(self, methods, panels):
+        self.methods, self.others = methods, {}
+        with_methods = any(line.method for p in panels for line in p.lines) or any(c.key in methods.colour for p in panels for c in p.contours)
+        self.colours = GREYS if with_methods else PALETTE
+
+    def colour(self, key, method):
+        if method or key in self.methods.colour:
+            return self.methods.colour.get(key, "#999999")
+        return self.colours[self.others.setdefault(key, len(self.others)) % len(self.colours)]
+
+    def marker(self, key, method):
+        if method:
+            return self.methods.marker.get(key, "circle")
+        return MARKERS[self.others.setdefault(key, len(self.others)) % len(MARKERS)]
+
+    def line(self, line):
+        fixed = {Mark.GUIDE: GUIDE_STYLE, Mark.STAR: STAR_STYLE, Mark.FRONT: FRONT_STYLE}.get(line.mark)
+        if fixed:
+            return fixed
+        colour, marker = self.colour(line.key, line.method), self.marker(line.key, line.method)
+        dash = "dash" if line.dashed else "solid"
+        if line.mark == Mark.LINE:
+            return Style(colour, None, dash)
+        if line.mark == Mark.POINTS:
+            return Style(colour, marker, None, size=4 if line.method else 3)
+        return Style(colour, marker, dash)
+
+    def resolve(self, panels):
+        for p in panels:
+            for i, ref in enumerate(p.references):
+                ref["style"] = reference_style(i, bool(ref["label"]))
+            for c in p.contours:
+                c.style = Style(self.colour(c.key, False), None, "solid", width=1.5)
+            for line in p.lines:
+                line.style = self.line(line)
+            for f in p.failed:
+                f.style = Style(self.colour(f.key, f.method), "x", None, size=7)
 
 
 def specs(directory):
@@ -124,7 +254,8 @@ def layer_lines(rows, layer, panel):
         for r in rows:
             out.setdefault(key_of(r), []).append(r)
         return out
-    if layer["mark"] == "contour":
+    mark = Mark(layer["mark"])
+    if mark == Mark.CONTOUR:
         out = []
         for values, mine in grouped(ok).items():
             xs = sorted({number(r[layer["x"]]) for r in mine})
@@ -146,11 +277,11 @@ def layer_lines(rows, layer, panel):
         if not points:
             continue
         series = values[0] if layer["series"] else None
-        dashed = "dashed" in layer["mark"] or (layer["split_dashed"] and series in seen_series)
+        dashed = layer["dashed"] or (layer["split_dashed"] and series in seen_series)
         seen_series.add(series)
         name = name_of(values)
         ordered = sorted(points)
-        lines.append(Line(name, style_key(values, name), method, layer["mark"].replace("dashed", "line"), dashed,
+        lines.append(Line(name, style_key(values, name), method, mark, dashed,
                           [p[0] for p in ordered], [p[1] for p in ordered], [points[p] for p in ordered]))
     fails = []
     for values, mine in grouped(failed).items():
@@ -169,11 +300,12 @@ def guide(panel, lines):
     x0 = min(x for x, _ in points)
     y0 = max(y for x, y in points if x == x0)
     xs = sorted({x for x, _ in points})
-    return [Line(panel["guide_label"], panel["guide_label"], False, "guide", False, xs, [y0 * (x / x0) ** panel["guide_slope"] for x in xs])]
+    return [Line(panel["guide_label"], panel["guide_label"], False, Mark.GUIDE, False, xs, [y0 * (x / x0) ** panel["guide_slope"] for x in xs])]
 
 
-def panels(directory, spec):
-    """[Panel] in the figure's order: its panels, once per facet value where it has a facet"""
+def panels(directory, spec, methods=None):
+    """[Panel] in the figure's order: its panels, once per facet value where it has a facet, each line's style
+    resolved (by `methods`, else the directory's method table)"""
     tables = Tables(directory)
     facets = [{}]
     if spec["facet"]:
@@ -190,8 +322,10 @@ def panels(directory, spec):
                 contours += more[1]
                 failed += more[2]
             title = (panel["title"] or spec["title"]).format(**{c: shown(v) for c, v in facet.items()})
+            top = max([y for line in lines for y in line.y] + [1.0]) * (10 if panel["log_y"] else 1.1)
             out.append(Panel(title, panel["x_label"], panel["y_label"], panel["log_x"], panel["log_y"], panel["symlog_x"], panel["equal_aspect"],
-                             lines + guide(panel, lines), contours, failed, panel["lines"]))
+                             lines + guide(panel, lines), contours, failed, panel["lines"], top if failed else math.nan))
+    Styler(methods or Methods(directory), out).resolve(out)
     return out
 
 

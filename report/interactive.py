@@ -1,8 +1,8 @@
 """The report's figures to explore in index.html: each drawn with plotly.js from its spec (figures.json:
 report/studies.hpp's FigureSpec) and the same CSVs, read by report/figure_spec.py as plot.py reads them for the PNGs.
 
-A method is a trace in its group's colour (the method table's `group`: whose code steps, ARKODE by kind; Okabe and
-Ito's colour-blind-safe palette) with a marker of its own; the legend lists the methods group by group, the first
+A method is a trace in its own colour and marker, a shade of its group's (the method table's `group`: whose code
+steps, ARKODE by kind), as report/figure_spec.py resolves it for both drawers; the legend lists the methods group by group, the first
 of each under its group's title (the titles are not clickable in the plotly.js Debian ships, 2.6.3), a method's
 entry hides or shows it in every panel, and a button per group above the plot shows or hides the whole group.
 Hover shows the line, its x and y and the values its spec names (setting, calls, CPU time). Log axes where the
@@ -12,16 +12,15 @@ the report's folder (no network when the page is viewed); the figures are built 
 (plotly.graph_objects), not by hand.
 
 Used by plot.py: twin() for each figure in the worker that draws its PNG, copy_plotly() once for the page."""
-import csv
 import os
 import shutil
 
+from figure_spec import Mark, Methods
+
 
 PLOTLY_JS = "/usr/share/python3-plotly/plotly.js"
-# Okabe & Ito (2008): eight colours told apart under the common colour-vision deficiencies
-PALETTE = ["#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000"]
-MARKERS = ["circle", "square", "diamond", "triangle-up", "triangle-down", "cross", "x", "star", "hexagon", "pentagon",
-           "triangle-left", "triangle-right", "hourglass", "bowtie", "circle-open", "square-open", "diamond-open", "star-open"]
+PX_PER_POINT = 1.5  # the styles' sizes, in points, as plotly's pixels (a page's figure is drawn larger than a PNG's)
+DASH = {"solid": None, "dash": "dash", "dot": "dot"}
 
 
 def available():
@@ -32,53 +31,27 @@ def available():
     return os.path.exists(PLOTLY_JS)
 
 
-def rows(directory, stem):
-    path = os.path.join(directory, stem + ".csv")
-    if not os.path.exists(path):
-        return []
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
-
-
-class Groups:
-    """each method's group, colour and marker, fixed by the method table's order"""
-
-    def __init__(self, directory):
-        table = rows(directory, "methods")
-        self.group = {r["name"]: r.get("group") or r["source"] for r in table}
-        order = []
-        for r in table:
-            if self.group[r["name"]] not in order:
-                order.append(self.group[r["name"]])
-        self.order = order
-        self.colour = {g: PALETTE[i % len(PALETTE)] for i, g in enumerate(order)}
-        self.marker = {}
-        for g in order:
-            for k, name in enumerate(n for n in self.group if self.group[n] == g):
-                self.marker[name] = MARKERS[k % len(MARKERS)]
-
-    def of(self, method):
-        return self.group.get(method, "other")
+def scatter_style(style):
+    """a figure_spec.Style as plotly Scatter's mode, line, marker and opacity (its marker names are plotly's own)"""
+    mode = "+".join(part for part, drawn in (("lines", style.dash), ("markers", style.marker)) if drawn) or "lines"
+    marker = dict(symbol=style.marker or "circle", size=style.size * PX_PER_POINT, color=style.colour)
+    if style.edge:
+        marker["line"] = dict(color=style.edge, width=1)
+    return dict(mode=mode, line=dict(color=style.colour, width=style.width * PX_PER_POINT, dash=DASH[style.dash or "solid"]),
+                marker=marker, opacity=style.opacity)
 
 
 def figure(groups, spec, panels):
     """a figure's panels (its spec as figure_spec reads it), the twin of plot.py's draw_figure: a panel each side
-    by side; a method's traces in its group's colour and its own marker, sharing one legend entry across panels and
-    layers (a click hides or shows the method everywhere), the first of each group titled with the group; another
-    line in a palette colour of its own; a Pareto front broad and pale; a failed run a cross at the panel's top; a
-    contour at level 1. Where more than 12 methods are drawn, only each group's best (the least y) and the methods
+    by side, each line, failed run and contour as its resolved Style says; a method's traces share one legend entry
+    across panels and layers (a click hides or shows the method everywhere), the first of each group titled with
+    the group. Where more than 12 methods are drawn, only each group's best (the least y) and the methods
     with a point on a front are shown at first; a button per group shows or hides the whole group"""
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
     fig = make_subplots(rows=1, cols=len(panels), subplot_titles=[p.title for p in panels] if len(panels) > 1 else None)
     fig.update_annotations(font_size=12)  # the panels' titles, side by side
-    others = {}
-
-    def colour(key, method):
-        return groups.colour.get(groups.of(key), "#999999") if method else PALETTE[others.setdefault(key, len(others)) % len(PALETTE)]
-    methods = {line.name: line.key for p in panels for line in p.lines if line.method and line.mark != "star"}
+    methods = {line.name: line.key for p in panels for line in p.lines if line.method and line.mark != Mark.STAR}
     # at first: every line, or (many methods) each group's best and the methods with a point on a front
     shown = set(methods)
     if len(methods) > 12:
@@ -90,7 +63,7 @@ def figure(groups, spec, panels):
                     best[g] = (line.name, least)
         shown = {name for name, _ in best.values()}
         for p in panels:
-            on_front = {(x, y) for line in p.lines if line.mark == "front" for x, y in zip(line.x, line.y)}
+            on_front = {(x, y) for line in p.lines if line.mark == Mark.FRONT for x, y in zip(line.x, line.y)}
             shown |= {line.name for line in p.lines if line.name in methods and on_front.intersection(zip(line.x, line.y))}
     legend_seen, titled = set(), set()
 
@@ -105,37 +78,28 @@ def figure(groups, spec, panels):
                     visible=True if name not in methods or name in shown else "legendonly")
     for col, p in enumerate(panels, start=1):
         for c in p.contours:
-            # a contour in a colour of its own (methods of one group would share theirs, and a contour has no marker)
-            hue = colour(c.name, False)
+            hue = c.style.colour
             fig.add_trace(go.Contour(x=c.x, y=c.y, z=c.z, contours=dict(start=1, end=1, size=1, coloring="lines"), showscale=False,
-                                     colorscale=[[0, hue], [1, hue]], line=dict(width=2), hoverinfo="skip", name=c.name, legendgroup=c.name),
+                                     colorscale=[[0, hue], [1, hue]], line=dict(width=c.style.width * PX_PER_POINT), hoverinfo="skip", name=c.name, legendgroup=c.name),
                           row=1, col=col)
             # a contour has no legend entry of its own: a line without points stands for it
-            fig.add_trace(go.Scatter(x=[None], y=[None], mode="lines", line=dict(color=hue, width=2), name=c.name, legendgroup=c.name,
+            fig.add_trace(go.Scatter(x=[None], y=[None], mode="lines", line=dict(color=hue, width=c.style.width * PX_PER_POINT), name=c.name, legendgroup=c.name,
                                      showlegend=col == 1), row=1, col=col)
         # a method's traces group by group (the legend lists them in this order, each group under its title)
         rank = {g: i for i, g in enumerate(groups.order)}
         for line in sorted(p.lines, key=lambda line: rank.get(groups.of(line.key), len(rank)) if line.method else -1):
-            hue = {"guide": "#000000", "front": "#888888"}.get(line.mark) or colour(line.key, line.method)
-            marker = dict(symbol="star" if line.mark == "star" else groups.marker.get(line.key, MARKERS[others.get(line.key, 0) % len(MARKERS)]),
-                          size=16 if line.mark == "star" else 7, color="gold" if line.mark == "star" else hue)
-            mode = {"line": "lines", "guide": "lines", "front": "lines", "points": "markers", "star": "markers"}.get(line.mark, "lines+markers")
             extra = ["<br>" + "<br>".join(h) if h else "" for h in line.hover] if line.hover else None
             fig.add_trace(go.Scatter(
-                x=line.x, y=line.y, mode=mode, line=dict(color=hue, width=6 if line.mark == "front" else 1.5,
-                                                         dash="dash" if line.dashed else "dot" if line.mark == "guide" else None),
-                opacity=0.35 if line.mark == "front" else 1, marker=marker, customdata=extra,
+                x=line.x, y=line.y, **scatter_style(line.style), customdata=extra,
                 hovertemplate=f"<b>{line.name}</b><br>{p.y_label} %{{y:.3g}}<br>{p.x_label} %{{x:.3g}}{'%{customdata}' if extra else ''}"
                               f"<extra>{groups.of(line.key) if line.method else ''}</extra>",
                 **legend_of(line.name, line.key, line.method)), row=1, col=col)
-        if p.failed:
-            top = max([y for line in p.lines for y in line.y] + [1.0]) * (10 if p.log_y else 1.1)
-            for f in p.failed:
-                fig.add_trace(go.Scatter(x=f.x, y=[top] * len(f.x), mode="markers", marker=dict(symbol="x", size=8, color=colour(f.key, f.method)),
+        for f in p.failed:
+            fig.add_trace(go.Scatter(x=f.x, y=[p.failed_y] * len(f.x), **scatter_style(f.style),
                                          hovertemplate=f"<b>{f.name}</b>: failed or diverged<br>{p.x_label} %{{x:.3g}}<extra></extra>",
                                          **{**legend_of(f.name, f.key, f.method), "showlegend": False}), row=1, col=col)
-        for k, ref in enumerate(p.references):
-            line = dict(color="#444444" if ref["label"] else "#bbbbbb", dash=("dot", "dash")[k % 2] if ref["label"] else "solid", width=1)
+        for ref in p.references:
+            line = scatter_style(ref["style"])["line"]
             add = fig.add_vline if ref["axis"] == "x" else fig.add_hline
             add(**{ref["axis"]: ref["value"]}, line=line, row=1, col=col, **({"annotation_text": ref["label"]} if ref["label"] else {}))
         fig.update_xaxes(type="log" if p.log_x else "linear", title=p.x_label, exponentformat="power", row=1, col=col)
@@ -180,7 +144,7 @@ def twin(directory, stem, spec, panels):
     plot.py's workers build them side by side"""
     if not available():
         return None
-    fig, methods = figure(Groups(directory), spec, panels)
+    fig, methods = figure(Methods(directory), spec, panels)
     spec = fig.to_json().replace("</", "<\\/")  # no text in the JSON can close its script element
     hint = ("hover for a point's method, setting, error and cost; click a legend entry to hide or show a method, a group's button above "
             "the plot for the whole group") if methods else "hover for a point's values; click a legend entry to hide or show its line"

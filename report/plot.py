@@ -6,7 +6,8 @@
 DIR/figures.csv lists the figures (stem, kind, subject) and DIR/figures.json declares each (report/studies.hpp's
 FigureSpec): every one is drawn by draw_figure below, from its spec and the CSVs in DIR only (report/figure_spec.py
 reads them), into DIR/stem.png, by N processes at once (--jobs; default 1). DIR/methods.csv (the method table)
-fixes one colour and marker per method, the same in every figure. With --html, DIR/report.md becomes
+fixes one colour and marker per method, the same in every figure and its twin (report/figure_spec.py resolves
+every line's style; this script and interactive.py only translate it). With --html, DIR/report.md becomes
 DIR/index.html (Python-Markdown, tables), each figure to explore in place of its PNG (report/interactive.py draws
 it from the same spec: plotly.js from Debian's python3-plotly).
 Needs Debian's python3-matplotlib (and python3-markdown for --html); exit status 3 names a missing one.
@@ -33,7 +34,6 @@ except ImportError as e:
     sys.exit(3)
 
 DPI = 100  # 1200 x 550 pixels for a two-panel figure; --dpi changes it (the README's copies are drawn smaller)
-FAILED_MARKER = dict(marker="x", linestyle="none", markersize=7)
 
 
 def read(directory, stem):
@@ -47,19 +47,6 @@ def read(directory, stem):
             except ValueError:
                 pass
     return rows
-
-
-class Styles:
-    """One colour and marker per method, fixed by the method table's order."""
-
-    def __init__(self, directory):
-        names = [row["name"] for row in read(directory, "methods")]
-        colours = plt.get_cmap("tab20").colors + plt.get_cmap("tab20b").colors
-        markers = "os^vD<>phP*Xd"
-        self.style = {name: dict(color=colours[i % len(colours)], marker=markers[i % len(markers)]) for i, name in enumerate(names)}
-
-    def __call__(self, method):
-        return self.style.get(method, dict(color="black", marker="."))
 
 
 def finish(fig, directory, stem):
@@ -78,57 +65,50 @@ def legend(ax, **kw):
 # ---- every figure, from its spec
 
 
-STAR = dict(marker="*", markersize=16, color="gold", markeredgecolor="black", linestyle="none")
-FRONT = dict(color="#bbbbbb", linewidth=6, alpha=0.6, marker=None, zorder=0)
-GUIDE = dict(color="black", linestyle=":", marker=None)
+# MARKERS' names (report/figure_spec.py) in matplotlib's words
+MARKER = {"circle": "o", "square": "s", "diamond": "D", "triangle-up": "^", "triangle-down": "v", "triangle-left": "<", "triangle-right": ">",
+          "pentagon": "p", "hexagon": "h", "cross": "P", "x": "X", "diamond-tall": "d", "star": "*"}
+DASH = {"solid": "-", "dash": "--", "dot": ":"}
 
 
-def draw_figure(directory, stem, panels, styles):
-    """a figure's panels (its spec as figure_spec reads it) side by side: a method's line in its own colour and
-    marker, another line in a colour of its own (the same in every panel), a dashed line dashed, points without a
-    line, a Pareto front broad and pale behind, a failed run a cross at the panel's top, a contour at level 1, the
-    reference lines grey"""
+def plot_style(style):
+    """a figure_spec.Style as matplotlib's plot() keywords"""
+    kw = dict(color=style.colour, linewidth=style.width, alpha=style.opacity, linestyle=DASH[style.dash] if style.dash else "none")
+    if style.marker:
+        name, hollow = style.marker.removesuffix("-open"), style.marker.endswith("-open")
+        kw.update(marker=MARKER[name], markersize=style.size)
+        if hollow:
+            kw["markerfacecolor"] = "none"
+        if style.edge:
+            kw["markeredgecolor"] = style.edge
+    else:
+        kw["marker"] = None
+    if style.behind:
+        kw["zorder"] = 0
+    return kw
+
+
+def draw_figure(directory, stem, panels):
+    """a figure's panels (its spec as figure_spec reads and styles it) side by side: each line as its Style says,
+    a failed run a cross at the panel's top, a contour at level 1, the reference lines grey"""
     many = max(len({line.name for line in p.lines}) for p in panels) > 12  # a legend this long goes beside the panel
     width = (5.2 if all(p.equal_aspect for p in panels) else 6) * len(panels) + (3 if many else 0)
     fig, axes = plt.subplots(1, len(panels), figsize=(8 if len(panels) == 1 and not many else width, 5.5 if many else 5), squeeze=False)
-    others = {}  # a line that is not a method's: its colour and marker, by name, the same in every panel
-
-    with_methods = any(line.method for p in panels for line in p.lines) or any(c.key in styles.style for p in panels for c in p.contours)
-    # beside methods' lines (in tab20's colours) the others are black and greys; alone, in matplotlib's cycle
-    colours = ["black", "grey", "darkgrey", "dimgrey"] if with_methods else [f"C{k}" for k in range(10)]
-
-    def style(key, method):
-        if method:
-            return styles(key)
-        k = others.setdefault(key, len(others))
-        return dict(color=colours[k % len(colours)], marker="os^vD<>"[k % 7])
     same_legends = len({tuple(sorted({line.name for line in p.lines})) for p in panels}) == 1
     for k, (ax, panel) in enumerate(zip(axes[0], panels)):
         named = set()
         for c in panel.contours:
-            hue = style(c.key, c.key in styles.style)["color"]
-            ax.contour(c.x, c.y, c.z, levels=[1], colors=[hue], linewidths=1.5)
-            ax.plot([], [], color=hue, label=c.name)
+            ax.contour(c.x, c.y, c.z, levels=[1], colors=[c.style.colour], linewidths=c.style.width)
+            ax.plot([], [], color=c.style.colour, label=c.name)
         for line in panel.lines:
-            kw = dict({"guide": GUIDE, "star": STAR, "front": FRONT}.get(line.mark) or style(line.key, line.method))
-            if line.mark == "line":
-                kw["marker"] = None
-            if line.mark == "points":
-                kw["linestyle"] = "none"
-            if line.dashed:
-                kw["linestyle"] = "--"
-            ax.plot(line.x, line.y, label=None if line.name in named else line.name, markersize=kw.pop("markersize", 4 if line.mark != "points" or line.method else 3),
-                    linewidth=kw.pop("linewidth", 1), **kw)
+            ax.plot(line.x, line.y, label=None if line.name in named else line.name, **plot_style(line.style))
             named.add(line.name)
-        if panel.failed:
-            ys = [y for line in panel.lines for y in line.y]
-            top = max(ys + [1.0]) * (10 if panel.log_y else 1.1)
-            for f in panel.failed:
-                ax.plot(f.x, [top] * len(f.x), color=style(f.key, f.method)["color"], **FAILED_MARKER)
-        for i, ref in enumerate(panel.references):
-            (ax.axvline if ref["axis"] == "x" else ax.axhline)(ref["value"], color=("black", "grey")[i % 2] if ref["label"] else "grey",
-                                                                 linestyle=(":", "--")[i % 2] if ref["label"] else "-",
-                                                                 linewidth=0.8 if ref["label"] else 0.5, label=ref["label"] or None)
+        for f in panel.failed:
+            ax.plot(f.x, [panel.failed_y] * len(f.x), **plot_style(f.style))
+        for ref in panel.references:
+            kw = plot_style(ref["style"])
+            del kw["marker"]
+            (ax.axvline if ref["axis"] == "x" else ax.axhline)(ref["value"], label=ref["label"] or None, **kw)
         if panel.symlog_x:
             least = min((x for line in panel.lines for x in line.x if x > 0), default=1.0)
             ax.set_xscale("symlog", linthresh=least)
@@ -236,7 +216,7 @@ def draw(directory, stem, dpi, explore):
     DPI = dpi
     spec = figure_spec.specs(directory)[stem]
     panels = figure_spec.panels(directory, spec)
-    draw_figure(directory, stem, panels, Styles(directory))
+    draw_figure(directory, stem, panels)
     return interactive.twin(directory, stem, spec, panels) if explore else None
 
 

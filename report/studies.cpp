@@ -30,8 +30,20 @@ std::vector<FigureSpec::Layer> by_mode(FigureSpec::Layer layer) {
   FigureSpec::Layer adaptive = layer;
   layer.where.push_back({"mode", {"fixed"}});
   adaptive.where.push_back({"mode", {"adaptive"}});
-  adaptive.mark = "dashed+points";
+  adaptive.dashed = true;
   return {std::move(layer), std::move(adaptive)};
+}
+
+std::string_view to_string(FigureMark mark) {
+  switch (mark) {
+    case FigureMark::line: return "line";
+    case FigureMark::points: return "points";
+    case FigureMark::line_and_points: return "line+points";
+    case FigureMark::star: return "star";
+    case FigureMark::contour: return "contour";
+    case FigureMark::front: return "front";
+  }
+  return "line+points";
 }
 
 nlohmann::json FigureSpec::json() const {
@@ -44,7 +56,7 @@ nlohmann::json FigureSpec::json() const {
       nlohmann::json where = nlohmann::json::object(), hover = nlohmann::json::array();
       for (const auto& w : l.where) where[w.column] = w.values;
       for (const auto& [column, heading] : l.hover) hover.push_back({column, heading});
-      panel["layers"].push_back({{"table", l.table}, {"x", l.x}, {"y", l.y}, {"z", l.z}, {"series", l.series}, {"split", l.split}, {"split_dashed", l.split_dashed}, {"label", l.label}, {"mark", l.mark},
+      panel["layers"].push_back({{"table", l.table}, {"x", l.x}, {"y", l.y}, {"z", l.z}, {"series", l.series}, {"split", l.split}, {"split_dashed", l.split_dashed}, {"label", l.label}, {"mark", to_string(l.mark)}, {"dashed", l.dashed},
                                  {"y_of", l.y_of}, {"floor", l.floor}, {"where", where}, {"complete", l.complete}, {"failures", l.failures},
                                  {"hover", hover}, {"names", l.names}});
     }

@@ -21,6 +21,18 @@ namespace stepwise {
 // another (index.html's plotly figure), both from the same lines as report/figure_spec.py reads them.
 // A figure is a row of panels (copied once per value of `facet`); a panel's layers each draw one table's rows,
 // a line per value of the layer's `series` column (a method: coloured by its group, marked by itself).
+// how a layer draws its rows: serialised by name into figures.json (figure_spec.py's Mark reads it)
+enum class FigureMark {
+  line,
+  points,
+  line_and_points,  // "line+points"
+  star,             // a point marked out (the advised method)
+  contour,          // z's level 1 over the grid of x and y
+  front,            // a Pareto front the study found: drawn broad and pale behind, and in index.html the methods with a
+                    // point on it shown at first
+};
+std::string_view to_string(FigureMark mark);
+
 struct FigureSpec {
   struct Where {
     std::string column;
@@ -33,10 +45,8 @@ struct FigureSpec {
     std::vector<std::string> split; // a line per distinct value of these columns too, in its series' colour and marker
     bool split_dashed = false;      // a series' second and later lines dashed
     std::string label = "{}";       // a line's legend name: "{}" its series' value, "{column}" a split column's
-    std::string mark = "line+points";  // "line", "points", "line+points", "dashed", "dashed+points", "star" (a point marked out),
-                                       // "contour" (z's level 1 over the grid of x and y), "front" (a Pareto front the study
-                                       // found: drawn broad and pale behind, and in index.html the methods with a point on
-                                       // it shown at first)
+    FigureMark mark = FigureMark::line_and_points;
+    bool dashed = false;            // the line dashed (a "line" or "line+points" mark)
     std::string z;                  // "contour": the column whose level 1 is drawn (named after a method: in its colour)
     std::string y_of;               // "": y as it is; "abs": |y|; "minus_one": y - 1
     double floor = 0;               // > 0: a y under it (an exact 0) drawn at it, on a log axis

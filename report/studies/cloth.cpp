@@ -100,13 +100,13 @@ Section stability_section(const StudyContext& ctx, std::vector<Figure>& figures)
                        [&](size_t row) { return std::get<std::string>(limits.rows[row][1]) != "implicit-euler"; });
   md += "\n";
   // the explicit methods' limits (implicit Euler's rows have no prediction: it is stable at every step)
-  const auto limit = [](std::string column, std::string label, std::string mark) {
+  const auto limit = [](std::string column, std::string label, FigureMark mark) {
     return FigureSpec::Layer{.table = "cloth_stability", .x = "stiffness", .y = std::move(column), .series = "method", .label = std::move(label),
-                             .mark = std::move(mark), .complete = {"predicted_dt"}};
+                             .mark = mark, .complete = {"predicted_dt"}};
   };
   FigureSpec stability_spec{.title = "8 x 8 sheet: explicit methods' limits from the stiffest mode",
                             .panels = {{.x_label = "structural stiffness c (N/m)", .y_label = "largest stable dt (s)", .log_x = true, .log_y = true,
-                                        .layers = {limit("predicted_dt", "{} predicted", "line"), limit("measured_dt", "{} measured", "points")}}}};
+                                        .layers = {limit("predicted_dt", "{} predicted", FigureMark::line), limit("measured_dt", "{} measured", FigureMark::points)}}}};
   md += add_figure(figures, "cloth_stability", "", std::move(stability_spec),
                    "Largest stable step against the sheet's stiffness: measured points, predicted lines");
   md += fmt::format(
@@ -143,13 +143,13 @@ Section damping_section(std::vector<Figure>& figures) {
                                  {"predicted_ratio", "1 / sqrt(1 + w^2 h^2)", shown_as("{:.12f}")},
                                  {"periods_to_halve", "periods to halve", shown_as("{:.3g}")}});
   md += "\n";
-  const auto kept = [](std::string column, std::string label, std::string mark) {
-    return FigureSpec::Layer{.table = "cloth_implicit_damping", .x = "omega_h", .y = std::move(column), .label = std::move(label), .mark = std::move(mark)};
+  const auto kept = [](std::string column, std::string label, FigureMark mark) {
+    return FigureSpec::Layer{.table = "cloth_implicit_damping", .x = "omega_h", .y = std::move(column), .label = std::move(label), .mark = mark};
   };
   FigureSpec damping_spec{.title = "Implicit Euler's numerical damping of one spring",
                           .panels = {{.x_label = "w h", .y_label = "amplitude kept per step", .log_x = true,
-                                      .layers = {kept("predicted_ratio", "1 / sqrt(1 + w^2 h^2)", "line"),
-                                                 kept("measured_ratio", "implicit-euler, measured", "points")}}}};
+                                      .layers = {kept("predicted_ratio", "1 / sqrt(1 + w^2 h^2)", FigureMark::line),
+                                                 kept("measured_ratio", "implicit-euler, measured", FigureMark::points)}}}};
   md += add_figure(figures, "cloth_implicit_damping", "", std::move(damping_spec), "Implicit Euler's amplitude kept per step against w h");
   md += fmt::format(
       "\nThe measured ratio is 1 / sqrt(1 + w^2 h^2) to {:.1e}. A mode at w h = 0.01 (628 steps a period) loses half its amplitude "

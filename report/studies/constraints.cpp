@@ -339,7 +339,7 @@ std::vector<Figure> figures_of(std::string& md, const std::string& stiffness_cap
   FigureSpec::Layer wp_adaptive = wp;
   wp.where.push_back({"mode", {"fixed"}});
   wp_adaptive.where.push_back({"mode", {"adaptive"}});
-  wp_adaptive.mark = "dashed+points";
+  wp_adaptive.dashed = true;
   md += add_figure(figures, "constraints_work_precision", "",
                    {.title = "Error at t_end against CPU: ODE methods plain, projected and Baumgarte-stabilised, RATTLE and xpbd",
                     .panels = {{.title = "{scene}", .x_label = "CPU (s)", .y_label = "max-norm error at t_end", .log_x = true, .log_y = true, .layers = {wp, wp_adaptive}}},
@@ -348,9 +348,9 @@ std::vector<Figure> figures_of(std::string& md, const std::string& stiffness_cap
   md += add_figure(figures, "constraints_drift", "",
                    {.title = "The Cartesian pendulum over many periods at dt = T/100",
                     .panels = {{.x_label = "periods", .y_label = "drift | |x| - L | / L", .log_y = true,
-                                .layers = {{.table = "constraints_long_run", .x = "periods", .y = "drift", .series = "label", .mark = "line", .floor = 1e-17}}},
+                                .layers = {{.table = "constraints_long_run", .x = "periods", .y = "drift", .series = "label", .mark = FigureMark::line, .floor = 1e-17}}},
                                {.x_label = "periods", .y_label = "|E - E0| / (E0 - E_bottom)", .log_y = true,
-                                .layers = {{.table = "constraints_long_run", .x = "periods", .y = "relative_energy_error", .series = "label", .mark = "line", .y_of = "abs", .floor = 1e-17}}}}},
+                                .layers = {{.table = "constraints_long_run", .x = "periods", .y = "relative_energy_error", .series = "label", .mark = FigureMark::line, .y_of = "abs", .floor = 1e-17}}}}},
                    "Drift from the constraint and energy error of each treatment over the long run");
   md += add_figure(figures, "constraints_substeps", "",
                    {.title = "A 1/60 s frame's budget of constraint sweeps spent as substeps x iterations",

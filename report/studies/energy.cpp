@@ -85,7 +85,7 @@ StudyOutput energy(const StudyContext& ctx) {
   md += "\n";
   FigureSpec spec{.title = "Relative energy error over the run, per method (the text above gives the scene and the step)",
                   .panels = {{.x_label = "t (s)", .y_label = "|E - E0| / |E0|", .log_y = true,
-                              .layers = {{.table = "energy", .x = "t", .y = "relative_energy_error", .series = "method", .mark = "line",
+                              .layers = {{.table = "energy", .x = "t", .y = "relative_energy_error", .series = "method", .mark = FigureMark::line,
                                           .y_of = "abs", .floor = 1e-17}}}}};
   md += add_figure(figures, "energy", "", std::move(spec), fmt::format("Relative energy error of {} over time, per method", user ? user->label : "the pendulum"));
   // the finding (the pendulum's): symplectic Euler's bounded error against explicit Euler's growth and implicit Euler's decay

@@ -89,9 +89,9 @@ StudyOutput rigid_body_invariants(const StudyContext& ctx) {
   const auto error = [](std::string column) {
     return std::vector<FigureSpec::Layer>{
         {.table = "rigid_body_invariants_series", .x = "t", .y = column, .series = "method", .split = {"dt"}, .split_dashed = true, .label = "{}, dt {dt}",
-         .mark = "line", .floor = 1e-17, .complete = {"dt"}},
+         .mark = FigureMark::line, .floor = 1e-17, .complete = {"dt"}},
         {.table = "rigid_body_invariants_series", .x = "t", .y = column, .series = "method", .split = {"rtol"}, .split_dashed = true,
-         .label = "{}, rtol {rtol}", .mark = "line", .floor = 1e-17, .complete = {"rtol"}}};
+         .label = "{}, rtol {rtol}", .mark = FigureMark::line, .floor = 1e-17, .complete = {"rtol"}}};
   };
   FigureSpec spec{.title = "The tumbling body's invariants",
                   .panels = {{.title = "Energy: bounded for the splitting, drifting for rk4", .x_label = "t (s)", .y_label = "|E / E0 - 1|", .log_y = true,

@@ -137,9 +137,9 @@ StudyOutput stability_regions(const StudyContext& ctx) {
   FigureSpec::Panel panel{.title = "{scene}: the spectrum times rk4's predicted step h", .x_label = "Re z", .y_label = "Im z",
                           .lines = {{'x', 0, ""}, {'y', 0, ""}}, .equal_aspect = true};
   for (const auto& method : region_methods)
-    panel.layers.push_back({.table = "stability_plane", .x = "re", .y = "im", .label = "|R(z)| = 1, " + method, .mark = "contour", .z = method});
+    panel.layers.push_back({.table = "stability_plane", .x = "re", .y = "im", .label = "|R(z)| = 1, " + method, .mark = FigureMark::contour, .z = method});
   for (const auto& [step, what] : {std::pair{"h", "h lambda, h = rk4's predicted limit"}, {"1.5 h", "at 1.5 h"}})
-    panel.layers.push_back({.table = "stability_plane_spectrum", .x = "re", .y = "im", .label = what, .mark = "points", .where = {{"step", {step}}}});
+    panel.layers.push_back({.table = "stability_plane_spectrum", .x = "re", .y = "im", .label = what, .mark = FigureMark::points, .where = {{"step", {step}}}});
   FigureSpec spec{.title = "Stability regions |R(z)| <= 1 and the scenes' spectra", .panels = {std::move(panel)}, .facet = {"scene"}};
   out.markdown = fmt::format(
       "Why a step fails: a one-step method multiplies each eigen-component of a linear(ised) system by R(h lambda) per step, so it is "

@@ -82,13 +82,13 @@ StudyOutput wave_stability_limits(const StudyContext& ctx) {
       "limit of the scheme with the damping taken implicitly.\n\n",
       100 * worst_derived, 100 * seeds_at_rest, 100 * seeds_damped);
   std::vector<Figure> figures;
-  const auto limit = [](std::string column, std::string label, std::string mark) {
-    return FigureSpec::Layer{.table = "wave_stability", .x = "mu", .y = std::move(column), .series = "method", .label = std::move(label), .mark = std::move(mark)};
+  const auto limit = [](std::string column, std::string label, FigureMark mark) {
+    return FigureSpec::Layer{.table = "wave_stability", .x = "mu", .y = std::move(column), .series = "method", .label = std::move(label), .mark = mark};
   };
   FigureSpec spec{.title = "The height field's largest stable step against damping",
                   .panels = {{.title = "c = {c} m/s, d = {d} m", .x_label = "damping mu (1/s)", .y_label = "largest stable dt (s)", .symlog_x = true,
-                              .layers = {limit("measured_dt", "{}: measured", "points"), limit("derived_dt", "{}: derived", "line"),
-                                         {.table = "wave_stability", .x = "mu", .y = "seeds_dt", .label = "seeds' condition", .mark = "dashed"}}}},
+                              .layers = {limit("measured_dt", "{}: measured", FigureMark::points), limit("derived_dt", "{}: derived", FigureMark::line),
+                                         {.table = "wave_stability", .x = "mu", .y = "seeds_dt", .label = "seeds' condition", .mark = FigureMark::line, .dashed = true}}}},
                   .facet = {"c", "d"}};
   md += add_figure(figures, "wave_stability", "", std::move(spec), "Largest stable step of the height field against damping: measured, derived, the seeds' condition");
   return {{{"wave_stability", std::move(table)}}, md, figures};

@@ -191,7 +191,7 @@ std::string scene_section(const StudyScene& scene, const Table& fronts, std::vec
   const auto against = [&](std::string cost, std::string label, std::string title) {
     FigureSpec::Panel panel{.title = fmt::format("{}: {}", scene.label, title), .x_label = std::move(label), .y_label = "max-norm error at t_end",
                             .log_x = true, .log_y = true,
-                            .layers = {{.table = "work_precision_pareto", .x = cost, .y = "error", .label = "Pareto front", .mark = "front",
+                            .layers = {{.table = "work_precision_pareto", .x = cost, .y = "error", .label = "Pareto front", .mark = FigureMark::front,
                                         .where = {{"scene", {scene.label}}, {"cost", {cost}}}, .hover = {{"method", "method"}, {"setting", "setting"}}}}};
     for (auto& layer : by_mode({.table = "work_precision", .x = cost, .y = "error", .where = {{"scene", {scene.label}}}})) panel.layers.push_back(std::move(layer));
     return panel;
