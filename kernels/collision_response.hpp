@@ -5,7 +5,7 @@
 // in solvers/cloth_grid.hpp at eps = 0, and the gpu-cloth shader) share it.
 #pragma once
 
-#include "vec3.hpp"
+#include <stepwise/kernels/vec3.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 // gpu-cloth shader (whose GLSL is held to this by test_gpu_shader's bitwise comparison) share it.
 #pragma once
 
-#include "vec3.hpp"
+#include <stepwise/kernels/vec3.hpp>
 
 namespace stepwise {
 

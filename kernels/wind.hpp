@@ -4,7 +4,7 @@
 // gpu-cloth shader share it.
 #pragma once
 
-#include "vec3.hpp"
+#include <stepwise/kernels/vec3.hpp>
 
 namespace stepwise {
 

@@ -13,7 +13,7 @@
 // Energy per unit mass E = vy^2 / 2 + g y.
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 #include <vector>
 

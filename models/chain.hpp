@@ -1,4 +1,4 @@
-// An inextensible chain of N rigid links (issue 50's second constrained scene): N point masses in the plane, each
+// An inextensible chain of N rigid links (the second constrained scene): N point masses in the plane, each
 // held at the link length l = L / N from the one before it, the first from a pin at the origin; released from
 // rest along the horizontal, gravity along -y. State y = (x_1, y_1, ..., x_N, y_N, then the velocities).
 // Parameters: links N, length L (the chain's), mass (the chain's, m / N a link), g.
@@ -11,7 +11,7 @@
 // (verification/tests/test_constraints.cpp: RATTLE and verner98 on the ODE agree).
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 namespace stepwise {
 

@@ -30,7 +30,7 @@
 // negative semidefinite); the wind's position part, which is not symmetric, is left to the explicit side.
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 #include <span>
 

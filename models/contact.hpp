@@ -17,9 +17,9 @@
 // its bodies and finds their contacts (solvers/capabilities/contact_bodies.hpp).
 #pragma once
 
-#include "plane_collision.hpp"
-#include "solvers/capabilities/contact_bodies.hpp"
-#include "triangle_mesh.hpp"
+#include <stepwise/models/plane_collision.hpp>
+#include <stepwise/solvers/capabilities/contact_bodies.hpp>
+#include <stepwise/models/triangle_mesh.hpp>
 
 #include <Eigen/Dense>
 

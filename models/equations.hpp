@@ -15,7 +15,7 @@
 // GiNaC's types stay in equations.cpp. The model then is an ordinary Model.
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 #include <optional>
 #include <string>

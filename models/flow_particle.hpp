@@ -8,7 +8,7 @@
 // Units: positions in m, time in s (the field is in 1/s). No invariant: the field is not a force.
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 namespace stepwise {
 

@@ -26,7 +26,7 @@
 // (max |div u| on the grid, spectral derivative) and density_total (integral rho dA).
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 namespace stepwise {
 

@@ -10,7 +10,7 @@
 // f has an analytic sparse Jacobian (cvode-bdf solves with KLU).
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 #include <vector>
 

@@ -29,9 +29,9 @@
 // standing-wave (one mode, exact), pool (drops at random places and seeded random times, each an event).
 #pragma once
 
-#include "kernels/wave_acceleration.hpp"
-#include "model.hpp"
-#include "solvers/capabilities/wave_grid.hpp"
+#include <stepwise/kernels/wave_acceleration.hpp>
+#include <stepwise/models/model.hpp>
+#include <stepwise/solvers/capabilities/wave_grid.hpp>
 
 namespace stepwise {
 

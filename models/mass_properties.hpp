@@ -8,7 +8,7 @@
 // The principal frame diagonalises I: I = R diag(I1, I2, I3) R^T with I1 <= I2 <= I3 and R a rotation.
 #pragma once
 
-#include "triangle_mesh.hpp"
+#include <stepwise/models/triangle_mesh.hpp>
 
 #include <Eigen/Dense>
 

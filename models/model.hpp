@@ -3,8 +3,8 @@
 // It never steps, prints or draws.
 #pragma once
 
-#include "shapes.hpp"
-#include "solvers/ode_system.hpp"
+#include <stepwise/models/shapes.hpp>
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <array>
 #include <functional>
@@ -73,8 +73,8 @@ struct ModelInfo {
   // pin. Throws BadParameter with key "pins" for a node off the grid
   std::function<std::unique_ptr<Model>(const Params&, std::span<const GridNode>)> make_with_pins = nullptr;
   // the columns the model's trajectory writes (its state's or its summary's entries), from the parameters alone,
-  // for a model whose size the parameters set: the output budget is then checked before the model is made (a
-  // hanging chain of 1e6 nodes took 3.6 s and 700 MB to build before its output was refused)
+  // for a model whose size the parameters set: the output budget is then checked before the model is made, so a
+  // run refused for its output costs nothing (building a large model first takes seconds and its memory)
   std::function<double(const Params&)> output_columns = nullptr;
 };
 

@@ -1,7 +1,7 @@
 // What the particle models share: a reproducible random stream and checks of a particle count and seed.
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 #include <random>
 

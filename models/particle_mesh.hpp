@@ -23,8 +23,8 @@
 // sliding keeps it.
 #pragma once
 
-#include "model.hpp"
-#include "triangle_mesh.hpp"
+#include <stepwise/models/model.hpp>
+#include <stepwise/models/triangle_mesh.hpp>
 
 namespace stepwise {
 

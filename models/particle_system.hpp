@@ -27,7 +27,7 @@
 // stream of particle_common.hpp.
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 namespace stepwise {
 

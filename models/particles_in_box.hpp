@@ -13,7 +13,7 @@
 // Energy E = sum |v_i|^2 / 2 + g z_i per unit mass; each impact removes (1 - eps^2) (n . v)^2 / 2 and friction more.
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 namespace stepwise {
 

@@ -16,7 +16,7 @@
 // Energy: nonlinear E = m L^2 omega^2 / 2 + m g L (1 - cos theta); small-angle E = m L^2 omega^2 / 2 + m g L theta^2 / 2.
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 namespace stepwise {
 

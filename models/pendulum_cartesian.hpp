@@ -1,4 +1,4 @@
-// The pendulum of pendulum.hpp as a point mass in the plane held by one distance constraint |x| = L (issue 50's
+// The pendulum of pendulum.hpp as a point mass in the plane held by one distance constraint |x| = L (the
 // constrained scene). State y = (x, y, vx, vy) [m, m/s], the pivot at the origin, y up; parameters those of the
 // pendulum (theta0, omega0, g, length, mass) and the constraint's compliance alpha [m/N] (0: a rigid rod).
 //
@@ -12,7 +12,7 @@
 // v = L omega (cos theta, sin theta). Energy m |v|^2 / 2 + m g y (+ (|x| - L)^2 / (2 alpha)).
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 namespace stepwise {
 

@@ -8,7 +8,7 @@
 //                     by mu J, but never below zero (friction stops sliding, it does not reverse it)
 #pragma once
 
-#include "triangle_mesh.hpp"
+#include <stepwise/models/triangle_mesh.hpp>
 
 #include <Eigen/Dense>
 

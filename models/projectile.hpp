@@ -11,7 +11,7 @@
 // Energy E = m |v|^2 / 2 + m g y (conserved without drag, decreasing with it).
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 namespace stepwise {
 

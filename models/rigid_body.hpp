@@ -25,10 +25,10 @@
 // period (the tennis-racket flip).
 #pragma once
 
-#include "kernels/rigid_body.hpp"
+#include <stepwise/kernels/rigid_body.hpp>
 
-#include "model.hpp"
-#include "triangle_mesh.hpp"
+#include <stepwise/models/model.hpp>
+#include <stepwise/models/triangle_mesh.hpp>
 
 #include <Eigen/Geometry>
 

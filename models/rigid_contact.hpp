@@ -19,8 +19,8 @@
 //   thrown at it from projectile_distance so that it meets the wall's plane at projectile_height.
 #pragma once
 
-#include "model.hpp"
-#include "triangle_mesh.hpp"
+#include <stepwise/models/model.hpp>
+#include <stepwise/models/triangle_mesh.hpp>
 
 namespace stepwise {
 

@@ -24,7 +24,7 @@
 // Scene: shallow-water-drop (the water-drop's raised cosine, at rest).
 #pragma once
 
-#include "model.hpp"
+#include <stepwise/models/model.hpp>
 
 namespace stepwise {
 

@@ -2,8 +2,8 @@
 // and a water surface, all in world coordinates (m). A model describes this; render/ draws it.
 #pragma once
 
-#include "plane_collision.hpp"
-#include "triangle_mesh.hpp"
+#include <stepwise/models/plane_collision.hpp>
+#include <stepwise/models/triangle_mesh.hpp>
 
 #include <Eigen/Dense>
 

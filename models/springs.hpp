@@ -15,7 +15,7 @@
 //   dF/dr ~ c u u^T + c max(0, 1 - l / L) (1 - u u^T),   symmetric positive semidefinite.
 #pragma once
 
-#include "solvers/capabilities/mass_spring.hpp"
+#include <stepwise/solvers/capabilities/mass_spring.hpp>
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>

@@ -7,7 +7,7 @@
 // pair of boxes; triangle pairs meet the exact test (Moller 1997) only in overlapping leaves.
 #pragma once
 
-#include "triangle_intersection.hpp"
+#include <stepwise/models/triangle_intersection.hpp>
 
 #include <Eigen/Dense>
 

@@ -2,7 +2,7 @@
 // table, each key with a default chosen from what is drawn.
 #pragma once
 
-#include "models/shapes.hpp"
+#include <stepwise/models/shapes.hpp>
 
 #include <Eigen/Dense>
 

@@ -7,7 +7,7 @@
 #pragma once
 
 #include "gl/context.hpp"
-#include "models/shapes.hpp"
+#include <stepwise/models/shapes.hpp>
 
 #include <Eigen/Dense>
 

@@ -4,9 +4,9 @@
 // refraction, Fresnel reflection and caustics from a photon map (render/caustics.hpp).
 #pragma once
 
-#include "camera.hpp"
+#include <stepwise/render/camera.hpp>
 #include "gl/context.hpp"
-#include "image.hpp"
+#include <stepwise/render/image.hpp>
 
 #include <memory>
 #include <span>

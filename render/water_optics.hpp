@@ -3,7 +3,7 @@
 // same in GLSL; these are the CPU forms the photon tracer and the tests use.
 #pragma once
 
-#include "models/shapes.hpp"
+#include <stepwise/models/shapes.hpp>
 
 #include <Eigen/Dense>
 

@@ -5,11 +5,11 @@
 // why each other method lost. DESIGN.md: the advisor is a budgeted study on one scene.
 #pragma once
 
-#include "report/studies.hpp"
-#include "report/studies/study_scenes.hpp"
-#include "run/csv.hpp"
-#include "run/prepare.hpp"
-#include "solvers/stability.hpp"  // stiffness_threshold
+#include <stepwise/report/studies.hpp>
+#include <stepwise/report/studies/study_scenes.hpp>
+#include <stepwise/run/csv.hpp>
+#include <stepwise/run/prepare.hpp>
+#include <stepwise/solvers/stability.hpp>  // stiffness_threshold
 
 #include <nlohmann/json_fwd.hpp>
 

@@ -43,8 +43,8 @@ double machine_slowness() {
   for (int run = 0; run < runs; ++run)
     if (integrator->solve(*model, 0, model->initial_state(), t_out).status != Status::ok) return 1;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / runs;
-  // that machine's time, taken as this one's of 2026-11-25 (348-354 us quiet), whose time-left lines at 0.4 ns a
-  // unit came within a factor of two at every line of the full report's work-precision sweep
+  // the reference machine's time for these runs (the one the report's time promises are made on), at whose speed
+  // the time-left lines at 0.4 ns a unit come within a factor of two of the truth
   constexpr double reference_seconds = 350e-6;
   return seconds / reference_seconds;
 }

@@ -3,7 +3,7 @@
 // which the sums over a sweep average out, and corrected as the sweep goes by the seconds its points took.
 #pragma once
 
-#include "solvers/method.hpp"
+#include <stepwise/solvers/method.hpp>
 
 namespace stepwise {
 

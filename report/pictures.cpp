@@ -35,7 +35,7 @@ struct QuickChange {
 };
 const QuickChange quick_changes[] = {
     {"particle-system", {"count=10000"}},  // 100 000 particles take 16 s to simulate
-    {"stack-collapse", {"rows=3"}},        // a wall of 3 x 5 boxes took 3.5 s, of 3 x 3 1.1 s
+    {"stack-collapse", {"rows=3"}},        // a wall of 3 x 3 boxes: a third of the 3 x 5 wall's cost
     // the 32 x 32 sheets' implicit steps and the 128^2 spectral fluid take 2-3 s each; a quarter of the
     // nodes or cells ~1 s
     {"cloth-on-sphere", {"rows=16", "columns=16"}},
@@ -110,11 +110,10 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
       other = static_cast<double>(shapes->bodies.size() + shapes->lines.size());
       for (const auto& sheet : shapes->surfaces) other += static_cast<double>(sheet.faces.rows());
     }
-    // an adaptive run's steps from a time scale of a tenth of the run (the scenes do not say theirs; the one
-    // adaptive scene, bouncing-ball, cvode-bdf at rtol 1e-10: 5 382 steps over 5 s, which this says as 4 600: a
-    // thousandth, as before, said 460 000, and its 1.6 s against a true 8 ms, the first point done, scaled every
-    // later estimate down 5x); a scene's fixed part ~0.4 s (its GL context and the set-up of its run and its
-    // animation: the quick report's cheapest scenes took 0.44-0.47 s as `stepwise render`, a process's start
+    // an adaptive run's steps from a time scale of a tenth of the run (the scenes do not say theirs; on the one
+    // adaptive scene, bouncing-ball with cvode-bdf at rtol 1e-10, this is within 15% of the steps it takes, where a
+    // thousandth of the run would overestimate them 100x and scale every later estimate wrong by the first point);
+    // a scene's fixed part ~0.4 s (its GL context and the set-up of its run and its animation, a process's start
     // included); a contact scene's collision work by its bodies
     const Method& method = *find_method(p.method);
     const double contact = method.needs.type == needs_contact_bodies.type && p.control.dt && shapes_bodies > 0

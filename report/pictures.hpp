@@ -1,7 +1,7 @@
 // The report's pictures: every scene drawn by `stepwise render` (this same binary), a still and an animation each.
 #pragma once
 
-#include "sweep.hpp"
+#include <stepwise/report/sweep.hpp>
 
 #include <filesystem>
 #include <string>

@@ -42,8 +42,8 @@ std::string study_names() {
 
 namespace {
 
-// the bytes a report takes, measured (2026-11-26: quick 21 MB, full 36 MB) with a margin: checked free before
-// any work starts
+// the bytes a report takes (its folder: about 21 MB quick, 36 MB full, docs/performance.md) with a margin:
+// checked free before any work starts
 double report_bytes(bool quick) { return quick ? 28e6 : 45e6; }
 
 // a drawn section by name, or null

@@ -1,7 +1,7 @@
 // Studies (sweeps written as CSV/JSON) and the report built from them (`stepwise study`, `stepwise report`).
 #pragma once
 
-#include "run/prepare.hpp"
+#include <stepwise/run/prepare.hpp>
 
 #include <filesystem>
 #include <optional>

@@ -3,7 +3,7 @@
 // of a cheap method can be seen.
 #pragma once
 
-#include "sweep.hpp"
+#include <stepwise/report/sweep.hpp>
 
 #include <filesystem>
 #include <string>

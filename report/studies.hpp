@@ -1,9 +1,9 @@
 // The studies of the report: each a sweep over methods and step sizes that writes its tables.
 #pragma once
 
-#include "run/csv.hpp"
-#include "solvers/method.hpp"
-#include "sweep.hpp"
+#include <stepwise/run/csv.hpp>
+#include <stepwise/solvers/method.hpp>
+#include <stepwise/report/sweep.hpp>
 
 #include <filesystem>
 #include <functional>

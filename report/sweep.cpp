@@ -71,9 +71,8 @@ double Progress::seconds_left() const {
   // sweep gave costs (they are: work-precision's and cloth-realtime's models), else the whole sweep's ratio so far
   double expected = 0, seconds = 0;
   for (const Group& g : groups_) expected += g.expected_done, seconds += g.seconds_done;
-  // (the models overestimate: measured, the quick report's work-precision points took 0.4 of their expected
-  // time, summed, with early estimates 2-2.6 times the truth at 1e-9 s a unit; on a machine 1.85 times slower
-  // the full report's work-precision lines said 0.45-0.50 of the truth, hence the slowness measured at the start)
+  // (the cost models overestimate by a steady factor, 0.4 of their unit taken as 1 ns, and a machine's own speed
+  // scales every point alike: hence the slowness measured at the start)
   const double prior = costs_given_ ? 0.4e-9 * slowness_ : expected > 0 ? seconds / expected : 0;
   const auto ratio = [&](const Group& g) { return g.expected_done > 0 ? g.seconds_done / g.expected_done : prior; };
   double left = 0;

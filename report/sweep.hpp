@@ -2,7 +2,7 @@
 // under mpirun the points are shared among the ranks too, by expected cost, and every rank gets every result.
 #pragma once
 
-#include "report/pack.hpp"
+#include <stepwise/report/pack.hpp>
 
 #include <chrono>
 #include <cstddef>

@@ -3,8 +3,8 @@
 // from read off its Jacobian's spectrum at the start.
 #pragma once
 
-#include "report/studies/study_scenes.hpp"
-#include "run/prepare.hpp"
+#include <stepwise/report/studies/study_scenes.hpp>
+#include <stepwise/run/prepare.hpp>
 
 namespace stepwise {
 

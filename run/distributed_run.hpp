@@ -6,8 +6,8 @@
 // runs on rank 0 alone, which says so in one line.
 #pragma once
 
-#include "run/measure.hpp"
-#include "run/prepare.hpp"
+#include <stepwise/run/measure.hpp>
+#include <stepwise/run/prepare.hpp>
 
 #include <functional>
 #include <memory>

@@ -2,8 +2,8 @@
 // `stepwise run`, the studies and the tests.
 #pragma once
 
-#include "models/model.hpp"
-#include "solvers/method_table.hpp"
+#include <stepwise/models/model.hpp>
+#include <stepwise/solvers/method_table.hpp>
 
 #include <optional>
 #include <tuple>

@@ -3,8 +3,8 @@
 // `stepwise render` and the report's pictures start here).
 #pragma once
 
-#include "run/scene.hpp"
-#include "solvers/integrator.hpp"
+#include <stepwise/run/scene.hpp>
+#include <stepwise/solvers/integrator.hpp>
 
 #include <memory>
 #include <optional>

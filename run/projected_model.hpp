@@ -5,7 +5,7 @@
 // accepted step and count it (summary.json's projections); everything else is the model's.
 #pragma once
 
-#include "models/model.hpp"
+#include <stepwise/models/model.hpp>
 
 #include <memory>
 

@@ -3,7 +3,7 @@
 // report's pictures call in its own process (each sweep thread makes its own GL context).
 #pragma once
 
-#include "run/prepare.hpp"
+#include <stepwise/run/prepare.hpp>
 
 #include <string>
 

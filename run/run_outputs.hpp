@@ -7,10 +7,10 @@
 // trajectory.csv without a summary.json beside it is from a run that did not finish.
 #pragma once
 
-#include "run/atomic_write.hpp"
-#include "run/csv.hpp"
-#include "run/measure.hpp"
-#include "run/prepare.hpp"
+#include <stepwise/run/atomic_write.hpp>
+#include <stepwise/run/csv.hpp>
+#include <stepwise/run/measure.hpp>
+#include <stepwise/run/prepare.hpp>
 
 #include <nlohmann/json_fwd.hpp>
 

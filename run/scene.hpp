@@ -15,10 +15,10 @@
 //   variables = ["x", "v"]  [initial]  [equations]  [exact]  energy = "..."   # model = "equations" only
 #pragma once
 
-#include "models/equations.hpp"
-#include "models/model.hpp"
-#include "models/triangle_mesh.hpp"
-#include "render/camera.hpp"
+#include <stepwise/models/equations.hpp>
+#include <stepwise/models/model.hpp>
+#include <stepwise/models/triangle_mesh.hpp>
+#include <stepwise/render/camera.hpp>
 
 #include <map>
 #include <optional>

@@ -3,7 +3,7 @@
 // from the last panel's, the reference. What the report's "Side by side" section films.
 #pragma once
 
-#include "run/prepare.hpp"
+#include <stepwise/run/prepare.hpp>
 
 #include <string>
 #include <tuple>

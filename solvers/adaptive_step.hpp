@@ -3,7 +3,7 @@
 // for divergence, projects where the system has a projection, and finds events inside a step.
 #pragma once
 
-#include "method.hpp"
+#include <stepwise/solvers/method.hpp>
 
 #include <functional>
 #include <memory>

@@ -11,11 +11,11 @@
 // operation is written out so that its order is fixed.
 #pragma once
 
-#include "kernels/collision_response.hpp"
-#include "kernels/spring_force.hpp"
-#include "kernels/vec3.hpp"
-#include "kernels/wind.hpp"
-#include "solvers/capabilities/cloth_grid.hpp"
+#include <stepwise/kernels/collision_response.hpp>
+#include <stepwise/kernels/spring_force.hpp>
+#include <stepwise/kernels/vec3.hpp>
+#include <stepwise/kernels/wind.hpp>
+#include <stepwise/solvers/capabilities/cloth_grid.hpp>
 
 #include <algorithm>
 #include <array>

@@ -5,7 +5,7 @@
 // be given after each step (--constraint project: run/constrained_model.hpp) are these.
 #pragma once
 
-#include "solvers/capabilities/distance_constraints.hpp"
+#include <stepwise/solvers/capabilities/distance_constraints.hpp>
 
 #include <Eigen/SparseCore>
 #include <Eigen/SparseLU>

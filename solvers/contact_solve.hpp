@@ -26,7 +26,7 @@
 // m_a d_a x (v_a - v_b), which is why pairs that separate (after an impact) are left to do it by themselves.
 #pragma once
 
-#include "capabilities/contact_bodies.hpp"
+#include <stepwise/solvers/capabilities/contact_bodies.hpp>
 
 #include <span>
 

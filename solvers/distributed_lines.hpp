@@ -11,8 +11,8 @@
 // tolerance's order, not by bits. SUNDIALS' and MPI's types stay in distributed_lines.cpp.
 #pragma once
 
-#include "capabilities/wave_grid.hpp"
-#include "method.hpp"
+#include <stepwise/solvers/capabilities/wave_grid.hpp>
+#include <stepwise/solvers/method.hpp>
 
 #include <Eigen/Core>
 

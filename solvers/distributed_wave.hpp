@@ -9,8 +9,8 @@
 // (run/ranks.hpp), or with one process it need not be.
 #pragma once
 
-#include "integrator.hpp"
-#include "wave_step.hpp"
+#include <stepwise/solvers/integrator.hpp>
+#include <stepwise/solvers/wave_step.hpp>
 
 #include <array>
 #include <cmath>

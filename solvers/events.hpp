@@ -14,7 +14,7 @@
 // must be shorter than the time between them (max_step).
 #pragma once
 
-#include "integrator.hpp"
+#include <stepwise/solvers/integrator.hpp>
 
 #include <functional>
 #include <optional>

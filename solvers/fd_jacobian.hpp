@@ -1,7 +1,7 @@
 // Central finite-difference Jacobian df/dy, the twin of every analytic Jacobian.
 #pragma once
 
-#include "ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 namespace stepwise {
 

@@ -1,7 +1,7 @@
 // Fixed-step integration: one loop over the step grid, shared by hand-written, GSL and GPU steppers.
 #pragma once
 
-#include "method.hpp"
+#include <stepwise/solvers/method.hpp>
 
 #include <algorithm>
 #include <array>
@@ -49,9 +49,9 @@ class FixedStepper {
   double norm_ = -1;  // step()'s measure of |y_next|inf; negative: not measured
 };
 
-// on a stepper's step(): no pairing of a small state's scalar stores into vector stores. Measured on this
-// machine (AMD EPYC): f reading y[1] right after a stage wrote y[0..1] as one 16-byte store misses
-// store-to-load forwarding, and a pendulum's rk4 step took 1.5x as long. Loops over large states are still
+// on a stepper's step(): no pairing of a small state's scalar stores into vector stores: f reading y[1] right
+// after a stage wrote y[0..1] as one 16-byte store misses store-to-load forwarding (on x86-64 cores such as AMD
+// EPYC), a stall on the chain from one stage's f to the next. Loops over large states are still
 // vectorised (that is the loop vectoriser, not this one). GCC's attribute: clang (the fuzz build) has none
 // such, and warned at every use
 #if defined(__clang__)

@@ -3,9 +3,9 @@
 // for the calls through the system; constructed as Stepper(system) or Stepper(system, kernel).
 #pragma once
 
-#include "solvers/capabilities/inline_rhs.hpp"
-#include "solvers/fixed_step.hpp"
-#include "solvers/run_support.hpp"
+#include <stepwise/solvers/capabilities/inline_rhs.hpp>
+#include <stepwise/solvers/fixed_step.hpp>
+#include <stepwise/solvers/run_support.hpp>
 
 #include <type_traits>
 #include <variant>

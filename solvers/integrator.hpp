@@ -2,7 +2,7 @@
 // every method is made as (method.hpp registers methods; method_table.hpp makes one by name).
 #pragma once
 
-#include "ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <functional>
 #include <tuple>

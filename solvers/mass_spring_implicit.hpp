@@ -26,9 +26,9 @@
 //    stepper finds the kept factor never pays and refactorises, trying again after runs that double.
 #pragma once
 
-#include "fixed_step.hpp"
-#include "run_support.hpp"
-#include "sparse_cholesky.hpp"
+#include <stepwise/solvers/fixed_step.hpp>
+#include <stepwise/solvers/run_support.hpp>
+#include <stepwise/solvers/sparse_cholesky.hpp>
 
 #include <Eigen/SparseCore>
 

@@ -4,8 +4,8 @@
 // place a method's name is looked up.
 #pragma once
 
-#include "capabilities/wave_grid.hpp"
-#include "integrator.hpp"
+#include <stepwise/solvers/capabilities/wave_grid.hpp>
+#include <stepwise/solvers/integrator.hpp>
 
 #include <complex>
 #include <functional>

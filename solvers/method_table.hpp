@@ -3,7 +3,7 @@
 // looked up: the command line, the report, the tests and the benches all come here.
 #pragma once
 
-#include "method.hpp"
+#include <stepwise/solvers/method.hpp>
 
 #include <functional>
 #include <memory>

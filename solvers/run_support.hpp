@@ -1,9 +1,9 @@
 // Pieces every integrator shares: RHS counting, divergence test, CPU clock, trajectory recording.
 #pragma once
 
-#include "capabilities/mass_spring.hpp"
-#include "capabilities/second_order.hpp"
-#include "integrator.hpp"
+#include <stepwise/solvers/capabilities/mass_spring.hpp>
+#include <stepwise/solvers/capabilities/second_order.hpp>
+#include <stepwise/solvers/integrator.hpp>
 
 #include <fmt/format.h>
 

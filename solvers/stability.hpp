@@ -4,7 +4,7 @@
 
 #include <optional>
 
-#include "ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <Eigen/Dense>
 

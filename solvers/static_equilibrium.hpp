@@ -9,7 +9,7 @@
 // lateral contraction under a stretch, its sag under gravity.
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <Eigen/Dense>
 

@@ -3,8 +3,8 @@
 // appear only here, in those three files and in distributed_lines.cpp (the same methods on the parallel vector).
 #pragma once
 
-#include "capabilities/imex_split.hpp"
-#include "run_support.hpp"
+#include <stepwise/solvers/capabilities/imex_split.hpp>
+#include <stepwise/solvers/run_support.hpp>
 
 #include <arkode/arkode_butcher_dirk.h>
 #include <arkode/arkode_butcher_erk.h>
@@ -70,8 +70,8 @@ int roots(sunrealtype t, N_Vector y, sunrealtype* gout, void* user_data);
 void error_handler(int, const char* module, const char* function, char* msg, void* user_data);
 
 // the system's sparse Jacobian pattern (df_I/dy's for an IMEX run) at (t0, y0), with the diagonal made
-// explicit: SUNDIALS 6.4 forms I - gamma J by rebuilding the whole matrix for every missing diagonal entry
-// (a 16 000-particle system's setup took 226 s, growing as n^2)
+// explicit: SUNDIALS 6.4 forms I - gamma J by rebuilding the whole matrix for every missing diagonal entry,
+// a cost growing as n^2
 void initial_pattern(Callbacks& c, double t0, const Eigen::VectorXd& y0);
 // a CSC SUNMatrix sized for the pattern initial_pattern() left in c.sparse_jac
 SUNMatrix sparse_matrix(const Callbacks& c, SUNContext context);

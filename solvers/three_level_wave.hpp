@@ -10,9 +10,9 @@
 // a^0 = c^2 Lap z^0 - mu v^0, and v^1 by the trapezoid rule on dv/dt = a (velocity Verlet), in double.
 #pragma once
 
-#include "fixed_step.hpp"
-#include "run_support.hpp"
-#include "wave_step.hpp"
+#include <stepwise/solvers/fixed_step.hpp>
+#include <stepwise/solvers/run_support.hpp>
+#include <stepwise/solvers/wave_step.hpp>
 
 namespace stepwise {
 

@@ -77,9 +77,9 @@ using RowKernel = void (*)(const WaveCoefficients&, int, int, int, double* __res
 // the kernels, each for one instruction set, all of the same IEEE operations in the same order. Inside the
 // caches the limit is in the core, not the memory: six loads (two of them z[j +- 1], split across cache
 // lines) and eight flops a cell against the triad's two loads and two flops. The AVX-512 kernel loads z's
-// row once, 64-byte aligned, and shifts its neighbours out of the registers (vpermt2pd), which took 256^2
-// from 0.63-0.76 of the triad (the compiler's AVX-512 loop) to 0.95-1.06; streaming from memory the AVX2
-// loop with prefetching measured 1.8 of the triad at 4096^2 where AVX-512 gave 1.35, so it keeps that role
+// row once, 64-byte aligned, and shifts its neighbours out of the registers (vpermt2pd), so a cell costs one
+// aligned load instead of three unaligned ones; streaming from memory the bound is the memory and the AVX2 loop
+// with prefetching is the faster there (docs/performance.md's height-field table), so it keeps that role
 [[gnu::target("avx512f")]] void row_avx512(const WaveCoefficients& k, int n, int first, int last, double* __restrict z_prev, const double* __restrict z) {
   int j = first;
   const auto cell = [&](int c) { z_prev[c] = wave_cell(k, z[c], z_prev[c], neighbour_sum(z, c, n)); };

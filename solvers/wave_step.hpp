@@ -18,8 +18,8 @@
 // lambda_max = (8/d^2) cos^2(pi / 2N) on N intervals per side: dt <= d / (sqrt(2) c cos(pi / 2N)).
 #pragma once
 
-#include "capabilities/wave_grid.hpp"
-#include "kernels/wave_acceleration.hpp"
+#include <stepwise/solvers/capabilities/wave_grid.hpp>
+#include <stepwise/kernels/wave_acceleration.hpp>
 
 #include <optional>
 #include <string_view>

@@ -2,8 +2,8 @@
 // by the contact tests and the report's contact study.
 #pragma once
 
-#include "models/model.hpp"
-#include "solvers/integrator.hpp"
+#include <stepwise/models/model.hpp>
+#include <stepwise/solvers/integrator.hpp>
 
 namespace stepwise {
 

@@ -4,7 +4,7 @@
 // in the sheet's plane (every z held: the in-plane answer, without the wrinkles a compressed sheet would throw).
 #pragma once
 
-#include "models/model.hpp"
+#include <stepwise/models/model.hpp>
 
 #include <string>
 #include <vector>

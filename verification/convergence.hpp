@@ -1,7 +1,7 @@
 // Convergence sweep of a fixed-step method: error at t_end against dt over successive halvings.
 #pragma once
 
-#include "run/measure.hpp"
+#include <stepwise/run/measure.hpp>
 
 #include <vector>
 #include <tuple>

@@ -3,7 +3,7 @@
 // pseudo-spectral method of lines, closed-form and from the Jacobian's spectrum.
 #pragma once
 
-#include "models/model.hpp"
+#include <stepwise/models/model.hpp>
 
 #include <memory>
 #include <optional>

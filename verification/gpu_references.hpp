@@ -5,8 +5,8 @@
 // wave_modes.hpp.
 #pragma once
 
-#include "solvers/cloth_grid.hpp"
-#include "verification/tolerances.hpp"
+#include <stepwise/solvers/cloth_grid.hpp>
+#include <stepwise/verification/tolerances.hpp>
 
 #include <algorithm>
 #include <cmath>

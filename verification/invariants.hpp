@@ -4,8 +4,8 @@
 // report's rigid-body study.
 #pragma once
 
-#include "models/model.hpp"
-#include "solvers/integrator.hpp"
+#include <stepwise/models/model.hpp>
+#include <stepwise/solvers/integrator.hpp>
 
 namespace stepwise {
 

@@ -9,7 +9,7 @@
 // map's rasterisation and the non-linearity of the ray map inside a triangle, both small on a fine grid.
 #pragma once
 
-#include "models/shapes.hpp"
+#include <stepwise/models/shapes.hpp>
 
 #include <Eigen/Dense>
 

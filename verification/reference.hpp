@@ -6,7 +6,7 @@
 // uncertainty, said wherever an error is measured against it.
 #pragma once
 
-#include "models/model.hpp"
+#include <stepwise/models/model.hpp>
 
 #include <string>
 

@@ -2,9 +2,9 @@
 // and one that does not, and the limits theory predicts for the height field.
 #pragma once
 
-#include "models/model.hpp"
-#include "solvers/method_table.hpp"
-#include "solvers/stability.hpp"
+#include <stepwise/models/model.hpp>
+#include <stepwise/solvers/method_table.hpp>
+#include <stepwise/solvers/stability.hpp>
 
 #include <complex>
 #include <tuple>

@@ -1,8 +1,8 @@
 // Every tolerance the verification suite asserts, in one place, each with where it comes from.
 #pragma once
 
-#include "models/contact.hpp"
-#include "solvers/contact_solve.hpp"
+#include <stepwise/models/contact.hpp>
+#include <stepwise/solvers/contact_solve.hpp>
 
 #include <algorithm>
 #include <cmath>

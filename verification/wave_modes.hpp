@@ -12,7 +12,7 @@
 // cos theta = B / rho: a damped discrete cosine of frequency theta / dt, the discrete dispersion relation).
 #pragma once
 
-#include "solvers/capabilities/wave_grid.hpp"
+#include <stepwise/solvers/capabilities/wave_grid.hpp>
 
 namespace stepwise {
 

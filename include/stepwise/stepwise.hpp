@@ -20,20 +20,20 @@
 //                                                        report/advise.hpp: advise
 #pragma once
 
-#include "models/equations.hpp"
-#include "models/model.hpp"
-#include "report/advise.hpp"
-#include "report/report.hpp"
-#include "report/studies.hpp"
-#include "report/user_scene.hpp"
-#include "run/measure.hpp"
-#include "run/prepare.hpp"
-#include "run/run_outputs.hpp"
-#include "run/scene.hpp"
-#include "solvers/capabilities/second_order.hpp"
-#include "solvers/integrator.hpp"
-#include "solvers/method_table.hpp"
-#include "solvers/ode_system.hpp"
+#include <stepwise/models/equations.hpp>
+#include <stepwise/models/model.hpp>
+#include <stepwise/report/advise.hpp>
+#include <stepwise/report/report.hpp>
+#include <stepwise/report/studies.hpp>
+#include <stepwise/report/user_scene.hpp>
+#include <stepwise/run/measure.hpp>
+#include <stepwise/run/prepare.hpp>
+#include <stepwise/run/run_outputs.hpp>
+#include <stepwise/run/scene.hpp>
+#include <stepwise/solvers/capabilities/second_order.hpp>
+#include <stepwise/solvers/integrator.hpp>
+#include <stepwise/solvers/method_table.hpp>
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <string_view>
 

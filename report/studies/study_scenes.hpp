@@ -2,18 +2,18 @@
 // the methods each sweeps, and the targets the recommendations read off the work-precision fronts.
 #pragma once
 
-#include "report/studies.hpp"
+#include <stepwise/report/studies.hpp>
 
-#include "models/model.hpp"
-#include "solvers/capabilities/distance_constraints.hpp"
-#include "solvers/capabilities/imex_split.hpp"
-#include "solvers/capabilities/mass_spring.hpp"
-#include "solvers/wave_step.hpp"
-#include "verification/convergence.hpp"
-#include "verification/reference.hpp"
-#include "run/measure.hpp"
-#include "verification/stability.hpp"
-#include "verification/tolerances.hpp"
+#include <stepwise/models/model.hpp>
+#include <stepwise/solvers/capabilities/distance_constraints.hpp>
+#include <stepwise/solvers/capabilities/imex_split.hpp>
+#include <stepwise/solvers/capabilities/mass_spring.hpp>
+#include <stepwise/solvers/wave_step.hpp>
+#include <stepwise/verification/convergence.hpp>
+#include <stepwise/verification/reference.hpp>
+#include <stepwise/run/measure.hpp>
+#include <stepwise/verification/stability.hpp>
+#include <stepwise/verification/tolerances.hpp>
 
 #include <fmt/format.h>
 

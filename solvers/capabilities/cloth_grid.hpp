@@ -2,7 +2,7 @@
 // CPU reference solvers/cloth_grid.hpp), where MassSpringView's spring list is what a matrix assembly needs.
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <array>
 #include <vector>

@@ -5,7 +5,7 @@
 // sequential-impulses). A system offering it can be run by no method that does not resolve contacts.
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <array>
 #include <functional>

@@ -6,7 +6,7 @@
 // its own f, the constrained equations of motion an ODE method steps.
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <Eigen/Core>
 

@@ -5,7 +5,7 @@
 //   rho' + u . grad rho = kappa Lap rho + s(x)
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <span>
 

@@ -4,7 +4,7 @@
 // free rigid body into exact rotations needs (rigid-splitting).
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 namespace stepwise {
 

@@ -3,7 +3,7 @@
 // the water's Laplacian, the fluid's viscosity. The two parts add up to f to round-off (test_imex_split).
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <functional>
 #include <string_view>

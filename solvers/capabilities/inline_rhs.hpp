@@ -3,13 +3,13 @@
 // the stage's round trip through memory cost as much as the method's own arithmetic (bench_rk4: rk4 took 1.4-1.5
 // times Boost.Odeint's runge_kutta4 on a std::array state, whose f the compiler inlines). A model offers it
 // through OdeSystem::capability beside its rhs, which must compute the same formula (the model calls the kernel
-// itself); a method asks with system.as<InlineRhs>() and counts the calls it makes (Stats::rhs_evals).
+// itself); which models' kernels may be offered is kernels/inline_kernels.hpp's list, kept beside the kernels,
+// so a model joins the path without an edit here; a method asks with system.as<InlineRhs>() and counts the calls
+// it makes (Stats::rhs_evals).
 #pragma once
 
-#include "kernels/flow_particle.hpp"
-#include "kernels/pendulum.hpp"
-#include "kernels/projectile.hpp"
-#include "solvers/ode_system.hpp"
+#include <stepwise/kernels/inline_kernels.hpp>
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <type_traits>
 #include <utility>
@@ -54,9 +54,17 @@ struct NativeRhs {
   }
 };
 
+// one variant of the models' kernels (kernels/inline_kernels.hpp's list) and the compiled equations' f
+template <class List, class... More>
+struct KernelVariant;
+template <class... Kernels, class... More>
+struct KernelVariant<KernelList<Kernels...>, More...> {
+  using type = std::variant<Kernels..., More...>;
+};
+
 struct InlineRhs {
   // each kernel: `static constexpr int size` and `void operator()(double t, const double* y, double* dydt) const`
-  std::variant<PendulumRhs, ProjectileRhs, FlowParticleRhs, NativeRhs<2>, NativeRhs<3>, NativeRhs<4>> f;
+  KernelVariant<ModelKernels, NativeRhs<2>, NativeRhs<3>, NativeRhs<4>>::type f;
 };
 
 }  // namespace stepwise

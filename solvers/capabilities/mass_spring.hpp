@@ -4,7 +4,7 @@
 // and the prefactored local/global method of Liu et al. 2013 (fast-mass-spring), need.
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <Eigen/SparseCore>
 

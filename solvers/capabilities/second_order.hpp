@@ -3,7 +3,7 @@
 // system.as<SecondOrderView>() and names it with needs_second_order.
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <functional>
 

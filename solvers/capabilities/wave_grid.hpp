@@ -4,7 +4,7 @@
 // the grid (gpu-symplectic-euler) need.
 #pragma once
 
-#include "solvers/ode_system.hpp"
+#include <stepwise/solvers/ode_system.hpp>
 
 #include <functional>
 #include <vector>

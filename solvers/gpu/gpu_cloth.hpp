@@ -13,8 +13,8 @@
 // scatter, each spring once with its force added to both ends, would need atomics on floats, not in GL 4.5.)
 #pragma once
 
-#include "gpu_grid.hpp"
-#include "solvers/cloth_grid.hpp"
+#include <stepwise/solvers/gpu/gpu_grid.hpp>
+#include <stepwise/solvers/cloth_grid.hpp>
 
 namespace stepwise::gpu {
 

@@ -9,8 +9,8 @@
 #pragma once
 
 #include "gl/context.hpp"
-#include "solvers/fixed_step.hpp"
-#include "solvers/method.hpp"
+#include <stepwise/solvers/fixed_step.hpp>
+#include <stepwise/solvers/method.hpp>
 
 #include <string>
 #include <vector>

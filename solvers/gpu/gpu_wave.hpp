@@ -12,8 +12,8 @@
 // one another the state stays on the device; the methods read each new level back for the run's samples.
 #pragma once
 
-#include "gpu_grid.hpp"
-#include "solvers/wave_step.hpp"
+#include <stepwise/solvers/gpu/gpu_grid.hpp>
+#include <stepwise/solvers/wave_step.hpp>
 
 #include <Eigen/Dense>
 

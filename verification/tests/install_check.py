@@ -2,6 +2,8 @@
 """The installed package from outside (issue 38): `cmake --install` into a temporary prefix, then
 
 - no installed header includes a backend's header (SUNDIALS, GSL, CHOLMOD, FFTW, GL, MPI, GiNaC, Boost, TOML);
+- every installed header includes the project's others as <stepwise/...>, each installed, and the consumer's
+  include path (the CMake package's, pkg-config's) is the prefix's include/ alone;
 - examples/cpp, a fresh CMake project whose CMakeLists only says find_package(stepwise) and links
   stepwise::stepwise, configures, builds and runs against the prefix: three methods on the user's own Lorenz
   system agree at t = 1 to what their tolerance allows (verification/tolerances.hpp adaptive_agreement_factor);
@@ -59,6 +61,21 @@ with tempfile.TemporaryDirectory() as d:
     prefix = os.path.join(d, "prefix")
     run(["cmake", "--install", build, "--prefix", prefix])
 
+    # every header under the one prefix: a project header includes another only as <stepwise/...>, which is installed
+    project = re.compile(r"#\s*include\s*\"(solvers|models|run|report|verification|render|kernels|gl|gpu)/")
+    prefixed = re.compile(r"#\s*include\s*<stepwise/([^>]+)>")
+    for root, _, files in os.walk(os.path.join(prefix, "include")):
+        for f in files:
+            for n, line in enumerate(open(os.path.join(root, f)), 1):
+                where = f"installed header {os.path.relpath(os.path.join(root, f), prefix)}:{n}"
+                if project.search(line):
+                    problems.append(f"{where} includes a project header by a short path: {line.strip()}")
+                if (m := prefixed.search(line)) and not os.path.exists(os.path.join(prefix, "include", "stepwise", m.group(1))):
+                    problems.append(f"{where} includes <stepwise/{m.group(1)}>, which is not installed")
+    targets = open(os.path.join(prefix, "lib", "cmake", "stepwise", "stepwise_targets.cmake")).read()
+    if "include/stepwise" in re.search(r"INTERFACE_INCLUDE_DIRECTORIES \"([^\"]*)\"", targets).group(1):
+        problems.append("the CMake package puts include/stepwise itself on a consumer's include path")
+
     backend = re.compile(r"#\s*include\s*[<\"](sundials|nvector|cvode|arkode|sunlinsol|sunmatrix|gsl|cholmod|fftw|mpi|GL|EGL|ginac|boost|toml|CLI|stb)")
     headers = 0
     for root, _, files in os.walk(os.path.join(prefix, "include")):
@@ -82,6 +99,8 @@ with tempfile.TemporaryDirectory() as d:
     # the same with pkg-config alone
     env["PKG_CONFIG_PATH"] = os.path.join(prefix, "lib", "pkgconfig")
     flags = run(["pkg-config", "--cflags", "--libs", "stepwise"], env=env).split()
+    if any(f.startswith("-I") and f.rstrip("/").endswith("include/stepwise") for f in flags):
+        problems.append(f"pkg-config puts include/stepwise itself on a consumer's include path: {flags}")
     binary = os.path.join(d, "lorenz-pkg-config")
     run(["c++", "-O2", os.path.join(source, "examples", "cpp", "lorenz.cpp"), "-o", binary] + flags, env=env)
     check_states("examples/cpp through pkg-config", run([binary]))
