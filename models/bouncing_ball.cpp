@@ -14,7 +14,7 @@ constexpr std::array params{
     ParamSpec{"rest_speed", 0.01, "m/s", "a rebound slower than this ends in resting contact", Bound::positive},
 };
 
-class BouncingBall final : public Model {
+class BouncingBall final : public Model, public DenseJacobian, public EventSource {
  public:
   explicit BouncingBall(const Params& p)
       : h0_(p.at("height")), eps_(p.at("restitution")), g_(p.at("g")), rest_speed_(p.at("rest_speed")) {
@@ -51,7 +51,7 @@ class BouncingBall final : public Model {
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"y", "vy"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector2d(h0_, 0); }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, as_part<DenseJacobian>(*this), as_part<EventSource>(*this)); }
   std::span<const Event> events() const override { return events_; }
   // the shortest flight: a rebound at rest_speed, up and down
   double event_free_interval() const override { return 2 * rest_speed_ / g_; }
@@ -62,7 +62,6 @@ class BouncingBall final : public Model {
     dydt[0] = y[1];
     dydt[1] = resting ? 0 : -g_;
   }
-  bool has_jacobian() const override { return true; }
   void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
     dfdy << 0, 1, 0, 0;
   }

@@ -92,7 +92,7 @@ Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
   return m;
 }
 
-class Cloth final : public Model {
+class Cloth final : public Model, public SparseJacobian, public Projection {
  public:
   Cloth(const Params& p, std::span<const GridNode> pins)
       : rows_(grid_size(p, "rows")),
@@ -289,7 +289,10 @@ class Cloth final : public Model {
   bool autonomous() const override { return gust_ == 0 || wind_k_ == 0; }
   // the continuum sheet is no network of springs: the GPU pass, the position-based methods and the prefactored
   // local/global method, which step springs, do not apply to it
+  // the projection onto the sphere and the ground where the sheet has them
   const void* capability(const std::type_info& type) const override {
+    if (type == typeid(Projection)) return sphere_radius_ > 0 || ground_ ? &as_part<Projection>(*this) : nullptr;
+    if (type == typeid(SparseJacobian)) return &as_part<SparseJacobian>(*this);
     if (continuum_) return offer(type, second_order_, view_, split_);
     return offer(type, second_order_, view_, network_, grid_, split_, constraints_);
   }
@@ -369,7 +372,6 @@ class Cloth final : public Model {
     }
   }
 
-  bool has_sparse_jacobian() const override { return true; }
   void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
     Eigen::SparseMatrix<double> dfdx, dfdv;
     force_jacobians(t, y, false, dfdx, dfdv);
@@ -377,8 +379,7 @@ class Cloth final : public Model {
   }
 
   // nodes inside the sphere or below the ground back onto its surface, their approach stopped
-  bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
-    if (sphere_radius_ == 0 && !ground_) return false;
+  void project(Eigen::Ref<Eigen::VectorXd> y) const override {
     const auto contact = [&](int i, const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
       y.segment<3>(3 * i) = surface;
       auto v = y.segment<3>(3 * (free_ + i));
@@ -397,7 +398,6 @@ class Cloth final : public Model {
         contact(i, surface, Eigen::Vector3d::UnitY());
       }
     }
-    return true;
   }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {

@@ -760,7 +760,7 @@ struct JacobianTapes {
 // a model destroyed while its Jacobian is made in the background stops that
 struct Cancelled {};
 
-class Equations final : public Model {
+class Equations final : public Model, public DenseJacobian, public SparseJacobian, public EventSource {
  public:
   Equations(const EquationsSpec& spec, const Params& values, const EquationsOptions& options) {
     std::lock_guard lock(ginac_mutex);
@@ -802,7 +802,6 @@ class Equations final : public Model {
     if (!flag_names_.empty()) hold(y, [&](int variable) { dydt[variable] = 0; });
   }
 
-  bool has_jacobian() const override { return true; }
   void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
     const JacobianTapes& J = jacobian_tapes();
     thread_local std::vector<double> values;
@@ -813,7 +812,6 @@ class Equations final : public Model {
       for (int k = J.columns[c]; k < J.columns[c + 1]; ++k) dfdy(J.rows[static_cast<size_t>(k)], static_cast<Eigen::Index>(c)) = values[static_cast<size_t>(k)];
     if (!flag_names_.empty()) hold(y, [&](int variable) { dfdy.row(variable).setZero(); });
   }
-  bool has_sparse_jacobian() const override { return true; }
   void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
     const JacobianTapes& J = jacobian_tapes();
     if (dfdy.rows() != size() || dfdy.cols() != size() || dfdy.nonZeros() != static_cast<Eigen::Index>(J.rows.size()) || !dfdy.isCompressed()) {
@@ -845,6 +843,7 @@ class Equations final : public Model {
     return y;
   }
   const void* capability(const std::type_info& type) const override {
+    if (const void* part = offer(type, as_part<DenseJacobian>(*this), as_part<SparseJacobian>(*this), as_part<EventSource>(*this))) return part;
     // a resting flag is held by rhs(): the inline f and the (x, v) layout would pass it by
     if (!flag_names_.empty()) return nullptr;
     if (second_order_.positions > 0 && inline_rhs_) return offer(type, second_order_, *inline_rhs_);

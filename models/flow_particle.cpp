@@ -20,7 +20,7 @@ constexpr std::array params_3d{
     ParamSpec{"z0", 1.0, "m", "initial z", Bound::finite},
 };
 
-class FlowParticle final : public Model {
+class FlowParticle final : public Model, public DenseJacobian {
  public:
   explicit FlowParticle(const Params& p) : x0_(p.at("x0")), y0_(p.at("y0")) {}
   std::string_view name() const override { return "flow-particle"; }
@@ -39,8 +39,7 @@ class FlowParticle final : public Model {
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::VectorXd> dpdt) const override {
     std::get<FlowParticleRhs>(inline_rhs_.f)(t, p.data(), dpdt.data());
   }
-  const void* capability(const std::type_info& type) const override { return offer(type, inline_rhs_); }
-  bool has_jacobian() const override { return true; }
+  const void* capability(const std::type_info& type) const override { return offer(type, inline_rhs_, as_part<DenseJacobian>(*this)); }
   void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::MatrixXd> dfdp) const override {
     dfdp << 1, 0, 0, std::cos(p[1]);
   }
@@ -59,7 +58,7 @@ class FlowParticle final : public Model {
   InlineRhs inline_rhs_{FlowParticleRhs{}};  // f, for the steppers that call it inline
 };
 
-class FlowParticle3d final : public Model {
+class FlowParticle3d final : public Model, public DenseJacobian {
  public:
   explicit FlowParticle3d(const Params& p) : x0_(p.at("x0")), y0_(p.at("y0")), z0_(p.at("z0")) {}
   std::string_view name() const override { return "flow-particle-3d"; }
@@ -78,7 +77,7 @@ class FlowParticle3d final : public Model {
     dpdt[1] = p[1];
     dpdt[2] = std::sin(p[0]);
   }
-  bool has_jacobian() const override { return true; }
+  const void* capability(const std::type_info& type) const override { return offer(type, as_part<DenseJacobian>(*this)); }
   void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::MatrixXd> dfdp) const override {
     dfdp << 1, 0, 0, 0, 1, 0, std::cos(p[0]), 0, 0;
   }

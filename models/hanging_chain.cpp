@@ -32,7 +32,7 @@ std::vector<Spring> chain_springs(int nodes, const Params& p) {
 // the nodes, checked against the memory rule (a node's state, springs, pattern and a dense-free Newton system: ~1 KiB)
 int node_count(const Params& p) { return particle_count(p, "nodes", 1024, "nodes"); }
 
-class HangingChain final : public Model {
+class HangingChain final : public Model, public SparseJacobian {
  public:
   explicit HangingChain(const Params& p)
       : n_(node_count(p)),
@@ -64,7 +64,7 @@ class HangingChain final : public Model {
   }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, network_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, network_, as_part<SparseJacobian>(*this)); }
   std::vector<std::string> state_names() const override {
     std::vector<std::string> names;
     for (const char* q : {"", "v"})
@@ -86,7 +86,6 @@ class HangingChain final : public Model {
     for (int k = 0; k < n_; ++k) a[3 * k + 1] -= g_;
   }
 
-  bool has_sparse_jacobian() const override { return true; }
   void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
     Eigen::SparseMatrix<double> dfdx, dfdv;
     force_jacobians(t, y, false, dfdx, dfdv);

@@ -91,7 +91,7 @@ struct Drop {
   double x = 0, y = 0;   // centre (m)
 };
 
-class HeightField final : public Model {
+class HeightField final : public Model, public SparseJacobian, public EventSource {
  public:
   enum class Scene { drop, standing, pool };
 
@@ -162,7 +162,7 @@ class HeightField final : public Model {
   }
   int size() const override { return static_cast<int>(2 * cells_); }
   bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, grid_, split_, blocks_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, grid_, split_, blocks_, as_part<SparseJacobian>(*this), as_part<EventSource>(*this)); }
   std::span<const Event> events() const override { return events_; }
 
   std::vector<std::string> state_names() const override {
@@ -221,7 +221,6 @@ class HeightField final : public Model {
   }
 
   // dz'/dv = I; dv'/dz = c^2 Lap (boundary neighbours included) and dv'/dv = -mu I on the interior rows
-  bool has_sparse_jacobian() const override { return true; }
   void sparse_jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::SparseMatrix<double>& dfdy) const override {
     jacobian_of(grid_.mu, dfdy);
   }

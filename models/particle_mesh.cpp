@@ -37,7 +37,7 @@ constexpr double bytes_per_particle = 32 * 6 * 8 + 2 * 256;
 // back 5 941 times in 3 s at rtol 1e-6; at 1e-7, once), far below any bounce
 constexpr double contact_tolerance = 1e-7;
 
-class ParticleMesh final : public Model {
+class ParticleMesh final : public Model, public EventSource {
  public:
   ParticleMesh(const Params& p, TriangleMesh mesh, std::vector<Plane> faces)
       : n_(particle_count(p, "count", bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
@@ -67,7 +67,7 @@ class ParticleMesh final : public Model {
   }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, as_part<EventSource>(*this)); }
   std::span<const Event> events() const override { return events_; }
   // the shortest return to a surface: a rebound at rest_speed along gravity, up and down
   double event_free_interval() const override { return g_ > 0 ? 2 * rest_speed_ / g_ : std::numeric_limits<double>::infinity(); }

@@ -29,7 +29,7 @@ constexpr std::array params{
 constexpr double bytes_per_particle = 32 * 6 * 8;
 constexpr double max_pairs = 1e8;
 
-class ParticleSystem final : public Model {
+class ParticleSystem final : public Model, public SparseJacobian {
  public:
   explicit ParticleSystem(const Params& p)
       : n_(particle_count(p, "count", bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
@@ -63,7 +63,11 @@ class ParticleSystem final : public Model {
   }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
+  // the sparse Jacobian of the force field without interactions (s = 0)
+  const void* capability(const std::type_info& type) const override {
+    if (type == typeid(SparseJacobian)) return s_ == 0 ? &as_part<SparseJacobian>(*this) : nullptr;
+    return offer(type, second_order_);
+  }
 
   std::vector<std::string> state_names() const override { return particle_state_names(n_); }
   Eigen::VectorXd initial_state() const override {
@@ -99,7 +103,6 @@ class ParticleSystem final : public Model {
   }
 
   // without repulsion df/dy has a fixed pattern: dx'/dv = I, dv'/dx = -k I, dv'/dv = -gamma I
-  bool has_sparse_jacobian() const override { return s_ == 0; }
   void sparse_jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::SparseMatrix<double>& dfdy) const override {
     const int m = 3 * n_;
     std::vector<Eigen::Triplet<double>> entries;

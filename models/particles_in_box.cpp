@@ -27,7 +27,7 @@ constexpr std::array params{
 // six events, each a name and two closures
 constexpr double bytes_per_particle = 32 * 6 * 8 + 6 * 256;
 
-class ParticlesInBox final : public Model {
+class ParticlesInBox final : public Model, public DenseJacobian, public EventSource {
  public:
   explicit ParticlesInBox(const Params& p)
       : n_(particle_count(p, "count", bytes_per_particle)), size_(p.at("size")), eps_(p.at("restitution")), mu_(p.at("friction")),
@@ -64,7 +64,7 @@ class ParticlesInBox final : public Model {
     for (int k = 0; k < 3 * n_; ++k) y[3 * n_ + k] = speed_ * (2 * uniform01(rng) - 1);
     return y;
   }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, as_part<DenseJacobian>(*this), as_part<EventSource>(*this)); }
   std::span<const Event> events() const override { return events_; }
   // the shortest return to one wall: a rebound off the floor at rest_speed, up and down
   double event_free_interval() const override { return g_ > 0 ? 2 * rest_speed_ / g_ : std::numeric_limits<double>::infinity(); }
@@ -78,7 +78,6 @@ class ParticlesInBox final : public Model {
       dydt[3 * n_ + 3 * i + 2] = resting ? 0 : -g_;
     }
   }
-  bool has_jacobian() const override { return true; }
   void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
     dfdy.setZero();
     dfdy.topRightCorner(3 * n_, 3 * n_).setIdentity();

@@ -25,7 +25,7 @@ constexpr std::array params{
     ParamSpec{"mass", 1.0, "kg", "bob mass (scales the energy only)", Bound::positive},
 };
 
-class Pendulum final : public Model {
+class Pendulum final : public Model, public DenseJacobian {
  public:
   Pendulum(const Params& p, bool small_angle)
       : theta0_(p.at("theta0")), omega0_(p.at("omega0")), g_(p.at("g")), length_(p.at("length")),
@@ -53,13 +53,12 @@ class Pendulum final : public Model {
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"theta", "omega"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector2d(theta0_, omega0_); }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, inline_rhs_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, inline_rhs_, as_part<DenseJacobian>(*this)); }
 
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     std::get<PendulumRhs>(inline_rhs_.f)(t, y.data(), dydt.data());
   }
 
-  bool has_jacobian() const override { return true; }
   void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
     dfdy << 0, 1, -w_ * w_ * (small_angle_ ? 1.0 : std::cos(y[0])), 0;
   }

@@ -18,7 +18,7 @@ constexpr std::array params{
     ParamSpec{"mass", 1.0, "kg", "particle mass (scales the energy only)", Bound::positive},
 };
 
-class Projectile final : public Model {
+class Projectile final : public Model, public DenseJacobian {
  public:
   explicit Projectile(const Params& p)
       : x0_(p.at("x0")), y0_(p.at("y0")), vx0_(p.at("vx0")), vy0_(p.at("vy0")), g_(p.at("g")), k_(p.at("drag")),
@@ -37,12 +37,11 @@ class Projectile final : public Model {
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"x", "y", "vx", "vy"}; }
   Eigen::VectorXd initial_state() const override { return Eigen::Vector4d(x0_, y0_, vx0_, vy0_); }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, inline_rhs_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, inline_rhs_, as_part<DenseJacobian>(*this)); }
 
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& s, Eigen::Ref<Eigen::VectorXd> dsdt) const override {
     std::get<ProjectileRhs>(inline_rhs_.f)(t, s.data(), dsdt.data());
   }
-  bool has_jacobian() const override { return true; }
   void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::MatrixXd> dfds) const override {
     dfds << 0, 0, 1, 0,
             0, 0, 0, 1,

@@ -58,7 +58,7 @@ Eigen::Vector3d equivalent_box(double m, const Eigen::Vector3d& I) {
   return h.cwiseMax(1e-2 * h.maxCoeff());
 }
 
-class RigidBody final : public Model {
+class RigidBody final : public Model, public Projection {
  public:
   // shape: the body's surface in its principal frame; empty: the box with these principal moments
   explicit RigidBody(const Params& p, std::optional<TriangleMesh> shape = std::nullopt)
@@ -98,12 +98,12 @@ class RigidBody final : public Model {
     dydt.segment<3>(10) += torque.cwiseQuotient(inertia_);
   }
 
-  bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
-    y.segment<4>(6).normalize();
-    return true;
-  }
+  void project(Eigen::Ref<Eigen::VectorXd> y) const override { y.segment<4>(6).normalize(); }
 
-  const void* capability(const std::type_info& type) const override { return free_ ? offer(type, *free_) : nullptr; }
+  const void* capability(const std::type_info& type) const override {
+    if (type == typeid(Projection)) return &as_part<Projection>(*this);
+    return free_ ? offer(type, *free_) : nullptr;
+  }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
     return body_kinetic_energy(mass_, inertia_, y.segment<3>(3), y.segment<3>(10)) - mass_ * gravity_.dot(y.segment<3>(0));

@@ -54,7 +54,7 @@ std::optional<Plane> ground(const Params& p) {
   return make_plane(Eigen::Vector3d::Zero(), Eigen::Vector3d(std::sin(s), 0, std::cos(s)));
 }
 
-class RigidContact final : public Model {
+class RigidContact final : public Model, public Projection {
  public:
   RigidContact(std::string_view name, std::vector<Placed> placed, const Params& p)
       : name_(name), ground_(ground(p)), g_(p.at("g")) {
@@ -99,12 +99,11 @@ class RigidContact final : public Model {
     }
   }
 
-  bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
+  void project(Eigen::Ref<Eigen::VectorXd> y) const override {
     for (size_t b = 0; b < bodies_.size(); ++b) y.segment<4>(13 * static_cast<Eigen::Index>(b) + 6).normalize();
-    return true;
   }
 
-  const void* capability(const std::type_info& type) const override { return offer(type, contact_); }
+  const void* capability(const std::type_info& type) const override { return offer(type, contact_, as_part<Projection>(*this)); }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
     double potential = 0;

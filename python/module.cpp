@@ -54,7 +54,7 @@ class SignalCheck {
 
 // a Python callable f(t, y) -> dy/dt (and jac(t, y) -> df/dy, or a constant matrix) as an OdeSystem, in s = sign t
 // (sign -1: a reversed t_span integrated forwards in s = -t, as every method steps forwards)
-class PythonSystem final : public OdeSystem {
+class PythonSystem final : public OdeSystem, public DenseJacobian {
  public:
   PythonSystem(py::object fun, py::object jac, int n, double sign) : fun_(std::move(fun)), jac_(std::move(jac)), n_(n), sign_(sign) {}
 
@@ -73,7 +73,10 @@ class PythonSystem final : public OdeSystem {
     }
   }
 
-  bool has_jacobian() const override { return !jac_.is_none(); }
+  // its Jacobian where `jac` was given
+  const void* capability(const std::type_info& type) const override {
+    return type == typeid(DenseJacobian) && !jac_.is_none() ? &as_part<DenseJacobian>(*this) : nullptr;
+  }
   void jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
     const double t = sign_ * s;
     const auto out = PyCallable_Check(jac_.ptr()) ? call(jac_, t, y, "jac") : as_array(jac_, t, "jac");
@@ -123,9 +126,10 @@ class PythonSystem final : public OdeSystem {
 // a compiled system (a user's equations, a scene's model) run with the GIL released: in s = sign t, and
 // looking for a signal every `check_every` calls of f. Capabilities pass through forwards in time only (x' = v
 // read backwards is no longer x' = v)
-class ReleasedSystem final : public OdeSystem {
+class ReleasedSystem final : public OdeSystem, public DenseJacobian, public SparseJacobian, public EventSource {
  public:
-  ReleasedSystem(const OdeSystem& inner, double sign) : inner_(inner), sign_(sign) {}
+  ReleasedSystem(const OdeSystem& inner, double sign)
+      : inner_(inner), sign_(sign), dense_(inner.as<DenseJacobian>()), sparse_(inner.as<SparseJacobian>()) {}
   static constexpr long check_every = 4096;
 
   int size() const override { return inner_.size(); }
@@ -135,32 +139,39 @@ class ReleasedSystem final : public OdeSystem {
     inner_.rhs(sign_ * s, y, dydt);
     if (sign_ < 0) dydt = -dydt;
   }
-  bool has_jacobian() const override { return inner_.has_jacobian(); }
   void jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
-    inner_.jacobian(sign_ * s, y, dfdy);
+    dense_->jacobian(sign_ * s, y, dfdy);
     if (sign_ < 0) dfdy = -dfdy;
   }
-  bool has_sparse_jacobian() const override { return inner_.has_sparse_jacobian(); }
   void sparse_jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
-    inner_.sparse_jacobian(sign_ * s, y, dfdy);
+    sparse_->sparse_jacobian(sign_ * s, y, dfdy);
     if (sign_ < 0) dfdy = -dfdy;
   }
-  const void* capability(const std::type_info& type) const override { return sign_ > 0 ? inner_.capability(type) : nullptr; }
-  std::span<const Event> events() const override { return inner_.events(); }
+  std::span<const Event> events() const override { return events_of(inner_); }
+  // the Jacobians in s, the events as the system has them; the other capabilities only forwards (in s, a
+  // second-order layout read backwards is no longer x' = v)
+  const void* capability(const std::type_info& type) const override {
+    if (type == typeid(DenseJacobian)) return dense_ ? &as_part<DenseJacobian>(*this) : nullptr;
+    if (type == typeid(SparseJacobian)) return sparse_ ? &as_part<SparseJacobian>(*this) : nullptr;
+    if (type == typeid(EventSource)) return &as_part<EventSource>(*this);
+    return sign_ > 0 ? inner_.capability(type) : nullptr;
+  }
 
  private:
   const OdeSystem& inner_;
   double sign_;
+  const DenseJacobian* dense_;
+  const SparseJacobian* sparse_;
   mutable long calls_ = 0;
 };
 
 // SciPy's events: callables g(t, y) with optional `terminal` and `direction` attributes, watched beside the
 // system's own (an Equations' [events]): each a sign-change event that keeps its state, read in s = sign t (so a
 // rising event in t is a falling one in s when integrating backwards)
-class EventfulSystem final : public OdeSystem {
+class EventfulSystem final : public OdeSystem, public EventSource {
  public:
   EventfulSystem(const OdeSystem& inner, const py::list& events, double sign, bool released) : inner_(inner) {
-    for (const Event& e : inner.events()) {
+    for (const Event& e : events_of(inner)) {
       Event mapped = e;
       mapped.g = [g = e.g, sign](double s, const Eigen::VectorXd& y) { return g(sign * s, y); };
       if (e.rate) mapped.rate = [rate = e.rate, sign](double s, const Eigen::VectorXd& y) { return sign * rate(sign * s, y); };
@@ -205,14 +216,11 @@ class EventfulSystem final : public OdeSystem {
   int size() const override { return inner_.size(); }
   bool autonomous() const override { return inner_.autonomous(); }
   void rhs(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override { inner_.rhs(s, y, dydt); }
-  bool has_jacobian() const override { return inner_.has_jacobian(); }
-  void jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override { inner_.jacobian(s, y, dfdy); }
-  bool has_sparse_jacobian() const override { return inner_.has_sparse_jacobian(); }
-  void sparse_jacobian(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
-    inner_.sparse_jacobian(s, y, dfdy);
-  }
   std::span<const Event> events() const override { return events_; }
-  const void* capability(const std::type_info& type) const override { return inner_.capability(type); }
+  // its events in place of the system's; the system's other capabilities (its Jacobians) as they are
+  const void* capability(const std::type_info& type) const override {
+    return type == typeid(EventSource) ? &as_part<EventSource>(*this) : inner_.capability(type);
+  }
 
  private:
   const OdeSystem& inner_;
@@ -336,7 +344,7 @@ py::dict stats_dict(const Stats& s) {
 // each event's times and the states there (of the variables), as arrays: the Python events' in their order
 // (SciPy's t_events, and y_events one row an event), the system's own by name (own_events: name -> (t, y))
 void put_events(py::dict& d, const EventfulSystem& system, const RunResult& r, double sign, int n) {
-  const auto all = system.events();
+  const auto all = events_of(system);
   std::vector<std::vector<double>> times(all.size());
   std::vector<std::vector<Eigen::VectorXd>> states(all.size());
   for (const EventRecord& e : r.events)

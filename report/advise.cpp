@@ -70,7 +70,8 @@ double with_event_error(double state_error, const RunResult& r, const std::vecto
 // a scene's own events (a ball that bounces at the wrong time is wrong, so their times count in the error): their
 // times in the reference run; none for a scene without
 std::optional<std::vector<double>> reference_event_times(const Model& model, double t_end) {
-  if (std::none_of(model.events().begin(), model.events().end(), [](const Event& e) { return !e.surface; })) return std::nullopt;
+  const auto events = events_of(model);
+  if (std::none_of(events.begin(), events.end(), [](const Event& e) { return !e.surface; })) return std::nullopt;
   const std::vector<double> t_out{t_end};
   const RunResult r = make_integrator(reference_method, StepControl::adaptive(reference_rtol, 1e-3 * reference_rtol))
                           ->integrate(model, 0, model.initial_state(), t_out);

@@ -256,7 +256,7 @@ void choose_method(const RunOptions& o, PreparedRun& p) {
     p.control = step_control(o, s, *find_method(p.method), p.control);
   }
   const Method* method = find_method(p.method);
-  const std::string sparse_hint = p.model->has_sparse_jacobian() ? " or cvode-bdf (sparse Jacobian, KLU)" : "";
+  const std::string sparse_hint = p.model->as<SparseJacobian>() ? " or cvode-bdf (sparse Jacobian, KLU)" : "";
   if (const double bytes = dense_matrix_bytes(*method, *p.model); over_memory_budget(bytes))
     throw InputError(fmt::format("{}: {} keeps dense {} x {} matrices ({:.3g} GiB) for this {}-entry state, {}: use an explicit method{}",
                                  where_method(o, s), p.method, p.model->size(), p.model->size(), bytes / 0x1p30, p.model->size(),

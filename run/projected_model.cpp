@@ -5,11 +5,11 @@
 namespace stepwise {
 namespace {
 
-class ProjectedModel final : public Model {
+class ProjectedModel final : public Model, public Projection {
  public:
   explicit ProjectedModel(std::unique_ptr<Model> model) : m_(std::move(model)), c_(m_->as<DistanceConstraints>()->rigid()) {}
 
-  bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
+  void project(Eigen::Ref<Eigen::VectorXd> y) const override {
     // a solver a call: a sweep's threads share the model, and the solver keeps its factorisation
     ConstraintSolver solver(c_);
     double* x = y.data();
@@ -17,7 +17,6 @@ class ProjectedModel final : public Model {
     solver.directions(x, along);
     std::string ignored;  // a state that cannot be met is left as the method made it, and its drift shows
     if (solver.meet(x, along, nullptr, 1.0, ignored)) solver.tangent(x + y.size() / 2);
-    return true;
   }
 
   std::string_view name() const override { return m_->name(); }
@@ -26,15 +25,10 @@ class ProjectedModel final : public Model {
   std::vector<std::string> state_names() const override { return m_->state_names(); }
   Eigen::VectorXd initial_state() const override { return m_->initial_state(); }
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override { m_->rhs(t, y, dydt); }
-  bool has_jacobian() const override { return m_->has_jacobian(); }
-  void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override { m_->jacobian(t, y, dfdy); }
-  bool has_sparse_jacobian() const override { return m_->has_sparse_jacobian(); }
-  void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
-    m_->sparse_jacobian(t, y, dfdy);
+  // the model's capabilities (its Jacobians, events, ...), this wrapper's projection in place of any of its own
+  const void* capability(const std::type_info& type) const override {
+    return type == typeid(Projection) ? &as_part<Projection>(*this) : m_->capability(type);
   }
-  std::span<const Event> events() const override { return m_->events(); }
-  double event_free_interval() const override { return m_->event_free_interval(); }
-  const void* capability(const std::type_info& type) const override { return m_->capability(type); }
   std::optional<double> energy(const Eigen::VectorXd& y) const override { return m_->energy(y); }
   std::vector<std::string> summary_names() const override { return m_->summary_names(); }
   Eigen::VectorXd summary(const Eigen::VectorXd& y) const override { return m_->summary(y); }

@@ -54,7 +54,7 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
     j["energy_final"] = *p.model->energy(r.y_stop);
   }
   j["events"] = nlohmann::json::array();
-  const auto events = p.model->events();
+  const auto events = events_of(*p.model);
   const auto state_names = p.model->state_names();
   const auto state = [&](const Eigen::VectorXd& y) {
     nlohmann::json s = nlohmann::json::object();

@@ -22,12 +22,10 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
   Eigen::VectorXd y = y0, y_start;  // y_start: the step's start, for events and a failing step
   double t = t0, t_start = t0, taken = 0;
   std::string failure;
-  const auto events = system.events();
+  const auto events = events_of(system);
   const bool watch_events = !events.empty();
-  const bool projects = [&] {
-    Eigen::VectorXd probe = y0;
-    return system.project(probe);
-  }();
+  const Projection* projection = counted.as<Projection>();  // counted: its calls are
+  const bool projects = projection != nullptr;
   EventWatch g_start = start_watch(events, t, y);
   // re-steps from the step's start to a fraction of it, for locating an event
   const Restep restep = [&](double s, Eigen::VectorXd& ys) { return stepper->restep(t_start, s * taken, y_start, ys); };
@@ -52,7 +50,7 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
     }
     ++result.stats.steps;
     // back onto the manifold, keeping the stepper's state: the correction is of the order of the local error
-    if (projects) counted.project(y);
+    if (projects) projection->project(y);
     if (has_diverged(y, bound)) {
       mark_diverged(result, t);
       break;

@@ -237,13 +237,14 @@ void for_interior(const DistributedWave& grid, int points, F&& f) {
 
 // the water model on this rank's block: its state (z, v) of the block, its f block_rhs (collective, like every
 // call on the grid), its events the model's for the block
-class BlockSystem final : public OdeSystem {
+class BlockSystem final : public OdeSystem, public EventSource {
  public:
   BlockSystem(DistributedWave& grid, const WaveGridView& view, const WaveBlocksView& blocks)
       : grid_(grid), view_(view), cells_(static_cast<Eigen::Index>(grid.block().rows) * grid.block().cols), events_(blocks.events(grid.block())) {}
   int size() const override { return static_cast<int>(2 * cells_); }
   bool autonomous() const override { return true; }
   std::span<const Event> events() const override { return events_; }
+  const void* capability(const std::type_info& type) const override { return offer(type, as_part<EventSource>(*this)); }
   void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     block_rhs(grid_, view_, y.data(), dydt.data());
   }

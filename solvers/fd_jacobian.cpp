@@ -23,7 +23,7 @@ void fd_jacobian(const OdeSystem& system, double t, const Eigen::Ref<const Eigen
 
 void jacobian_or_fd(const OdeSystem& system, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                     Eigen::Ref<Eigen::MatrixXd> dfdy) {
-  if (system.has_jacobian()) system.jacobian(t, y, dfdy);
+  if (const auto* analytic = system.as<DenseJacobian>()) analytic->jacobian(t, y, dfdy);
   else fd_jacobian(system, t, y, dfdy);
 }
 

@@ -25,15 +25,13 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
   Eigen::VectorXd y = y0, y_next(y0.size());
   double t = t0, h = dt;
   std::string failure;
-  const auto events = system.events();
+  const auto events = events_of(system);
   std::vector<std::string> handled;
   // what this system and method have, asked once: nothing is done per step for what they lack
   const bool watch_events = !events.empty();
   const bool method_events = stepper->handles_events();
-  const bool projects = [&] {
-    Eigen::VectorXd probe = y0;
-    return system.project(probe);
-  }();
+  const Projection* projection = counted.as<Projection>();  // counted: its calls are
+  const bool projects = projection != nullptr;
   EventWatch g_start = start_watch(events, t, y);
   // re-steps from the step's start to a fraction of it, for locating an event
   const Restep restep = [&](double s, Eigen::VectorXd& ys) {
@@ -68,7 +66,7 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
       }
       // back onto the manifold; a multistep history is kept (the correction is of the order of the local
       // error: restarting would drop GSL's multistep methods to order 1 for good, measured)
-      if (projects) counted.project(y_next);
+      if (projects) projection->project(y_next);
       const auto norm = projects ? std::nullopt : stepper->last_norm();
       if (norm ? !(*norm <= bound) : has_diverged(y_next, bound)) [[unlikely]] {
         mark_diverged(result, t_next);

@@ -89,7 +89,7 @@ double dense_matrix_bytes(const Method& method, const OdeSystem& system) {
   switch (method.dense) {
     case DenseMatrices::none: return 0;
     case DenseMatrices::unless_sparse_jacobian:
-      if (system.has_sparse_jacobian()) return 0;
+      if (system.as<SparseJacobian>()) return 0;
       break;
     case DenseMatrices::unless_mass_spring:
       if (system.as<MassSpringView>()) return 0;

@@ -1,4 +1,5 @@
-// The one thing every integrator sees: dy/dt = f(t, y), with optional Jacobians, events and a projection.
+// The one thing every integrator sees: dy/dt = f(t, y); optional Jacobians, events and a projection are
+// capabilities a system offers beside it.
 //
 // An integrator never includes a models/ header; a model implements this interface. Structure only some
 // methods use (y = (x, v), a wave grid, a mass-spring network, bodies in contact, ...) is a capability: a
@@ -55,35 +56,60 @@ class OdeSystem {
   // true when f does not depend on t (then df/dt = 0)
   virtual bool autonomous() const { return false; }
 
-  // optional analytic Jacobian df/dy, dense (size() x size())
-  virtual bool has_jacobian() const { return false; }
-  virtual void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const;
-
-  // optional sparse Jacobian with a pattern that never changes (CSC); CVODE uses KLU with it
-  virtual bool has_sparse_jacobian() const { return false; }
-  virtual void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const;
-
-  // optional projection onto the manifold the exact flow keeps (a rigid body's unit quaternion): the
-  // integrators apply it after every accepted step (hand-written and GSL steppers; CVODE BDF through
-  // CVodeSetProjFn; CVODE Adams has no projection) and count it, keeping any multistep history (the
-  // correction is of the order of the local error); returns whether the system has one (true even where
-  // nothing moved), so an integrator can ask once, on a copy of the initial state, and skip it for good
-  virtual bool project(Eigen::Ref<Eigen::VectorXd> y) const { (void)y; return false; }
-
-  // optional events; an empty span means none
-  virtual std::span<const Event> events() const { return {}; }
-
-  // the shortest time between two zeros of one event's g (a bouncing ball's shortest flight): adaptive
-  // integrators step at most half of it, so a step never jumps over a pair of crossings and the ball
-  // never passes through the floor unseen
-  virtual double event_free_interval() const { return std::numeric_limits<double>::infinity(); }
-
-  // the capability of this type the system offers (solvers/capabilities/), or null; a model answers with
-  // offer(), a method asks with as<T>()
+  // the capability of this type the system offers (the optional parts below, solvers/capabilities/), or null; a
+  // model answers with offer(), a method asks with as<T>()
   virtual const void* capability(const std::type_info& type) const { (void)type; return nullptr; }
   template <class Capability>
   const Capability* as() const { return static_cast<const Capability*>(capability(typeid(Capability))); }
 };
+
+// The optional parts of a system, each a capability: a model derives from the interface and offers itself as it
+// (offer(type, as_part<DenseJacobian>(*this)), below), a method asks with system.as<DenseJacobian>().
+
+// the analytic Jacobian df/dy, dense (size() x size())
+class DenseJacobian {
+ public:
+  virtual ~DenseJacobian() = default;
+  virtual void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const = 0;
+};
+
+// the Jacobian df/dy sparse, with a pattern that never changes (CSC); CVODE uses KLU with it
+class SparseJacobian {
+ public:
+  virtual ~SparseJacobian() = default;
+  virtual void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const = 0;
+};
+
+// a projection onto the manifold the exact flow keeps (a rigid body's unit quaternion, the ground a cloth may not
+// pass): the integrators apply it after every accepted step (hand-written and GSL steppers; CVODE BDF through
+// CVodeSetProjFn; CVODE Adams has none) and count it, keeping any multistep history (the correction is of the
+// order of the local error)
+class Projection {
+ public:
+  virtual ~Projection() = default;
+  virtual void project(Eigen::Ref<Eigen::VectorXd> y) const = 0;
+};
+
+// events g(t, y) = 0 and what happens at them
+class EventSource {
+ public:
+  virtual ~EventSource() = default;
+  virtual std::span<const Event> events() const = 0;
+  // the shortest time between two zeros of one event's g (a bouncing ball's shortest flight): adaptive
+  // integrators step at most half of it, so a step never jumps over a pair of crossings and the ball
+  // never passes through the floor unseen
+  virtual double event_free_interval() const { return std::numeric_limits<double>::infinity(); }
+};
+
+// a system's events (none where it offers no EventSource) and their shortest event-free interval
+inline std::span<const Event> events_of(const OdeSystem& system) {
+  const auto* source = system.as<EventSource>();
+  return source ? source->events() : std::span<const Event>{};
+}
+inline double event_free_interval_of(const OdeSystem& system) {
+  const auto* source = system.as<EventSource>();
+  return source ? source->event_free_interval() : std::numeric_limits<double>::infinity();
+}
 
 // a model's answer to capability(type): whichever of the capabilities it offers has that type, else null
 template <class... Capabilities>
@@ -91,6 +117,13 @@ const void* offer(const std::type_info& type, const Capabilities&... offered) {
   const void* found = nullptr;
   ((found = found ? found : type == typeid(Capabilities) ? static_cast<const void*>(&offered) : nullptr), ...);
   return found;
+}
+
+// a system's own part (an interface it derives from: DenseJacobian, EventSource, ...) as offer() takes it:
+// offer(type, second_order_, as_part<DenseJacobian>(*this))
+template <class Part, class System>
+const Part& as_part(const System& system) {
+  return system;
 }
 
 // what a method needs of a system beyond f: one capability, by type, and what it is in words (for the

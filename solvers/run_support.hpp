@@ -11,34 +11,26 @@
 namespace stepwise {
 
 // forwards to a system and counts every call of f in Stats; backends see only this wrapper. Capabilities
-// are passed through untouched (as<T>() reaches the model's): a method that evaluates forces through one
-// counts that call itself, with the helpers below. Jacobian evaluations are counted by the caller, analytic
-// or finite-difference alike.
-class CountedSystem final : public OdeSystem {
+// are passed through untouched (as<T>() reaches the model's), but for the projection, which this wrapper offers
+// in the model's place to count it: a method that evaluates forces through one counts that call itself, with
+// the helpers below. Jacobian evaluations are counted by the caller, analytic or finite-difference alike.
+class CountedSystem final : public OdeSystem, public Projection {
  public:
-  CountedSystem(const OdeSystem& inner, Stats& stats) : inner_(inner), stats_(stats) {}
+  CountedSystem(const OdeSystem& inner, Stats& stats) : inner_(inner), stats_(stats), projection_(inner.as<Projection>()) {}
   int size() const override { return inner_.size(); }
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     ++stats_.rhs_evals;
     inner_.rhs(t, y, dydt);
   }
   bool autonomous() const override { return inner_.autonomous(); }
-  bool has_jacobian() const override { return inner_.has_jacobian(); }
-  void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
-    inner_.jacobian(t, y, dfdy);
+  void project(Eigen::Ref<Eigen::VectorXd> y) const override {
+    projection_->project(y);
+    ++stats_.projections;
   }
-  bool has_sparse_jacobian() const override { return inner_.has_sparse_jacobian(); }
-  void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
-    inner_.sparse_jacobian(t, y, dfdy);
+  const void* capability(const std::type_info& type) const override {
+    if (type == typeid(Projection)) return projection_ ? static_cast<const Projection*>(this) : nullptr;
+    return inner_.capability(type);
   }
-  std::span<const Event> events() const override { return inner_.events(); }
-  bool project(Eigen::Ref<Eigen::VectorXd> y) const override {
-    const bool projected = inner_.project(y);
-    if (projected) ++stats_.projections;
-    return projected;
-  }
-  double event_free_interval() const override { return inner_.event_free_interval(); }
-  const void* capability(const std::type_info& type) const override { return inner_.capability(type); }
   Stats& stats() const { return stats_; }
   // the wrapped system, for a backend's hot path that counts its calls itself
   const OdeSystem& inner() const { return inner_; }
@@ -46,6 +38,7 @@ class CountedSystem final : public OdeSystem {
  private:
   const OdeSystem& inner_;
   Stats& stats_;
+  const Projection* projection_;
 };
 
 // a = dv/dt of a second-order system (n entries), counted as one call of f: the model's own acceleration
@@ -73,7 +66,7 @@ inline void force_jacobians(const CountedSystem& system, const MassSpringView& v
 // the largest step an adaptive integrator may take on this system: the control's cap, and half the
 // shortest event-free interval
 inline double max_adaptive_step(const StepControl& control, const OdeSystem& system) {
-  return std::min(control.max_step, 0.5 * system.event_free_interval());
+  return std::min(control.max_step, 0.5 * event_free_interval_of(system));
 }
 
 // |y|inf above which a run has blown up: blowup * max(1, |y0|inf), from y0 or its norm

@@ -90,9 +90,9 @@ StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::Vecto
 
 std::optional<double> fastest_decay(const OdeSystem& system, double t, const Eigen::VectorXd& y, int largest) {
   const int n = system.size();
-  if (!system.has_jacobian() || n > largest) return std::nullopt;
+  if (!system.as<DenseJacobian>() || n > largest) return std::nullopt;
   Eigen::MatrixXd j(n, n);
-  system.jacobian(t, y, j);
+  system.as<DenseJacobian>()->jacobian(t, y, j);
   if (!j.allFinite()) return std::nullopt;
   const Eigen::VectorXcd lambda = Eigen::EigenSolver<Eigen::MatrixXd>(j, false).eigenvalues();
   double fastest = 0;

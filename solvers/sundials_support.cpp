@@ -40,7 +40,7 @@ void with_diagonal(Eigen::SparseMatrix<double>& J) {
 
 void evaluate_sparse(const Callbacks& c, double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& J) {
   if (c.split) c.split->implicit_jacobian(t, y, J);
-  else c.system->sparse_jacobian(t, y, J);
+  else c.system->as<SparseJacobian>()->sparse_jacobian(t, y, J);
 }
 
 }  // namespace
@@ -87,7 +87,7 @@ int dense_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user_
   auto& c = *static_cast<Callbacks*>(user_data);
   const auto n = static_cast<Eigen::Index>(N_VGetLength(y));
   c.jac.resize(n, n);
-  c.system->jacobian(t, view(y), c.jac);
+  c.system->as<DenseJacobian>()->jacobian(t, view(y), c.jac);
   ++c.system->stats().jac_evals;
   // SUNDIALS dense matrices are column-major, like Eigen's default
   Eigen::Map<Eigen::MatrixXd>(SUNDenseMatrix_Data(J), n, n) = c.jac;
@@ -111,7 +111,7 @@ int sparse_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user
 int roots(sunrealtype t, N_Vector y, sunrealtype* gout, void* user_data) {
   const auto& c = *static_cast<Callbacks*>(user_data);
   const Eigen::VectorXd state = view(y);
-  const auto events = c.system->events();
+  const auto events = events_of(*c.system);
   for (size_t i = 0; i < events.size(); ++i) gout[i] = events[i].g(t, state);
   return 0;
 }
@@ -132,7 +132,7 @@ SUNMatrix sparse_matrix(const Callbacks& c, SUNContext context) {
 
 void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double t0, std::span<const double> t_out,
                  const StepControl& control, RunResult& result) {
-  const auto events = callbacks.system->events();
+  const auto events = events_of(*callbacks.system);
   std::vector<int> found(events.size());
   const auto n = static_cast<Eigen::Index>(callbacks.system->size());  // the state, leading y (IDA's unknowns go on)
   Eigen::Map<Eigen::VectorXd> ym(N_VGetArrayPointer(y), n);

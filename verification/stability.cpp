@@ -78,7 +78,7 @@ std::optional<std::complex<double>> stability_function(std::string_view method, 
 namespace {
 
 // y' = z y in real pairs: y = (Re, Im), f = (a y0 - b y1, b y0 + a y1)
-class ComplexScalar final : public OdeSystem {
+class ComplexScalar final : public OdeSystem, public DenseJacobian {
  public:
   explicit ComplexScalar(std::complex<double> z) : z_(z) {}
   int size() const override { return 2; }
@@ -87,10 +87,10 @@ class ComplexScalar final : public OdeSystem {
     f[0] = z_.real() * y[0] - z_.imag() * y[1];
     f[1] = z_.imag() * y[0] + z_.real() * y[1];
   }
-  bool has_jacobian() const override { return true; }
   void jacobian(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::MatrixXd> j) const override {
     j << z_.real(), -z_.imag(), z_.imag(), z_.real();
   }
+  const void* capability(const std::type_info& type) const override { return offer(type, as_part<DenseJacobian>(*this)); }
 
  private:
   std::complex<double> z_;

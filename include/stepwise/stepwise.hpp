@@ -4,8 +4,9 @@
 //
 //   the method table and making an integrator by name   solvers/method_table.hpp: methods(), find_method(),
 //                                                        make_integrator(name, StepControl)
-//   a user's own system and what it may offer           solvers/ode_system.hpp: OdeSystem (size, rhs, the
-//                                                        optional Jacobians, events, projection);
+//   a user's own system and what it may offer           solvers/ode_system.hpp: OdeSystem (size, rhs,
+//                                                        autonomous) and the optional parts it may offer:
+//                                                        DenseJacobian, SparseJacobian, EventSource, Projection;
 //                                                        solvers/capabilities/second_order.hpp: y = (x, v)
 //   a run: step control, counters, result               solvers/integrator.hpp: StepControl::fixed/adaptive,
 //                                                        Integrator::integrate, RunResult, Stats, Status

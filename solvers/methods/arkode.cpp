@@ -119,7 +119,7 @@ class ArkodeIntegrator final : public Integrator {
     VectorPtr y;
     if (const int code = serial_state(y0, context, y)) return setup_failed("SUNContext_Create", code);
     const double max_step = max_adaptive_step(control_, system);
-    const auto events = system.events();
+    const auto events = events_of(system);
     std::vector<int> directions;
     for (const auto& e : events) directions.push_back(e.direction);
 
@@ -158,7 +158,7 @@ class ArkodeIntegrator final : public Integrator {
       linear.reset(embedded_solver(&embedded, context.get()));
       if (!linear) return setup_failed("SUNLinSolNewEmpty", ARK_MEM_FAIL);
       if (const int code = ARKStepSetLinearSolver(m, linear.get(), nullptr)) return setup_failed("ARKStepSetLinearSolver", code);
-    } else if (implicit && (imex || system.has_sparse_jacobian())) {
+    } else if (implicit && (imex || system.as<SparseJacobian>())) {
       initial_pattern(callbacks, t0, y0);
       matrix.reset(sparse_matrix(callbacks, context.get()));
       linear.reset(SUNLinSol_KLU(y.get(), matrix.get(), context.get()));
@@ -172,7 +172,7 @@ class ArkodeIntegrator final : public Integrator {
       matrix.reset(SUNDenseMatrix(n, n, context.get()));
       linear.reset(SUNLinSol_Dense(y.get(), matrix.get(), context.get()));
       if (const int code = ARKStepSetLinearSolver(m, linear.get(), matrix.get())) return setup_failed("ARKStepSetLinearSolver", code);
-      if (system.has_jacobian()) {
+      if (system.as<DenseJacobian>()) {
         if (const int code = ARKStepSetJacFn(m, sundials::dense_jacobian)) return setup_failed("ARKStepSetJacFn", code);
       }
     }
@@ -196,7 +196,7 @@ class ArkodeIntegrator final : public Integrator {
       result.stats.factorizations += setups;
       result.stats.linear_solves += iterations;
       // analytic Jacobians are counted in the callbacks; difference-quotient ones only by ARKODE
-      if (implicit && !imex && !system.has_jacobian() && !system.has_sparse_jacobian()) result.stats.jac_evals += jacobians;
+      if (implicit && !imex && !system.as<DenseJacobian>() && !system.as<SparseJacobian>()) result.stats.jac_evals += jacobians;
     };
     const Driver driver{
         .method = name,

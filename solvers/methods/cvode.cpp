@@ -39,7 +39,7 @@ int cvode_projection(sunrealtype, N_Vector ycur, N_Vector corr, sunrealtype, N_V
   const auto n = static_cast<Eigen::Index>(N_VGetLength(ycur));
   const Eigen::Map<const Eigen::VectorXd> y(N_VGetArrayPointer(ycur), n);
   c.projected = y;
-  c.system->project(c.projected);
+  c.system->as<Projection>()->project(c.projected);
   Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(corr), n) = c.projected - y;
   return 0;
 }
@@ -85,7 +85,7 @@ class CvodeIntegrator final : public Integrator {
     if (!bdf_) {
       nonlinear.reset(SUNNonlinSol_FixedPoint(y.get(), 0, context.get()));
       if (const int code = CVodeSetNonlinearSolver(mem.get(), nonlinear.get())) return setup_failed("CVodeSetNonlinearSolver", code);
-    } else if (system.has_sparse_jacobian()) {
+    } else if (system.as<SparseJacobian>()) {
       initial_pattern(callbacks, t0, y0);
       matrix.reset(sparse_matrix(callbacks, context.get()));
       linear.reset(SUNLinSol_KLU(y.get(), matrix.get(), context.get()));
@@ -99,19 +99,19 @@ class CvodeIntegrator final : public Integrator {
       matrix.reset(SUNDenseMatrix(n, n, context.get()));
       linear.reset(SUNLinSol_Dense(y.get(), matrix.get(), context.get()));
       if (const int code = CVodeSetLinearSolver(mem.get(), linear.get(), matrix.get())) return setup_failed("CVodeSetLinearSolver", code);
-      if (system.has_jacobian()) {
+      if (system.as<DenseJacobian>()) {
         if (const int code = CVodeSetJacFn(mem.get(), sundials::dense_jacobian)) return setup_failed("CVodeSetJacFn", code);
       }
     }
 
     // projection after each step, where the system has one: CVODE supports it for BDF only
-    if (Eigen::VectorXd probe = y0; bdf_ && system.project(probe)) {
+    if (bdf_ && system.as<Projection>()) {
       if (const int code = CVodeSetProjFn(mem.get(), cvode_projection)) return setup_failed("CVodeSetProjFn", code);
       if (const int code = CVodeSetProjErrEst(mem.get(), SUNFALSE)) return setup_failed("CVodeSetProjErrEst", code);
     }
 
     // events: CVODE's rootfinding with each event's direction; after a root, the handler and a re-initialisation
-    const auto events = system.events();
+    const auto events = events_of(system);
     if (!events.empty()) {
       std::vector<int> directions;
       for (const auto& e : events) directions.push_back(e.direction);
@@ -133,7 +133,7 @@ class CvodeIntegrator final : public Integrator {
       CVodeGetNumNonlinSolvIters(mem.get(), &iterations);
       CVodeGetNumJacEvals(mem.get(), &fd_jacobians);
       // analytic Jacobians are counted in the callbacks; difference-quotient ones only by CVODE
-      if (!system.has_jacobian() && !system.has_sparse_jacobian()) result.stats.jac_evals += fd_jacobians;
+      if (!system.as<DenseJacobian>() && !system.as<SparseJacobian>()) result.stats.jac_evals += fd_jacobians;
       result.stats.factorizations += setups;
       result.stats.linear_solves += iterations;
     };

@@ -114,7 +114,7 @@ class SparseNewtonMatrix final : public NewtonMatrix {
  public:
   explicit SparseNewtonMatrix(const CountedSystem& s) : system_(s) {}
   bool factor(double t, const Eigen::VectorXd& y, double h) override {
-    system_.sparse_jacobian(t, y, jac_);
+    system_.as<SparseJacobian>()->sparse_jacobian(t, y, jac_);
     ++system_.stats().jac_evals;
     ++system_.stats().factorizations;
     Eigen::SparseMatrix<double> identity(jac_.rows(), jac_.cols());
@@ -174,7 +174,7 @@ constexpr int sparse_from = 64;
 
 // sparse LU on a large system's pattern, fixed-size LU on 2 to 4 unknowns, else dense LU
 std::unique_ptr<NewtonMatrix> newton_matrix_for(const CountedSystem& s) {
-  if (s.has_sparse_jacobian() && s.size() >= sparse_from) return std::make_unique<SparseNewtonMatrix>(s);
+  if (s.as<SparseJacobian>() && s.size() >= sparse_from) return std::make_unique<SparseNewtonMatrix>(s);
   if (s.size() == 2) return std::make_unique<SmallNewtonMatrix<2>>(s);
   if (s.size() == 3) return std::make_unique<SmallNewtonMatrix<3>>(s);
   if (s.size() == 4) return std::make_unique<SmallNewtonMatrix<4>>(s);

@@ -57,7 +57,7 @@ TEST(Springs, TheChainsSparseJacobianMatchesCentralDifferences) {
     Eigen::VectorXd y = model->initial_state();
     for (Eigen::Index i = 0; i < y.size(); ++i) y[i] += (i < y.size() / 2 ? spread : 1.0) * u(rng);
     Eigen::SparseMatrix<double> sparse;
-    model->sparse_jacobian(0, y, sparse);
+    model->as<SparseJacobian>()->sparse_jacobian(0, y, sparse);
     const Eigen::MatrixXd analytic = Eigen::MatrixXd(sparse);
     // springs 0.1 m long put third derivatives of f at ~c/(m L^2) = 1e5 against |J| ~ 1e3: plain central
     // differences truncate at ~1e-6 of |J| there, so the columns are Richardson-extrapolated from steps h

@@ -162,7 +162,7 @@ TEST(EquationEvents, AnEventAtTheStartDoesNotFireUnlessItCrosses) {
     const bool fixed = std::string_view(method) == "rk4";
     const RunResult r = run(*model, method, fixed ? StepControl::fixed(0.1) : StepControl::adaptive(1e-8, 1e-10), {1.0});
     ASSERT_EQ(r.events.size(), 1u) << method;
-    EXPECT_EQ(model->events()[r.events[0].event].name, "half") << method;
+    EXPECT_EQ(events_of(*model)[r.events[0].event].name, "half") << method;
     EXPECT_NEAR(r.events[0].t, 0.5, 1e-9) << method;
   }
 }
@@ -188,7 +188,7 @@ action = { seen = "10*seen + 2" }
   for (const char* method : {"rk4", "euler"}) {
     const RunResult r = run(*model, method, StepControl::fixed(1.0), {1.0});
     ASSERT_EQ(r.events.size(), 2u) << method;
-    EXPECT_EQ(model->events()[r.events[0].event].name, "b") << method;
+    EXPECT_EQ(events_of(*model)[r.events[0].event].name, "b") << method;
     EXPECT_NEAR(r.events[0].t, 0.2, tolerance::event_time_located(1.0)) << method;
     EXPECT_NEAR(r.events[1].t, 0.3, tolerance::event_time_located(1.0)) << method;
     EXPECT_EQ(r.y_stop[1], 21.0) << method << ": b's action, then a's";

@@ -9,6 +9,7 @@
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -117,14 +118,14 @@ TEST_F(Equations, CompiledAndInterpretedAgreeToTheBitAndTheJacobianIsTheDerivati
       interpreted->rhs(t, y, f2);
       for (int i = 0; i < n; ++i) EXPECT_EQ(f1[i], f2[i]) << name << " f[" << i << "]";  // the same operations in the same order
       Eigen::MatrixXd j1(n, n), j2(n, n), fd(n, n);
-      compiled->jacobian(t, y, j1);
-      interpreted->jacobian(t, y, j2);
+      compiled->as<DenseJacobian>()->jacobian(t, y, j1);
+      interpreted->as<DenseJacobian>()->jacobian(t, y, j2);
       EXPECT_EQ(j1, j2) << name;
       fd_jacobian(*compiled, t, y, fd);
       EXPECT_LE((j1 - fd).cwiseAbs().maxCoeff(), tolerance::jacobian_fd * (1 + j1.cwiseAbs().maxCoeff())) << name << "\n" << j1 << "\n" << fd;
       // the sparse Jacobian is the dense one on its pattern
       Eigen::SparseMatrix<double> sparse;
-      compiled->sparse_jacobian(t, y, sparse);
+      compiled->as<SparseJacobian>()->sparse_jacobian(t, y, sparse);
       EXPECT_EQ(Eigen::MatrixXd(sparse), j1) << name;
     }
   }
@@ -177,7 +178,7 @@ TEST_F(Equations, WhatTheModelKnowsOfItself) {
   EXPECT_EQ(equations_evaluation(*lorenz)->second_order, 0);
   // Lorenz's Jacobian: x' = sigma (y - x) does not depend on z, z' = x y - beta z: 2 zeros off the diagonal
   Eigen::SparseMatrix<double> j;
-  lorenz->sparse_jacobian(0, lorenz->initial_state(), j);
+  lorenz->as<SparseJacobian>()->sparse_jacobian(0, lorenz->initial_state(), j);
   EXPECT_EQ(j.nonZeros(), 8);
   const auto dp = make_equations(spec_of("double-pendulum"), {});
   EXPECT_EQ(equations_evaluation(*dp)->second_order, 2);
@@ -332,7 +333,10 @@ TEST_F(Equations, AnObjectThatDoesNotLoadSaysWhy) {
 TEST_F(Equations, AHangingCompilerIsStoppedAndTheInterpreterRuns) {
   const std::string hanging = (cache_.dir / "hanging-cc").string();
   std::filesystem::create_directories(cache_.dir);
-  std::ofstream(hanging) << "#!/bin/sh\nsleep 300 &\nwait\n";
+  // its child sleeps for a time no other process on the machine is likely to (300 s and this process's id in
+  // microseconds), so that the look for it below finds it alone
+  const std::string sleep_for = fmt::format("300.{:06d}", ::getpid() % 1000000);
+  std::ofstream(hanging) << "#!/bin/sh\nsleep " << sleep_for << " &\nwait\n";
   ::chmod(hanging.c_str(), 0700);
   ::setenv("STEPWISE_CC", hanging.c_str(), 1);
   EquationsOptions options;
@@ -345,11 +349,12 @@ TEST_F(Equations, AHangingCompilerIsStoppedAndTheInterpreterRuns) {
   // the script's sleep was in the compiler's process group: gone with it (a zombie has no command line). SIGKILL
   // is delivered asynchronously: on a loaded machine (the suite in parallel) the process can still be listed for
   // a moment after the group was killed, so it is looked for until it is gone, within a hang bound of 10 s
-  const auto sleeping = [] {
+  const std::string command = "sleep" + std::string(1, '\0') + sleep_for + std::string(1, '\0');
+  const auto sleeping = [&command] {
     for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
       std::ifstream in(entry.path() / "cmdline", std::ios::binary);
       const std::string line((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      if (line == std::string("sleep\0" "300\0", 10)) return true;
+      if (line == command) return true;
     }
     return false;
   };

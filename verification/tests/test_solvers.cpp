@@ -31,11 +31,10 @@ class SelfCounting final : public OdeSystem {
     ++calls;
     model_.rhs(t, y, f);
   }
-  bool has_jacobian() const override { return !hide_ && model_.has_jacobian(); }
-  void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> J) const override {
-    model_.jacobian(t, y, J);
+  const void* capability(const std::type_info& type) const override {
+    if (type == typeid(InlineRhs) || (hide_ && type == typeid(DenseJacobian))) return nullptr;
+    return model_.capability(type);
   }
-  const void* capability(const std::type_info& type) const override { return type == typeid(InlineRhs) ? nullptr : model_.capability(type); }
   mutable long calls = 0;
 
  private:
@@ -70,8 +69,6 @@ class WithoutInlineF final : public OdeSystem {
     model_.rhs(t, y, f);
   }
   bool autonomous() const override { return model_.autonomous(); }
-  bool has_jacobian() const override { return model_.has_jacobian(); }
-  void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> J) const override { model_.jacobian(t, y, J); }
   const void* capability(const std::type_info& type) const override { return type == typeid(InlineRhs) ? nullptr : model_.capability(type); }
   mutable long calls = 0;
 
@@ -113,14 +110,16 @@ TEST(Solvers, AStepperCallingTheModelsFInlineTakesTheSameStepsAndCountsAsThrough
 }
 
 // the model with an event that never fires (g = 1): the fixed-step loop then takes every step itself
-class WithIdleEvent final : public OdeSystem {
+class WithIdleEvent final : public OdeSystem, public EventSource {
  public:
   explicit WithIdleEvent(const Model& m) : model_(m) { event_.push_back({"never", 0, [](double, const Eigen::VectorXd&) { return 1.0; }, {}}); }
   int size() const override { return model_.size(); }
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) const override { model_.rhs(t, y, f); }
   bool autonomous() const override { return model_.autonomous(); }
   std::span<const Event> events() const override { return event_; }
-  const void* capability(const std::type_info& type) const override { return model_.capability(type); }
+  const void* capability(const std::type_info& type) const override {
+    return type == typeid(EventSource) ? &as_part<EventSource>(*this) : model_.capability(type);
+  }
 
  private:
   const Model& model_;
@@ -169,18 +168,18 @@ TEST(Solvers, TheSteppersOwnRunOfStepsIsTheLoopsStepByStep) {
 }
 
 // the flow field (x, y, sin x) offering its Jacobian as a sparse matrix, so that CVODE BDF takes its KLU path
-class SparseFlow final : public OdeSystem {
+class SparseFlow final : public OdeSystem, public SparseJacobian {
  public:
   explicit SparseFlow(const Model& m) : model_(m) {}
   int size() const override { return model_.size(); }
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) const override { model_.rhs(t, y, f); }
-  bool has_sparse_jacobian() const override { return true; }
   void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& J) const override {
     Eigen::MatrixXd dense(size(), size());
-    model_.jacobian(t, y, dense);
+    model_.as<DenseJacobian>()->jacobian(t, y, dense);
     J = dense.sparseView();
     ++sparse_calls;
   }
+  const void* capability(const std::type_info& type) const override { return offer(type, as_part<SparseJacobian>(*this)); }
   mutable long sparse_calls = 0;
 
  private:

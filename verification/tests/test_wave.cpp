@@ -285,7 +285,7 @@ TEST(Wave, SparseJacobianMatchesCentralDifferences) {
   y.head(49) = random_wave_field(7, 1.0, 9);
   y.tail(49) = random_wave_field(7, 1.0, 10);
   Eigen::SparseMatrix<double> sparse;
-  model->sparse_jacobian(0, y, sparse);
+  model->as<SparseJacobian>()->sparse_jacobian(0, y, sparse);
   Eigen::MatrixXd fd(model->size(), model->size());
   fd_jacobian(*model, 0, y, fd);
   const Eigen::MatrixXd analytic(sparse);
