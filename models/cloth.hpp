@@ -17,7 +17,7 @@
 // scene's [pins] table: nodes = [[row, column], ...]; with pin_corners = 0, those alone). Pinned nodes are not part
 // of the state: a spring to one is a spring from a fixed anchor.
 //
-// Obstacles: a sphere and the ground plane y = ground_y. After each step (OdeSystem::project) a node
+// Obstacles: a sphere and the ground plane y = ground_y. After each step (its Projection capability) a node
 // inside one is put back on its surface and, if moving into it, given the plane response of the
 // collisions issue (models/plane_collision.hpp) without restitution, with Coulomb friction.
 //

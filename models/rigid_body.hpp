@@ -10,7 +10,7 @@
 //   I dw/dt = (I w) x w - c I w + r x (R^T f)      (Euler's equations, I = diag(I1, I2, I3); c = angular_drag,
 //                                                    1/s; f applied at the body point r)
 // R is the rotation of q / |q|: the right-hand side is defined off the unit sphere, and every integrator
-// takes q back to it after each step (OdeSystem::project; counted as `projections`).
+// takes q back to it after each step (its Projection capability; counted as `projections`).
 // Energy: m |v|^2 / 2 + w^T I w / 2 + m g z. The world angular momentum L = R I w is conserved without
 // torque; summary.json's final_state carries it as Lx, Ly, Lz beside the state.
 //

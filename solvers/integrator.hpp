@@ -68,7 +68,7 @@ struct Stats {
   long linear_solves = 0;   // solves with a factorised Newton matrix
   long factorizations = 0;  // factorisations of a Newton matrix
   long events = 0;          // events handled
-  long projections = 0;     // projections onto the system's manifold (OdeSystem::project)
+  long projections = 0;     // projections onto the system's manifold (the Projection capability)
   long contact_sweeps = 0;  // Gauss-Seidel sweeps over contacts (solvers/contact_solve.hpp)
   double cpu_seconds = 0;   // thread CPU time of the integration
   // the members, to copy a result between processes (report/pack.hpp)
