@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """stepwise.solve_ivp against scipy.integrate.solve_ivp, at equal error (issue 38).
 
-usage: PYTHONPATH=build/release/python /usr/bin/python3 bench/python_vs_scipy.py [--quick]
+usage: PYTHONPATH=build/release/python /usr/bin/python3 bench/python_vs_scipy.py [--quick] [--events-only]
 
 Per problem (the pendulum at 170 degrees, Lorenz, Van der Pol mu = 1; Van der Pol mu = 1000 over one relaxation cycle, t = 2000, for the stiff
 methods against Radau, BDF and LSODA), each method is swept over rtol (thirds of a decade, atol = rtol 1e-3) and
@@ -24,8 +24,13 @@ import stepwise
 
 parser = argparse.ArgumentParser()
 parser.add_argument("--quick", action="store_true", help="fewer repeats and tolerances (a smoke run)")
+parser.add_argument("--events-only", action="store_true", help="the bouncing ball's table alone")
 args = parser.parse_args()
-REPEATS = 1 if args.quick else 5
+REPEATS = 1 if args.quick else 3
+# each method's sweep is run PASSES times, the methods of both sides taken in turn in each pass, and each point's
+# time is the least over the passes: this machine's speed drifts by up to 2x over seconds, so a side swept once
+# may land in a slow phase the other side's sweep missed (its own repeats, back to back, would not tell)
+PASSES = 1 if args.quick else 3
 ERRORS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9]
 
 
@@ -78,13 +83,16 @@ def timed(solve):
     return best, sol
 
 
-def sweep(solve, reference):
+def sweep(solve, reference, read=None):
     """[(error, seconds, nfev)] over rtol 1e-2 .. 1e-11 in thirds of a decade, stopping once an error is below
-    the smallest asked"""
+    the smallest asked. Only solve(rtol) is timed; read(its result), where given, makes what is measured of it
+    (an object with success, y[:, -1] and nfev) outside the timing"""
     points = []
     for k in range(0, 28 if not args.quick else 28, 1 if not args.quick else 2):
         rtol = 10 ** (-2 - k / 3)
         seconds, sol = timed(lambda: solve(rtol))
+        if read:
+            sol = read(sol)
         if not sol.success:
             continue
         err = float(np.max(np.abs(sol.y[:, -1] - reference)))
@@ -92,6 +100,21 @@ def sweep(solve, reference):
         if err < ERRORS[-1] / 3 or seconds > 5:
             break
     return points
+
+
+def sweep_all(solves, reference):
+    """{method: sweep points} for {method: solve(rtol), or (solve, read) as sweep() takes them}, over PASSES
+    passes (each taking every method in turn), each point's time the least of its passes' (the errors and calls
+    are the same in every pass)"""
+    curves = {}
+    for _ in range(PASSES):
+        for method, entry in solves.items():
+            solve, read = entry if isinstance(entry, tuple) else (entry, None)
+            points = sweep(solve, reference, read)
+            if method in curves and len(curves[method]) == len(points):
+                points = [(e, min(c, c0), n) for (e, c, n), (_, c0, _) in zip(points, curves[method])]
+            curves[method] = points
+    return curves
 
 
 def cost_at(points, target):
@@ -125,24 +148,28 @@ def compare(e, scipy_curves, python_curves, compiled_curves):
 
 
 def per_call(fun, y0):
-    n = 20000
+    """the Python fun's own cost a call: the least of five means over 4000 calls, as the solves' times are least
+    ones (a single mean, in a slow phase, would put the fun's share of a solve over 100%)"""
     y = np.array(y0, dtype=float)
-    start = time.perf_counter()
-    for _ in range(n):
-        fun(0.0, y)
-    return (time.perf_counter() - start) / n
+    best = math.inf
+    for _ in range(5):
+        start = time.perf_counter()
+        for _ in range(4000):
+            fun(0.0, y)
+        best = min(best, (time.perf_counter() - start) / 4000)
+    return best
 
 
-print(f"stepwise {stepwise.__version__}; SciPy {scipy.__version__}; NumPy {np.__version__}; repeats {REPEATS}")
+print(f"stepwise {stepwise.__version__}; SciPy {scipy.__version__}; NumPy {np.__version__}; repeats {REPEATS}, passes {PASSES}")
 summary = []
-for name, fun, jac, equations, t_end, y0, ours, theirs, ref_method in PROBLEMS:
+for name, fun, jac, equations, t_end, y0, ours, theirs, ref_method in [] if args.events_only else PROBLEMS:
     ref = scipy.integrate.solve_ivp(fun, (0, t_end), y0, method=ref_method, rtol=1e-13, atol=1e-15, jac=jac).y[:, -1]
-    scipy_curves = {m: sweep(lambda rtol, m=m: scipy.integrate.solve_ivp(fun, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3,
-                                                                        **({"jac": jac} if jac and m != "RK45" else {})), ref) for m in theirs}
-    python_curves = {m: sweep(lambda rtol, m=m: stepwise.solve_ivp(fun, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3, jac=jac), ref)
-                     for m in ours}
-    compiled_curves = {m: sweep(lambda rtol, m=m: stepwise.solve_ivp(equations, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3), ref)
-                       for m in ours}
+    curves = sweep_all({**{("scipy", m): lambda rtol, m=m: scipy.integrate.solve_ivp(fun, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3,
+                                                                                   **({"jac": jac} if jac and m != "RK45" else {})) for m in theirs},
+                        **{("python", m): lambda rtol, m=m: stepwise.solve_ivp(fun, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3, jac=jac) for m in ours},
+                        **{("compiled", m): lambda rtol, m=m: stepwise.solve_ivp(equations, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3) for m in ours}},
+                       ref)
+    scipy_curves, python_curves, compiled_curves = ({m: p for (side, m), p in curves.items() if side == s} for s in ("scipy", "python", "compiled"))
     call = per_call(fun, y0)
     print(f"\n{name} (t_end {t_end}; the Python fun costs {call * 1e6:.2f} us a call)")
     print(f"{'error':>7} | {'SciPy best':>22} | {'stepwise, Python fun':>24} {'ratio':>6} {'fun share':>9} | {'stepwise, compiled':>24} {'ratio':>7}")
@@ -205,18 +232,26 @@ class Impacts:
         self.nfev = nfev
 
 
-def compiled_impacts(method, rtol):
-    # the run ends at the fifth impact's time plus a little: the impact times come from the solve's own events
-    sol = stepwise.solve_ivp(ball_equations, (0, reference_impacts[-1] + 0.05), [1.0, 0.0], method=method, rtol=rtol, atol=rtol * 1e-3,
-                             t_eval=[reference_impacts[-1] + 0.05])
+reference_impacts = bounce_loop(scipy.integrate.solve_ivp, "DOP853", 1e-13)
+ref = np.array(reference_impacts)
+# the compiled run ends at the fifth impact's time plus a little: the impact times are the solve's own events
+T_END = reference_impacts[-1] + 0.05
+
+
+def compiled_bounces(method, rtol):
+    return stepwise.solve_ivp(ball_equations, (0, T_END), [1.0, 0.0], method=method, rtol=rtol, atol=rtol * 1e-3, t_eval=[T_END])
+
+
+def compiled_impacts(sol):
     return Impacts(list(sol.equation_events["floor"][0]), sol.nfev)
 
 
-reference_impacts = bounce_loop(scipy.integrate.solve_ivp, "DOP853", 1e-13)
-ref = np.array(reference_impacts)
-scipy_curves = {m: sweep(lambda rtol, m=m: Impacts(bounce_loop(scipy.integrate.solve_ivp, m, rtol)), ref) for m in ["RK45", "DOP853", "LSODA"]}
-python_curves = {m: sweep(lambda rtol, m=m: Impacts(bounce_loop(stepwise.solve_ivp, m, rtol)), ref) for m in ["verner98", "tsitouras54"]}
-compiled_curves = {m: sweep(lambda rtol, m=m: compiled_impacts(m, rtol), ref) for m in ["verner98", "tsitouras54"]}
+# each side's solve timed alone: the loops of restarts are SciPy's and the Python fun's solve; the impacts' array
+# made of a result is not timed on any side
+curves = sweep_all({**{("scipy", m): (lambda rtol, m=m: bounce_loop(scipy.integrate.solve_ivp, m, rtol), Impacts) for m in ["RK45", "DOP853", "LSODA"]},
+                    **{("python", m): (lambda rtol, m=m: bounce_loop(stepwise.solve_ivp, m, rtol), Impacts) for m in ["verner98", "tsitouras54"]},
+                    **{("compiled", m): (lambda rtol, m=m: compiled_bounces(m, rtol), compiled_impacts) for m in ["verner98", "tsitouras54"]}}, ref)
+scipy_curves, python_curves, compiled_curves = ({m: p for (side, m), p in curves.items() if side == s} for s in ("scipy", "python", "compiled"))
 print(f"\nbouncing ball with drag, {BOUNCES} impacts: the largest impact-time error")
 print(f"{'error':>7} | {'SciPy best':>22} | {'stepwise, Python fun':>24} {'ratio':>6} | {'stepwise, compiled':>24} {'ratio':>7}")
 event_ratios = []
@@ -231,6 +266,8 @@ print(f"events, at equal impact-time error, SciPy's best / stepwise's best: Pyth
       f"{min(r for r, _ in event_ratios if r):.1f}-{max(r for r, _ in event_ratios if r):.1f}x, compiled "
       f"{min(r for _, r in event_ratios if r):.0f}-{max(r for _, r in event_ratios if r):.0f}x")
 
+if not summary:
+    sys.exit(0)
 python_ratios = [r for _, _, r, _ in summary if r]
 compiled_ratios = [r for _, _, _, r in summary if r]
 print(f"\nat equal error, SciPy's best / stepwise's best: Python fun {min(python_ratios):.1f}-{max(python_ratios):.1f}x, "

@@ -4,6 +4,7 @@
 #include "solvers/capabilities/inline_rhs.hpp"
 #include "solvers/capabilities/second_order.hpp"
 
+#include <boost/container/small_vector.hpp>
 #include <fmt/format.h>
 #include <ginac/ginac.h>
 
@@ -121,6 +122,20 @@ double* scratch(int depth) {
   if (stack.size() < static_cast<size_t>(depth)) stack.resize(static_cast<size_t>(depth));
   return stack.data();
 }
+
+// a tape's stack: on the caller's stack where the tapes are shallow (most are), else the thread's scratch. A
+// thread_local in a shared library is reached through __tls_get_addr, as costly as an event's one-line tape,
+// which a solve runs at every step
+class TapeStack {
+ public:
+  explicit TapeStack(int depth) : data_(depth <= on_stack ? local_.data() : scratch(depth)) {}
+  double* get() { return data_; }
+
+ private:
+  static constexpr int on_stack = 32;
+  std::array<double, on_stack> local_;
+  double* data_;
+};
 
 // the largest system whose compiled f a stepper calls inline (solvers/capabilities/inline_rhs.hpp)
 constexpr size_t max_inline_size = 4;
@@ -796,7 +811,8 @@ class Equations final : public Model, public DenseJacobian, public SparseJacobia
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     if (const NativeFn native = native_rhs_.load(std::memory_order_acquire)) native(t, y.data(), p_.data(), dydt.data());
     else {
-      double* stack = scratch(depth_);
+      TapeStack tape_stack(depth_);
+      double* stack = tape_stack.get();
       for (size_t i = 0; i < rhs_.size(); ++i) dydt[static_cast<Eigen::Index>(i)] = run(rhs_[i], t, y.data(), p_.data(), stack);
     }
     if (!flag_names_.empty()) hold(y, [&](int variable) { dydt[variable] = 0; });
@@ -833,13 +849,13 @@ class Equations final : public Model, public DenseJacobian, public SparseJacobia
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
     if (!energy_) return std::nullopt;
-    return run(*energy_, 0, y.data(), p_.data(), scratch(depth_));
+    return run(*energy_, 0, y.data(), p_.data(), TapeStack(depth_).get());
   }
   bool has_exact() const override { return !exact_.empty() && evaluation_.exact_note.empty(); }
   Eigen::VectorXd exact(double t) const override {
     if (exact_.empty()) return Model::exact(t);
     Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
-    for (size_t i = 0; i < exact_.size(); ++i) y[static_cast<Eigen::Index>(i)] = run(exact_[i], t, nullptr, p_.data(), scratch(depth_));
+    for (size_t i = 0; i < exact_.size(); ++i) y[static_cast<Eigen::Index>(i)] = run(exact_[i], t, nullptr, p_.data(), TapeStack(depth_).get());
     return y;
   }
   const void* capability(const std::type_info& type) const override {
@@ -859,7 +875,8 @@ class Equations final : public Model, public DenseJacobian, public SparseJacobia
   void jacobian_values(double t, const double* y, double* values) const {
     const JacobianTapes& J = jacobian_tapes();
     if (const NativeFn native = native_jacobian_.load(std::memory_order_acquire)) return native(t, y, J.p.data(), values);
-    double* stack = scratch(J.depth);
+    TapeStack tape_stack(J.depth);
+    double* stack = tape_stack.get();
     for (size_t k = 0; k < J.tapes.size(); ++k) values[k] = run(J.tapes[k], t, y, J.p.data(), stack);
   }
   // the Jacobian, made on first use: by the constructor for a small system; for a large one by the background
@@ -974,7 +991,7 @@ std::vector<const Formula*> Equations::make_tapes(const EquationsSpec& spec) {
   make_events(spec);
   // the derived slots, from the parameters (each reads parameters and numbers only)
   for (const Tape& t : derived.tapes) depth_ = std::max(depth_, t.depth);
-  for (const Tape& t : derived.tapes) p_.push_back(run(t, 0, nullptr, p_.data(), scratch(depth_)));
+  for (const Tape& t : derived.tapes) p_.push_back(run(t, 0, nullptr, p_.data(), TapeStack(depth_).get()));
   for (const auto* tapes : {&rhs_, &exact_})
     for (const Tape& t : *tapes) depth_ = std::max(depth_, t.depth);
   if (energy_) depth_ = std::max(depth_, energy_->depth);
@@ -1045,12 +1062,12 @@ void Equations::make_events(const EquationsSpec& spec) {
     events_[k].g = [this, k](double t, const Eigen::VectorXd& y) {
       const EventTapes& e = event_tapes_[k];
       if (e.flag >= 0 && y[e.flag] != 0) return 1.0;  // disarmed: at rest
-      return run(e.g, t, y.data(), p_.data(), scratch(depth_));
+      return run(e.g, t, y.data(), p_.data(), TapeStack(depth_).get());
     };
     events_[k].rate = [this, k](double t, const Eigen::VectorXd& y) {
       const EventTapes& e = event_tapes_[k];
       if (e.flag >= 0 && y[e.flag] != 0) return 0.0;
-      return run(e.rate, t, y.data(), p_.data(), scratch(depth_));
+      return run(e.rate, t, y.data(), p_.data(), TapeStack(depth_).get());
     };
     events_[k].apply = [this, k](double t, Eigen::VectorXd& y) { return fire(event_tapes_[k], t, y); };
   }
@@ -1061,7 +1078,8 @@ void Equations::make_events(const EquationsSpec& spec) {
 // an event's handler: its rest rule tested and its action's formulas all evaluated on the state at the event,
 // then written
 std::string Equations::fire(const EventTapes& e, double t, Eigen::VectorXd& y) const {
-  double* stack = scratch(depth_);
+  TapeStack tape_stack(depth_);
+  double* stack = tape_stack.get();
   if (e.rest) {
     const double left = run(e.rest->first, t, y.data(), p_.data(), stack), right = run(e.rest->second, t, y.data(), p_.data(), stack);
     const bool rests = e.comparison == "<" ? left < right : e.comparison == "<=" ? left <= right : e.comparison == ">" ? left > right : left >= right;
@@ -1071,8 +1089,7 @@ std::string Equations::fire(const EventTapes& e, double t, Eigen::VectorXd& y) c
       return "rest";
     }
   }
-  thread_local std::vector<double> values;
-  values.clear();
+  boost::container::small_vector<double, 4> values;
   for (const auto& [variable, tape] : e.action) values.push_back(run(tape, t, y.data(), p_.data(), stack));
   for (size_t i = 0; i < values.size(); ++i) y[e.action[i].first] = values[i];
   return "crossing";
@@ -1098,7 +1115,8 @@ void Equations::find_second_order() {
 void Equations::check_start(const EquationsSpec& spec, const std::vector<const Formula*>& formula_of) {
   const size_t n = names_.size();
   {
-    double* stack = scratch(depth_);
+    TapeStack tape_stack(depth_);
+  double* stack = tape_stack.get();
     for (size_t i = 0; i < n; ++i)
       if (const double v = run(rhs_[i], 0, y0_.data(), p_.data(), stack); !std::isfinite(v))
         throw BadEquations(fmt::format("{}: the formula is {} at the initial state (t = 0, {})", formula_of[i]->where(), v, [&] {
@@ -1201,7 +1219,7 @@ void Equations::make_jacobian(bool ginac_held) const {
   for (const Tape& t : J->tapes) J->depth = std::max(J->depth, t.depth);
   for (size_t k = J->p.size() - static_cast<size_t>(w.derived.first_slot); k < w.derived.tapes.size(); ++k) {
     J->depth = std::max(J->depth, w.derived.tapes[k].depth);
-    J->p.push_back(run(w.derived.tapes[k], 0, nullptr, J->p.data(), scratch(J->depth)));
+    J->p.push_back(run(w.derived.tapes[k], 0, nullptr, J->p.data(), TapeStack(J->depth).get()));
   }
   jacobian_ = std::move(J);
   std::unique_lock lock(ginac_mutex, std::defer_lock);

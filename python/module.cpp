@@ -170,8 +170,12 @@ class ReleasedSystem final : public OdeSystem, public DenseJacobian, public Spar
 // rising event in t is a falling one in s when integrating backwards)
 class EventfulSystem final : public OdeSystem, public EventSource {
  public:
-  EventfulSystem(const OdeSystem& inner, const py::list& events, double sign, bool released) : inner_(inner) {
-    for (const Event& e : events_of(inner)) {
+  EventfulSystem(const OdeSystem& inner, const py::list& events, double sign, bool released) : inner_(inner), own_events_(events_of(inner)) {
+    own_ = own_events_.size();
+    // forwards in time with no events of Python's: the system's own, as they are (no copy; a solve of a few
+    // microseconds would spend one on copying them)
+    if (sign > 0 && events.empty()) return;
+    for (const Event& e : own_events_) {
       Event mapped = e;
       mapped.g = [g = e.g, sign](double s, const Eigen::VectorXd& y) { return g(sign * s, y); };
       if (e.rate) mapped.rate = [rate = e.rate, sign](double s, const Eigen::VectorXd& y) { return sign * rate(sign * s, y); };
@@ -179,7 +183,6 @@ class EventfulSystem final : public OdeSystem, public EventSource {
       mapped.direction = static_cast<int>(sign) * e.direction;
       events_.push_back(std::move(mapped));
     }
-    own_ = events_.size();
     const int n = inner.size();
     for (size_t k = 0; k < events.size(); ++k) {
       py::object g = events[k];
@@ -216,7 +219,7 @@ class EventfulSystem final : public OdeSystem, public EventSource {
   int size() const override { return inner_.size(); }
   bool autonomous() const override { return inner_.autonomous(); }
   void rhs(double s, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override { inner_.rhs(s, y, dydt); }
-  std::span<const Event> events() const override { return events_; }
+  std::span<const Event> events() const override { return events_.empty() ? own_events_ : std::span<const Event>(events_); }
   // its events in place of the system's; the system's other capabilities (its Jacobians) as they are
   const void* capability(const std::type_info& type) const override {
     return type == typeid(EventSource) ? &as_part<EventSource>(*this) : inner_.capability(type);
@@ -224,7 +227,8 @@ class EventfulSystem final : public OdeSystem, public EventSource {
 
  private:
   const OdeSystem& inner_;
-  std::vector<Event> events_;
+  std::span<const Event> own_events_;  // the system's own
+  std::vector<Event> events_;          // its own mapped to s and Python's, or empty: its own as they are
   size_t own_ = 0;
 };
 
@@ -316,7 +320,13 @@ Equations equations_from_scene(const std::string& file, bool compile) {
   return Equations(*scene.equations, {}, compile);
 }
 
-py::array_t<double> vector_array(const std::vector<double>& v) { return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data()); }
+// made empty and filled: pybind11's constructor from a pointer makes the array twice (one over the pointer, then
+// its copy), 2.7 times the instructions
+py::array_t<double> vector_array(const std::vector<double>& v) {
+  py::array_t<double> a(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), a.mutable_data());
+  return a;
+}
 
 // samples as an (n, N) array, SciPy's layout: one row a component, one column a time; or (N, n), one row a time
 py::array_t<double> columns_array(const std::vector<Eigen::VectorXd>& samples, py::ssize_t n, bool row_a_time = false) {
@@ -328,16 +338,30 @@ py::array_t<double> columns_array(const std::vector<Eigen::VectorXd>& samples, p
   return a;
 }
 
+// the keys of solve()'s result, made once rather than 19 strings a call (a compiled solve takes a few
+// microseconds). Never destroyed: they would outlive the interpreter
+struct SolveKeys {
+  py::str t{"t"}, y{"y"}, status{"status"}, message{"message"}, t_stop{"t_stop"}, t_events{"t_events"}, y_events{"y_events"},
+      own_events{"own_events"}, terminated{"terminated"}, stats{"stats"}, method{"method"};
+  py::str steps{"steps"}, rejected{"rejected"}, rhs_evals{"rhs_evals"}, jac_evals{"jac_evals"}, linear_solves{"linear_solves"},
+      factorizations{"factorizations"}, events{"events"}, projections{"projections"};
+};
+const SolveKeys& keys() {
+  static const SolveKeys* made = new SolveKeys();
+  return *made;
+}
+
 py::dict stats_dict(const Stats& s) {
+  const SolveKeys& k = keys();
   py::dict d;
-  d["steps"] = s.steps;
-  d["rejected"] = s.rejected;
-  d["rhs_evals"] = s.rhs_evals;
-  d["jac_evals"] = s.jac_evals;
-  d["linear_solves"] = s.linear_solves;
-  d["factorizations"] = s.factorizations;
-  d["events"] = s.events;
-  d["projections"] = s.projections;
+  d[k.steps] = s.steps;
+  d[k.rejected] = s.rejected;
+  d[k.rhs_evals] = s.rhs_evals;
+  d[k.jac_evals] = s.jac_evals;
+  d[k.linear_solves] = s.linear_solves;
+  d[k.factorizations] = s.factorizations;
+  d[k.events] = s.events;
+  d[k.projections] = s.projections;
   return d;
 }
 
@@ -362,9 +386,9 @@ void put_events(py::dict& d, const EventfulSystem& system, const RunResult& r, d
       y_events.append(rows);
     }
   }
-  d["t_events"] = t_events;
-  d["y_events"] = y_events;
-  d["own_events"] = own_events;
+  d[keys().t_events] = t_events;
+  d[keys().y_events] = y_events;
+  d[keys().own_events] = own_events;
 }
 
 // solve_ivp's compiled half (the untimed solve(): a caller times it as it likes; the thread CPU clock's two reads
@@ -449,20 +473,21 @@ py::dict solve(const py::object& fun, double t0, double t1, const py::array_t<do
     r.y_stop = y0;
   } else if (equations) {
     py::gil_scoped_release released;
-    r = make_integrator(method->name, control)->solve(*system, sign * t0, state0, s_out);
+    r = method->make(*method, control)->solve(*system, sign * t0, state0, s_out);  // (checked above: not looked up again)
   } else {
-    r = make_integrator(method->name, control)->solve(*system, sign * t0, state0, s_out);
+    r = method->make(*method, control)->solve(*system, sign * t0, state0, s_out);
   }
+  const SolveKeys& k = keys();
   py::dict d;
-  d["t"] = vector_array(t_done);
-  d["y"] = columns_array(y_done, n);
-  d["status"] = std::string(to_string(r.status));
-  d["message"] = r.message;
-  d["t_stop"] = sign * r.t_stop;
+  d[k.t] = vector_array(t_done);
+  d[k.y] = columns_array(y_done, n);
+  d[k.status] = std::string(to_string(r.status));
+  d[k.message] = r.message;
+  d[k.t_stop] = sign * r.t_stop;
   put_events(d, *system, r, sign, n);
-  d["terminated"] = r.terminated;
-  d["stats"] = stats_dict(r.stats);
-  d["method"] = std::string(method->name);
+  d[k.terminated] = r.terminated;
+  d[k.stats] = stats_dict(r.stats);
+  d[k.method] = std::string(method->name);
   return d;
 }
 

@@ -109,6 +109,9 @@ _SCIPY_CLOSEST = {
 _SCIPY_NO_EFFECT = {"first_step", "min_step", "jac_sparsity", "lband", "uband"}
 
 
+_FLOAT64 = np.dtype(np.float64)
+
+
 def _number(name, value):
     if type(value) is float:  # the common case, checked first: a solve's own cost is a few microseconds
         return value
@@ -184,7 +187,8 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
     callables g(t, y) with SciPy's ``terminal`` and ``direction`` attributes, located on the method's solution
     (``t_events``, ``y_events``). dense_output: ``sol`` (a StepSolution). vectorized: fun is called with
     y of shape (n, 1). A reversed t_span integrates backwards."""
-    options = dict(options)
+    # (options is this call's own dict: popped as read. The checks below take the common case first, as a solve
+    # of a compiled system costs a few microseconds)
     rtol = _number("rtol", options.pop("rtol", 1e-3))
     atol = options.pop("atol", 1e-6)
     scale = None  # atol per component: the system is solved in z = y / scale, with one atol (see below)
@@ -248,11 +252,13 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
         raise ValueError("args: an Equations system takes its parameters when it is made (Equations(..., parameters=...))")
 
     try:
-        t0, t1 = (_number("t_span", t) for t in t_span)
+        t0, t1 = t_span
+        t0, t1 = _number("t_span", t0), _number("t_span", t1)
     except ValueError as e:
         raise ValueError(f"t_span must be two numbers (t0, t1), not {t_span!r}") from e
-    y0 = np.asarray(y0)
-    if y0.dtype != np.float64:
+    if type(y0) is not np.ndarray:
+        y0 = np.asarray(y0)
+    if y0.dtype is not _FLOAT64 and y0.dtype != _FLOAT64:
         if y0.dtype.kind == "c":
             raise TypeError("y0: complex states are not supported; split them into real and imaginary parts")
         try:
@@ -262,7 +268,8 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
     if y0.ndim != 1:
         raise ValueError(f"`y0` must be 1-dimensional, not of shape {y0.shape}.")
     if t_eval is not None:
-        t_eval = np.asarray(t_eval, dtype=float)
+        if type(t_eval) is not np.ndarray or t_eval.dtype is not _FLOAT64:
+            t_eval = np.asarray(t_eval, dtype=float)
         if t_eval.ndim != 1:
             raise ValueError("`t_eval` must be 1-dimensional.")
     if scale is not None:

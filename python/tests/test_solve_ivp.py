@@ -333,6 +333,25 @@ def test_equations_take_events_in_the_scene_files_layout():
         stepwise.Equations({"y": "1"}, events={"e": {"when": "y", "direction": "down"}})
 
 
+def test_an_equations_own_events_and_python_events_are_found_backwards():
+    # thrown up at 5 m/s from the floor at t = 0, read back from t = 1: its apex (v = 0) at 5/g, and the height
+    # 1 m at the roots of g t^2/2 - 5 t + 1 = 0, the later first. The system's own event alone, and beside a
+    # Python event (its own are then mapped to reversed time with the Python one)
+    g = 9.81
+    ball = stepwise.Equations({"y": "v", "v": "-g"}, parameters={"g": g}, events={"apex": {"when": "v", "direction": "falling"}})
+    at_one = [5.0 - g / 2, 5.0 - g]
+    height = lambda t, y: y[0] - 1.0  # noqa: E731
+    roots = [(5 + np.sqrt(25 - 2 * g)) / g, (5 - np.sqrt(25 - 2 * g)) / g]
+    for events in (None, height):
+        sol = stepwise.solve_ivp(ball, (1.0, 0.0), at_one, rtol=1e-10, atol=1e-12, events=events)
+        apex = sol.equation_events["apex"][0]
+        assert sol.success and len(apex) == 1 and abs(apex[0] - 5 / g) < 1e-9, (events, apex)
+        assert abs(sol.y[0, -1]) < 1e-9 and abs(sol.y[1, -1] - 5.0) < 1e-9
+        if events:
+            assert np.allclose(sol.t_events[0], roots, atol=1e-9, rtol=0), sol.t_events
+            assert np.allclose(sol.y_events[0][:, 0], 1.0, atol=1e-9, rtol=0)
+
+
 def test_a_scene_runs_events_into_its_summary_and_trajectory():
     r = stepwise.run("bouncing-ball-equations")
     events = r.summary["events"]
