@@ -102,30 +102,34 @@ def sweep(solve, reference, read=None):
     return points
 
 
-def sweep_all(solves, reference):
+def sweep_all(solves, reference, probe=None):
     """{method: sweep points} for {method: solve(rtol), or (solve, read) as sweep() takes them}, over PASSES
     passes (each taking every method in turn), each point's time the least of its passes' (the errors and calls
-    are the same in every pass)"""
+    are the same in every pass); and probe() (a time), where given, run in each pass too: the least of them"""
     curves = {}
+    probed = math.inf
     for _ in range(PASSES):
+        if probe:
+            probed = min(probed, probe())
         for method, entry in solves.items():
             solve, read = entry if isinstance(entry, tuple) else (entry, None)
             points = sweep(solve, reference, read)
             if method in curves and len(curves[method]) == len(points):
                 points = [(e, min(c, c0), n) for (e, c, n), (_, c0, _) in zip(points, curves[method])]
             curves[method] = points
-    return curves
+    return (curves, probed) if probe else curves
 
 
-def cost_at(points, target):
-    """the cost at error `target` on the curve (log-log interpolation between the first pair of successive
-    points that brackets it), or None where the sweep never reached it"""
-    for (e1, c1, _), (e2, c2, _) in zip(points, points[1:]):
+def cost_at(points, target, column=1):
+    """the cost (column 1: seconds; 2: calls of f) at error `target` on the curve (log-log interpolation between
+    the first pair of successive points that brackets it), or None where the sweep never reached it"""
+    for p1, p2 in zip(points, points[1:]):
+        e1, c1, e2, c2 = p1[0], p1[column], p2[0], p2[column]
         if e1 >= target >= e2 and e1 > e2:
             w = (math.log(e1) - math.log(target)) / (math.log(e1) - math.log(e2))
             return math.exp(math.log(c1) + w * (math.log(c2) - math.log(c1)))
     if points and points[0][0] <= target:
-        return points[0][1]
+        return points[0][column]
     return None
 
 
@@ -148,8 +152,9 @@ def compare(e, scipy_curves, python_curves, compiled_curves):
 
 
 def per_call(fun, y0):
-    """the Python fun's own cost a call: the least of five means over 4000 calls, as the solves' times are least
-    ones (a single mean, in a slow phase, would put the fun's share of a solve over 100%)"""
+    """the Python fun's own cost a call: the least of five means over 4000 calls (run in each pass of the sweeps,
+    as the solves' times are the least of their passes': timed once, in a slow phase, it would put the fun's
+    share of a solve over 100%)"""
     y = np.array(y0, dtype=float)
     best = math.inf
     for _ in range(5):
@@ -168,9 +173,9 @@ for name, fun, jac, equations, t_end, y0, ours, theirs, ref_method in [] if args
                                                                                    **({"jac": jac} if jac and m != "RK45" else {})) for m in theirs},
                         **{("python", m): lambda rtol, m=m: stepwise.solve_ivp(fun, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3, jac=jac) for m in ours},
                         **{("compiled", m): lambda rtol, m=m: stepwise.solve_ivp(equations, (0, t_end), y0, method=m, rtol=rtol, atol=rtol * 1e-3) for m in ours}},
-                       ref)
+                       ref, probe=lambda: per_call(fun, y0))
+    curves, call = curves
     scipy_curves, python_curves, compiled_curves = ({m: p for (side, m), p in curves.items() if side == s} for s in ("scipy", "python", "compiled"))
-    call = per_call(fun, y0)
     print(f"\n{name} (t_end {t_end}; the Python fun costs {call * 1e6:.2f} us a call)")
     print(f"{'error':>7} | {'SciPy best':>22} | {'stepwise, Python fun':>24} {'ratio':>6} {'fun share':>9} | {'stepwise, compiled':>24} {'ratio':>7}")
     for e in ERRORS:
@@ -181,9 +186,7 @@ for name, fun, jac, equations, t_end, y0, ours, theirs, ref_method in [] if args
         share = ""
         if pm:
             # the calls stepwise's best made near this error: interpolated like the cost
-            pts = python_curves[pm]
-            nfev = next((n for err, _, n in pts if err <= e), pts[-1][2])
-            share = f"{nfev * call / pc:9.0%}"
+            share = f"{cost_at(python_curves[pm], e, column=2) * call / pc:9.0%}"
         print(f"{e:7.0e} | {sm:>10} {sc * 1e3:9.3f} ms | {pm or '-':>12} {(pc or 0) * 1e3:8.3f} ms {pr} {share:>9} | {cm or '-':>12} {(cc or 0) * 1e3:8.4f} ms {cr}")
         summary.append((name, e, sc / pc if pc else None, sc / cc if cc else None))
 
