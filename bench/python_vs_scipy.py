@@ -5,8 +5,9 @@ usage: PYTHONPATH=build/release/python /usr/bin/python3 bench/python_vs_scipy.py
 
 Per problem (the pendulum at 170 degrees, Lorenz, Van der Pol mu = 1; Van der Pol mu = 1000 over one relaxation cycle, t = 2000, for the stiff
 methods against Radau, BDF and LSODA), each method is swept over rtol (thirds of a decade, atol = rtol 1e-3) and
-each solve timed (the best of several, wall clock on this otherwise idle machine) with its error at t_end
-against a reference (SciPy's DOP853, or Radau on the stiff problem, at rtol 1e-13). Each side's cost at an error
+each solve timed (wall clock on this otherwise idle machine: the least over PASSES passes of the best of REPEATS
+means, below) with its error at t_end against a reference (SciPy's DOP853, or Radau on the stiff problem, at
+rtol 1e-13). Last, a ball bouncing with events, each side's impact times against the reference's. Each side's cost at an error
 E is read off its own work-precision curve (log-log interpolation between the two sweep points around E, not
 the nearest tolerance), its best method's; the ratio is SciPy's best over stepwise's best, for a Python fun and for
 the same equations compiled (stepwise.Equations). `fun share` is the time the Python fun alone takes for the
