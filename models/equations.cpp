@@ -1116,7 +1116,7 @@ void Equations::check_start(const EquationsSpec& spec, const std::vector<const F
   const size_t n = names_.size();
   {
     TapeStack tape_stack(depth_);
-  double* stack = tape_stack.get();
+    double* stack = tape_stack.get();
     for (size_t i = 0; i < n; ++i)
       if (const double v = run(rhs_[i], 0, y0_.data(), p_.data(), stack); !std::isfinite(v))
         throw BadEquations(fmt::format("{}: the formula is {} at the initial state (t = 0, {})", formula_of[i]->where(), v, [&] {
