@@ -40,9 +40,8 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-// a point shorter than this is run again (the minimum of three runs): timer resolution and first-touch costs are
-// microseconds, a few percent of a millisecond run
-constexpr double short_run_seconds = 0.05;
+// a short point's runs (least_of_runs)
+constexpr int advise_runs = 3;
 // the share of the budget the sweep may take; the rest is the reference, the spectrum, the reproduction and the
 // outputs (measured: under 5% on the shipped scenes)
 constexpr double sweep_share = 0.8;
@@ -90,12 +89,7 @@ AdvisePoint measure(const Model& model, const Method& method, const StepControl&
     p.rtol = control.rtol;
     p.atol = control.atol;
   }
-  Measured best;
-  for (int run = 0; run < 3; ++run) {
-    Measured m = run_and_measure(model, method.name, control, t_end, t_end);
-    if (run == 0 || m.result.stats.cpu_seconds < best.result.stats.cpu_seconds) best = std::move(m);
-    if (best.result.stats.cpu_seconds > short_run_seconds || best.result.status != Status::ok) break;
-  }
+  const Measured best = least_of_runs(model, method.name, control, t_end, advise_runs);
   p.status = best.result.status;
   p.message = best.result.message;
   p.cpu_seconds = best.result.stats.cpu_seconds;
@@ -146,7 +140,7 @@ std::vector<AdvisePoint> sweep_method(const StudyScene& scene, const Method& met
       control.max_steps = 2'000'000;
     }
     points.push_back(measure(*model, method, control, scene.t_end, reference));
-    spent += points.back().cpu_seconds * (points.back().cpu_seconds > short_run_seconds ? 1 : 3);
+    spent += points.back().cpu_seconds * (points.back().cpu_seconds > short_run_seconds ? 1 : advise_runs);
     if (!met(points.back())) continue;
     // between the last setting that missed and this one: the cheapest that meets it may lie there
     if (k > 0 && stride == 3 && !met(points[points.size() - 2]))

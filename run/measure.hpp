@@ -42,6 +42,13 @@ std::optional<double> exact_error(const Model& model, const RunResult& result, d
 // diverged at t_end, saying so, never `ok` (the one place: run, render, the studies and split runs measure here)
 void measure_error(const Model& model, Measured& m, double t_end);
 
+// a run timed for a comparison of costs: one shorter than short_run_seconds (thread CPU) is run again, up to
+// `runs` times in all, and the least kept. Timer resolution, first-touch costs and an interruption are
+// microseconds to a millisecond: a large share of a run of a few milliseconds, little of a longer one. A run
+// that fails is not run again
+constexpr double short_run_seconds = 0.05;
+Measured least_of_runs(const Model& model, std::string_view method, const StepControl& control, double t_end, int runs);
+
 // |a - b|inf
 double max_norm_error(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 

@@ -7,28 +7,12 @@
 namespace stepwise {
 namespace {
 
-// a run this long (thread CPU seconds) is timed by itself: the timer's resolution and a warm-up's first-touch
-// costs are microseconds, under 0.01% of it, and repeating it would only multiply the sweep's time (its
-// longest points take up to 10 s a run)
-constexpr double long_run_seconds = 0.2;
-
 // a fixed-step point expected to take longer than this (CPU ns, report/cost_model) is left out: a fixed-step
 // method's finest points cost the most and say the least (a slow method's error at a step nobody would pay for;
 // gpu-cloth's float32 errors grow as dt falls, the shear layer's ark324 reaches round-off long before), and the
 // report is promised in 10 minutes on 2 cores (1 minute quick). Fixed-step points only: their steps are known,
 // while an adaptive implicit one's are estimated from rtol alone, up to 10x high on the sheet
 constexpr double point_budget_ns = 3e9, quick_point_budget_ns = 1e9;
-
-// minimum thread CPU time over `repeats` runs after one discarded warm-up run; a long run once
-Measured timed_run(const Model& model, std::string_view method, const StepControl& control, double t_end, int repeats) {
-  Measured best = run_and_measure(model, method, control, t_end, t_end);
-  if (best.result.stats.cpu_seconds > long_run_seconds) return best;
-  for (int r = 0; r < repeats; ++r) {
-    Measured m = run_and_measure(model, method, control, t_end, t_end);
-    if (m.result.stats.cpu_seconds < best.result.stats.cpu_seconds || r == 0) best = std::move(m);
-  }
-  return best;
-}
 
 // what a point measured (the plan says what it ran)
 struct Outcome {
@@ -77,7 +61,7 @@ const WorkPoint* cheapest_reaching(const std::vector<const WorkPoint*>& front, d
 // a point's expected CPU time in nanoseconds (report/cost_model.hpp), the runs repeated when short
 double expected_cost(const WorkPoint& p, double n, int repeats) {
   const double once = expected_run_ns(*p.method, p.control, p.scene->t_end, p.scene->time_scale, n);
-  return once < long_run_seconds * 1e9 ? once * (1 + repeats) : once;
+  return once < short_run_seconds * 1e9 ? once * (1 + repeats) : once;
 }
 
 // the reference states of the scenes without an exact solution (a user's scene's checked by two methods), and
@@ -135,7 +119,7 @@ std::vector<WorkPoint> work_plan(const StudyContext& ctx, const std::vector<Stud
   return plan;
 }
 
-// the plan's points run (timed_run), each with its error against the exact solution or the reference
+// the plan's points run (least_of_runs), each with its error against the exact solution or the reference
 std::vector<WorkPoint> run_plan(const StudyContext& ctx, const std::vector<WorkPoint>& plan, const std::map<const StudyScene*, double>& sizes, int repeats,
                                 const std::map<const StudyScene*, Eigen::VectorXd>& reference) {
   std::vector<std::string> labels;
@@ -149,7 +133,7 @@ std::vector<WorkPoint> run_plan(const StudyContext& ctx, const std::vector<WorkP
   const auto outcomes = ctx.sweep<Outcome>(labels, [&](size_t i) {
     const WorkPoint& p = plan[i];
     const auto model = scene_model(*p.scene);
-    const Measured m = timed_run(*model, p.method->name, p.control, p.scene->t_end, repeats);
+    const Measured m = least_of_runs(*model, p.method->name, p.control, p.scene->t_end, 1 + repeats);
     Outcome o{m.error, static_cast<double>(m.result.stats.rhs_evals), m.result.stats.cpu_seconds, m.result.stats.steps, m.result.status};
     if (!model->has_exact() && m.result.status == Status::ok) o.error = max_norm_error(m.result.y_stop, reference.at(p.scene));
     return o;
