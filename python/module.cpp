@@ -171,7 +171,6 @@ class ReleasedSystem final : public OdeSystem, public DenseJacobian, public Spar
 class EventfulSystem final : public OdeSystem, public EventSource {
  public:
   EventfulSystem(const OdeSystem& inner, const py::list& events, double sign, bool released) : inner_(inner), own_events_(events_of(inner)) {
-    own_ = own_events_.size();
     // forwards in time with no events of Python's: the system's own, as they are (no copy; a solve of a few
     // microseconds would spend one on copying them)
     if (sign > 0 && events.empty()) return;
@@ -214,7 +213,7 @@ class EventfulSystem final : public OdeSystem, public EventSource {
     }
   }
   // which of the events are the system's own (they come first)
-  size_t own() const { return own_; }
+  size_t own() const { return own_events_.size(); }
 
   int size() const override { return inner_.size(); }
   bool autonomous() const override { return inner_.autonomous(); }
@@ -229,7 +228,6 @@ class EventfulSystem final : public OdeSystem, public EventSource {
   const OdeSystem& inner_;
   std::span<const Event> own_events_;  // the system's own
   std::vector<Event> events_;          // its own mapped to s and Python's, or empty: its own as they are
-  size_t own_ = 0;
 };
 
 // a system of equations written as text (models/equations.hpp), parsed, differentiated and compiled once when

@@ -24,8 +24,7 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
   std::string failure;
   const auto events = events_of(system);
   const bool watch_events = !events.empty();
-  const Projection* projection = counted.as<Projection>();  // counted: its calls are
-  const bool projects = projection != nullptr;
+  const Projection* projection = counted.as<Projection>();  // counted: its calls are; null where none
   EventWatch g_start = start_watch(events, t, y);
   // re-steps from the step's start to a fraction of it, for locating an event
   const Restep restep = [&](double s, Eigen::VectorXd& ys) { return stepper->restep(t_start, s * taken, y_start, ys); };
@@ -50,7 +49,7 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
     }
     ++result.stats.steps;
     // back onto the manifold, keeping the stepper's state: the correction is of the order of the local error
-    if (projects) projection->project(y);
+    if (projection) projection->project(y);
     if (has_diverged(y, bound)) {
       mark_diverged(result, t);
       break;

@@ -30,8 +30,7 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
   // what this system and method have, asked once: nothing is done per step for what they lack
   const bool watch_events = !events.empty();
   const bool method_events = stepper->handles_events();
-  const Projection* projection = counted.as<Projection>();  // counted: its calls are
-  const bool projects = projection != nullptr;
+  const Projection* projection = counted.as<Projection>();  // counted: its calls are; null where none
   EventWatch g_start = start_watch(events, t, y);
   // re-steps from the step's start to a fraction of it, for locating an event
   const Restep restep = [&](double s, Eigen::VectorXd& ys) {
@@ -39,7 +38,7 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
     return stepper->step(t, s * h, y, ys, failure);
   };
   // a run with none of these may have the stepper take its full steps itself (FixedStepper::plain_steps)
-  const bool plain = !watch_events && !method_events && !projects && !control_.record_steps;
+  const bool plain = !watch_events && !method_events && !projection && !control_.record_steps;
   bool stop = false;  // a terminal event or Zeno ended the run
   for (const double target : t_out) {
     while (t < target) {
@@ -66,8 +65,8 @@ RunResult FixedStepIntegrator::solve(const OdeSystem& system, double t0, const E
       }
       // back onto the manifold; a multistep history is kept (the correction is of the order of the local
       // error: restarting would drop GSL's multistep methods to order 1 for good, measured)
-      if (projects) projection->project(y_next);
-      const auto norm = projects ? std::nullopt : stepper->last_norm();
+      if (projection) projection->project(y_next);
+      const auto norm = projection ? std::nullopt : stepper->last_norm();
       if (norm ? !(*norm <= bound) : has_diverged(y_next, bound)) [[unlikely]] {
         mark_diverged(result, t_next);
         break;
