@@ -1127,6 +1127,11 @@ void Equations::check_start(const EquationsSpec& spec, const std::vector<const F
     if (energy_)
       if (const double e = run(*energy_, 0, y0_.data(), p_.data(), stack); !std::isfinite(e))
         throw BadEquations(fmt::format("{}: the formula is {} at the initial state", spec.energy->where(), e));
+    // an event whose g is not finite at the start could never be seen to cross
+    for (size_t k = 0; k < event_tapes_.size(); ++k)
+      if (const double g = run(event_tapes_[k].g, 0, y0_.data(), p_.data(), stack); !std::isfinite(g))
+        throw BadEquations(fmt::format("{}: event '{}' is not finite at the initial state ({}): it could never be seen to cross zero",
+                                       spec.events[k].when.where(), spec.events[k].name, g));
   }
   if (!exact_.empty()) {
     const Eigen::VectorXd at0 = exact(0);

@@ -8,6 +8,7 @@
 #include "run/atomic_write.hpp"
 #include "run/csv.hpp"
 #include "run/message.hpp"
+#include "verification/reference.hpp"
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
 
@@ -45,6 +46,9 @@ constexpr int advise_runs = 3;
 // the share of the budget the sweep may take; the rest is the reference, the spectrum, the reproduction and the
 // outputs (measured: under 5% on the shipped scenes)
 constexpr double sweep_share = 0.8;
+// the most of the budget the reference may take (its runs are cut at that deadline, and the advice refused); the
+// sweep then has what is left of its share
+constexpr double reference_share = 0.5;
 // the finest settings swept: rtol 1e-13, or t_end / 2^26 steps
 constexpr int finest_rtol_exponent = 13, finest_halving = 26;
 
@@ -68,12 +72,21 @@ double with_event_error(double state_error, const RunResult& r, const std::vecto
 
 // a scene's own events (a ball that bounces at the wrong time is wrong, so their times count in the error): their
 // times in the reference run; none for a scene without
-std::optional<std::vector<double>> reference_event_times(const Model& model, double t_end) {
+std::optional<std::vector<double>> reference_event_times(const Model& model, double t_end, const ReferenceLimit& limit) {
   const auto events = events_of(model);
   if (std::none_of(events.begin(), events.end(), [](const Event& e) { return !e.surface; })) return std::nullopt;
   const std::vector<double> t_out{t_end};
-  const RunResult r = make_integrator(reference_method, StepControl::adaptive(reference_rtol, 1e-3 * reference_rtol))
+  const auto start = Clock::now();
+  double reached = 0;
+  const RunResult r = make_integrator(reference_method, limited(StepControl::adaptive(reference_rtol, 1e-3 * reference_rtol), std::string(reference_method),
+                                                                t_end, limit, reached))
                           ->integrate(model, 0, model.initial_state(), t_out);
+  if (r.status != Status::ok && Clock::now() > limit.deadline) {
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    throw ReferenceOutOfTime(fmt::format("the reference run for the event times ({} at rtol {:.0e}) reached t = {:.4g} of {:.4g} s in {:.3g} s",
+                                         reference_method, reference_rtol, reached, t_end, seconds),
+                             reached > 0 ? seconds * t_end / reached : std::numeric_limits<double>::infinity());
+  }
   if (r.status != Status::ok) throw std::runtime_error(fmt::format("advise: the reference run for the event times ({}) failed: {}", reference_method, r.message));
   std::vector<double> times;
   for (const auto& e : r.events) times.push_back(e.t);
@@ -242,17 +255,19 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
   advice.budget_seconds = budget_seconds;
   const auto model = scene_model(scene);
 
-  // what the errors are measured against
+  // what the errors are measured against, within the reference's share of the budget (ReferenceOutOfTime past it)
+  const ReferenceLimit limit{start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(reference_share * budget_seconds)),
+                             [](const std::string& line) { fmt::print(stderr, "stepwise advise: {}\n", line); }};
   AdviseReference reference;
   if (model->has_exact()) {
     advice.reference = "the exact solution";
   } else {
-    const Reference r = converged_reference(*model, scene.t_end);
+    const Reference r = converged_reference(*model, scene.t_end, &limit);
     reference.y = r.y;
     advice.reference = r.methods;
     advice.reference_agreement = r.agreement;
   }
-  reference.event_times = reference_event_times(*model, scene.t_end);
+  reference.event_times = reference_event_times(*model, scene.t_end, limit);
   if (reference.event_times) advice.event_count = reference.event_times->size();
   spectrum_along_run(scene, advice);
   // the worst-case spectrum for the stability predictions: the eigenvalues at the start and the fastest decay seen
@@ -491,7 +506,15 @@ int advise_command(const AdviseOptions& o) {
   const StudyScene scene = user_study_scene(o.run, &prepared);
   ensure_writable_directory(o.out);
   const int threads = threads_or_default(o.threads);
-  const Advice a = advise(scene, o.error, o.budget, threads);
+  Advice a;
+  try {
+    a = advise(scene, o.error, o.budget, threads);
+  } catch (const ReferenceOutOfTime& cut) {
+    // nothing written: the errors could not be measured
+    print_error("advise", fmt::format("{}: the converged reference cannot be had within its share ({:.3g} s) of --budget {:g}; about --budget {:.0f} "
+                                      "would do", cut.what(), reference_share * o.budget, o.budget, std::ceil(cut.estimated_seconds / reference_share)));
+    return 1;
+  }
 
   std::string command = fmt::format("stepwise advise {} --error {:g} --budget {:g}", o.run.scene_file, o.error, o.budget);
   for (const auto& s : o.run.sets) command += " --set " + s;

@@ -221,6 +221,21 @@ EventSpec event_spec(const std::string& name, const toml::node& node, const std:
   return e;
 }
 
+// the [events.NAME] tables in the order the file declares them (a TOML table's keys come sorted by name): events at
+// one instant fire in that order
+std::vector<EventSpec> events_in_file_order(const toml::table& events, const std::string& file) {
+  std::vector<std::pair<const toml::node*, std::string>> declared;
+  for (auto&& [name, value] : events) declared.emplace_back(&value, std::string(name.str()));
+  std::stable_sort(declared.begin(), declared.end(), [](const auto& a, const auto& b) {
+    const auto &x = a.first->source().begin, &y = b.first->source().begin;
+    return std::pair(x.line, x.column) < std::pair(y.line, y.column);
+  });
+  std::vector<EventSpec> specs;
+  for (const auto& [node, name] : declared) specs.push_back(event_spec(name, *node, file));
+  return specs;
+}
+
+
 // the equations model's tables: variables, [initial], [equations], [exact], energy, [events.NAME]
 void equations_entry(const std::string& key, const toml::node& node, Scene& scene) {
   if (!scene.equations) scene.equations.emplace();
@@ -247,7 +262,7 @@ void equations_entry(const std::string& key, const toml::node& node, Scene& scen
   if (key == "events") {
     const auto* events = node.as_table();
     if (!events) throw InputError(fmt::format("{}:{}: events: expected tables [events.NAME]", scene.file, line_of(node)));
-    for (auto&& [k, value] : *events) spec.events.push_back(event_spec(std::string(k.str()), value, scene.file));
+    spec.events = events_in_file_order(*events, scene.file);
     return;
   }
   const auto* table = node.as_table();
@@ -300,7 +315,7 @@ std::vector<EventSpec> events_from_toml(std::string_view text, const std::string
     if (k.str() != "events") throw InputError(fmt::format("{}:{}: {}: unknown key (expected [events.NAME] tables)", file, line_of(node), k.str()));
     const auto* table = node.as_table();
     if (!table) throw InputError(fmt::format("{}:{}: events: expected tables [events.NAME]", file, line_of(node)));
-    for (auto&& [name, value] : *table) events.push_back(event_spec(std::string(name.str()), value, file));
+    events = events_in_file_order(*table, file);
   }
   return events;
 }

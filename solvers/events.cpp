@@ -2,6 +2,7 @@
 
 #include "run_support.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -23,30 +24,34 @@ struct SurfaceCrossing {
   double fraction;
 };
 
+// where in the step the linear interpolant of a built-in surface event's g vanishes, from a to b, or nullopt
+// where it does not cross
+std::optional<double> surface_fraction(int direction, double g0, double g1) {
+  // signs as for a falling event; a rising one is the same with g negated
+  const double sign = direction > 0 ? -1.0 : 1.0;
+  const double a = sign * g0, b = sign * g1;
+  if (direction == 0) {
+    // either way through zero
+    if (!((a > 0 && b <= 0) || (a < 0 && b >= 0))) return std::nullopt;
+    return a / (a - b);
+  }
+  // a directed event is a surface the state may not end a step behind (a wall, the ground):
+  // - from the front to or behind it: the crossing of the segment;
+  // - from on it (just after an event) to behind it: it left and came back within the step, a flight
+  //   shorter than the step, and the segment cannot say when: the step's end;
+  // - already behind it (carried there by a step to another event): at once, at the step's start.
+  // A state resting on the surface (g = 0 at both ends) does not cross it.
+  if (!(b < 0 || (a > 0 && b == 0))) return std::nullopt;
+  return a > 0 ? a / (a - b) : a == 0 ? 1.0 : 0.0;
+}
+
 std::optional<SurfaceCrossing> first_surface_crossing(std::span<const Event> events, const Eigen::VectorXd& g0, const Eigen::VectorXd& g1) {
   std::optional<SurfaceCrossing> first;
   for (size_t i = 0; i < events.size(); ++i) {
     if (!events[i].surface) continue;
-    const int d = events[i].direction;
-    // signs as for a falling event; a rising one is the same with g negated
-    const double sign = d > 0 ? -1.0 : 1.0;
-    const double a = sign * g0[static_cast<Eigen::Index>(i)], b = sign * g1[static_cast<Eigen::Index>(i)];
-    double s = 0;
-    if (d == 0) {
-      // either way through zero
-      if (!((a > 0 && b <= 0) || (a < 0 && b >= 0))) continue;
-      s = a / (a - b);
-    } else {
-      // a directed event is a surface the state may not end a step behind (a wall, the ground):
-      // - from the front to or behind it: the crossing of the segment;
-      // - from on it (just after an event) to behind it: it left and came back within the step, a flight
-      //   shorter than the step, and the segment cannot say when: the step's end;
-      // - already behind it (carried there by a step to another event): at once, at the step's start.
-      // A state resting on the surface (g = 0 at both ends) does not cross it.
-      if (!(b < 0 || (a > 0 && b == 0))) continue;
-      s = a > 0 ? a / (a - b) : a == 0 ? 1.0 : 0.0;
-    }
-    if (!first || s < first->fraction) first = SurfaceCrossing{i, s};
+    const auto k = static_cast<Eigen::Index>(i);
+    const auto s = surface_fraction(events[i].direction, g0[k], g1[k]);
+    if (s && (!first || *s < first->fraction)) first = SurfaceCrossing{i, *s};
   }
   return first;
 }
@@ -106,8 +111,8 @@ struct Bracket {
   double s_lo, s_hi, g_lo, g_hi;
 };
 // `fired_rate`: where the event was just handled (the step starts on its level), its g's rate just before the
-// handler; else nullopt
-std::optional<Bracket> sign_change_bracket(const Event& event, std::optional<double> fired_rate, double zero, double t, double h, double a,
+// handler; else null
+std::optional<Bracket> sign_change_bracket(const Event& event, const double* fired_rate, double zero, double t, double h, double a,
                                            double b, const Eigen::VectorXd& y0, const Eigen::VectorXd& y1, const Restep& restep) {
   const int d = event.direction;
   if (crosses(a, b, d)) return Bracket{0, 1, a, b};
@@ -152,6 +157,86 @@ std::optional<Bracket> sign_change_bracket(const Event& event, std::optional<dou
   return std::nullopt;
 }
 
+// an event found inside the step: which, when, the state there, and the size of its g over its bracket (the
+// scale its root's precision is relative to)
+struct Located {
+  size_t index;
+  double t;
+  Eigen::VectorXd y;
+  double scale;
+};
+
+// detect and locate: the earliest built-in surface crossing (the seeds' linear estimate, refined) with every other
+// surface crossing at the same fraction, and each user's event crossing in its direction, on its own bracket
+std::vector<Located> locate_events(std::span<const Event> events, const EventWatch& watch, double t, double h, const Eigen::VectorXd& y_start,
+                                   const Eigen::VectorXd& y, EventLocation location, const Restep& restep) {
+  std::vector<Located> found;
+  const Eigen::VectorXd &g_start = watch.g, &g_end = watch.g_end;
+  if (const auto surface = first_surface_crossing(events, g_start, g_end)) {
+    auto [t_hit, y_hit] = locate_surface(events[surface->index], *surface, t, h, y_start, y, location, restep);
+    for (size_t i = 0; i < events.size(); ++i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      if (!events[i].surface) continue;
+      const auto s = surface_fraction(events[i].direction, g_start[k], g_end[k]);
+      if (s && *s - surface->fraction <= 4 * std::numeric_limits<double>::epsilon()) found.push_back({i, t_hit, y_hit, 0.0});
+    }
+  }
+  for (size_t i = 0; i < events.size(); ++i) {
+    if (events[i].surface) continue;
+    const auto k = static_cast<Eigen::Index>(i);
+    const double zero = watch.zero[k];
+    const double* fired_rate = watch.fired[i] ? &watch.fired_rate[k] : nullptr;
+    const auto bracket = sign_change_bracket(events[i], fired_rate, zero, t, h, g_start[k] - zero, g_end[k] - zero, y_start, y, restep);
+    if (!bracket) continue;
+    Eigen::VectorXd ys = y;
+    const double s = refine(bracket->s_lo, bracket->s_hi, bracket->g_lo, bracket->g_hi, ys, restep,
+                            [&](double f, const Eigen::VectorXd& state) { return events[i].g(t + f * h, state) - zero; }, 1e-15);
+    found.push_back({i, t + s * h, std::move(ys), std::max(std::abs(bracket->g_lo), std::abs(bracket->g_hi))});
+  }
+  return found;
+}
+
+// the instant: the earliest located event (on a tie, the one declared first), and the events that reach zero there
+// (One instant, events.hpp), in the order the system declares them
+std::pair<size_t, std::vector<size_t>> first_instant(std::span<const Event> events, const std::vector<Located>& found, const EventWatch& watch,
+                                                     double t, double h) {
+  size_t first = 0;
+  for (size_t c = 1; c < found.size(); ++c)
+    if (found[c].t < found[first].t || (found[c].t == found[first].t && found[c].index < found[first].index)) first = c;
+  const double eps = std::numeric_limits<double>::epsilon();
+  const Located& at = found[first];
+  const double apart = 2e-15 * h + 2 * eps * std::max(std::abs(t), std::abs(t + h));
+  std::vector<size_t> indices;
+  for (const Located& c : found) {
+    bool there = c.t - at.t <= apart;
+    if (!there && !events[c.index].surface) {
+      const double g = events[c.index].g(at.t, at.y) - watch.zero[static_cast<Eigen::Index>(c.index)];
+      there = std::abs(g) <= 4 * eps * c.scale;
+    }
+    if (there) indices.push_back(c.index);
+  }
+  std::sort(indices.begin(), indices.end());
+  return {first, std::move(indices)};
+}
+
+// re-arm after the handlers: an event just handled sits on its zero, and rounding may leave its g a hair behind, so
+// that the next step would see the same crossing again. A built-in undirected event's g is taken as 0; a user's
+// event measures its next crossing from where its g is now, and remembers its rate at the instant
+void rearm(std::span<const Event> events, EventWatch& watch, std::span<const size_t> fired, const Eigen::VectorXd& rates, double t,
+           const Eigen::VectorXd& y) {
+  event_values(events, t, y, watch.g);
+  for (const size_t i : fired) {
+    const auto k = static_cast<Eigen::Index>(i);
+    if (!events[i].surface) {
+      watch.zero[k] = watch.g[k];
+      watch.fired[i] = 1;
+      watch.fired_rate[k] = rates[k];
+    } else if (events[i].direction == 0) {
+      watch.g[k] = 0;
+    }
+  }
+}
+
 }  // namespace
 
 
@@ -159,6 +244,8 @@ EventWatch start_watch(std::span<const Event> events, double t, const Eigen::Vec
   EventWatch watch;
   event_values(events, t, y, watch.g);
   watch.zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(events.size()));
+  watch.fired.assign(events.size(), 0);
+  watch.fired_rate = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(events.size()));
   return watch;
 }
 
@@ -167,58 +254,47 @@ void event_values(std::span<const Event> events, double t, const Eigen::VectorXd
   for (size_t i = 0; i < events.size(); ++i) g[static_cast<Eigen::Index>(i)] = events[i].g(t, y);
 }
 
+bool handle_events(RunResult& result, std::span<const Event> events, std::span<const size_t> indices, double t, Eigen::VectorXd& y) {
+  bool go_on = true;
+  for (const size_t index : indices) {
+    go_on = handle_event(result, events, index, t, y) && go_on;
+    if (result.status != Status::ok) return false;
+  }
+  if (result.terminated) result.y_stop = y;
+  return go_on;
+}
+
 std::optional<Settled> settle_step_events(std::span<const Event> events, EventWatch& watch, double t, double h,
                                           const Eigen::VectorXd& y_start, Eigen::VectorXd& y, EventLocation location,
                                           const Restep& restep, RunResult& result) {
   if (events.empty() || !(h > 0)) return std::nullopt;
-  Eigen::VectorXd& g_end = watch.g_end;
-  event_values(events, t + h, y, g_end);
-  // the earliest event of the step: each candidate located, the one at the earliest time kept
-  std::optional<size_t> first;
-  double t_first = 0;
-  Eigen::VectorXd y_first;
-  const Eigen::VectorXd& g_start = watch.g;
-  if (const auto surface = first_surface_crossing(events, g_start, g_end)) {
-    std::tie(t_first, y_first) = locate_surface(events[surface->index], *surface, t, h, y_start, y, location, restep);
-    first = surface->index;
-  }
-  for (size_t i = 0; i < events.size(); ++i) {
-    if (events[i].surface) continue;
-    const auto k = static_cast<Eigen::Index>(i);
-    const double zero = watch.zero[k];
-    const auto bracket = sign_change_bracket(events[i], watch.fired == i ? std::optional(watch.fired_rate) : std::nullopt, zero, t, h,
-                                             g_start[k] - zero, g_end[k] - zero, y_start, y, restep);
-    if (!bracket) continue;
-    Eigen::VectorXd ys = y;
-    const double s = refine(bracket->s_lo, bracket->s_hi, bracket->g_lo, bracket->g_hi, ys, restep,
-                            [&](double f, const Eigen::VectorXd& state) { return events[i].g(t + f * h, state) - zero; }, 1e-15);
-    if (!first || t + s * h < t_first) {
-      first = i;
-      t_first = t + s * h;
-      y_first = std::move(ys);
+  event_values(events, t + h, y, watch.g_end);
+  for (size_t i = 0; i < events.size(); ++i)
+    if (const double g = watch.g_end[static_cast<Eigen::Index>(i)]; !std::isfinite(g)) {
+      mark_failed(result, t + h, fmt::format("event '{}' is not finite ({}) at t = {:.9g}: its formula left its domain", events[i].name, g, t + h));
+      return Settled{t + h, false};
     }
-  }
-  watch.zero.setZero();
-  watch.fired.reset();
-  if (!first) {
-    watch.g.swap(g_end);
+  std::vector<Located> found = locate_events(events, watch, t, h, y_start, y, location, restep);
+  const auto disarm = [&] {
+    watch.zero.setZero();
+    std::fill(watch.fired.begin(), watch.fired.end(), 0);
+  };
+  if (found.empty()) {
+    disarm();
+    watch.g.swap(watch.g_end);
     return std::nullopt;
   }
-  const double rate_before = events[*first].rate ? events[*first].rate(t_first, y_first) : 0.0;
-  const bool go_on = handle_event(result, events, *first, t_first, y_first);
-  y = std::move(y_first);
-  event_values(events, t_first, y, watch.g);
-  // an event just handled sits on its zero: rounding may leave its g a hair behind, and the next step would see
-  // the same crossing again. A built-in undirected event's g is taken as 0; a user's event measures its next
-  // crossing from where its g is now
-  const auto k = static_cast<Eigen::Index>(*first);
-  if (!events[*first].surface) {
-    watch.zero[k] = watch.g[k];
-    watch.fired = *first;
-    watch.fired_rate = rate_before;
-  }
-  else if (events[*first].direction == 0) watch.g[k] = 0;
-  return Settled{t_first, go_on};
+  const auto [first, fired] = first_instant(events, found, watch, t, h);
+  disarm();
+  const double t_event = found[first].t;
+  y = std::move(found[first].y);
+  // each user's event's rate as the state arrives at the instant, before any handler
+  Eigen::VectorXd rates = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(events.size()));
+  for (const size_t i : fired)
+    if (!events[i].surface && events[i].rate) rates[static_cast<Eigen::Index>(i)] = events[i].rate(t_event, y);
+  const bool go_on = handle_events(result, events, fired, t_event, y);
+  rearm(events, watch, fired, rates, t_event, y);
+  return Settled{t_event, go_on};
 }
 
 }  // namespace stepwise

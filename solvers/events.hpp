@@ -18,6 +18,7 @@
 
 #include <functional>
 #include <optional>
+#include <vector>
 
 namespace stepwise {
 
@@ -25,16 +26,22 @@ namespace stepwise {
 void event_values(std::span<const Event> events, double t, const Eigen::VectorXd& y, Eigen::VectorXd& g);
 
 // what the event pass keeps between steps: g at the step's start, and the level each event's g is measured from.
-// That is 0, but for a user's event just handled it is g right after the handler: the state sits on the
+// That is 0, but for a user's event just handled it is g right after the handlers: the state sits on the
 // event's zero to the root's precision (a ball at y = -1e-15), and its next crossing is of that level (a
 // flight of 1e-22 m above it is still a flight)
 struct EventWatch {
   Eigen::VectorXd g, zero;
   Eigen::VectorXd g_end;        // scratch: g at the step's end (kept, so that a step allocates nothing)
-  std::optional<size_t> fired;  // the user's event handled at the step's start
-  double fired_rate = 0;        // its g's rate just before its handler
+  std::vector<char> fired;      // the user's events handled at the step's start (one entry an event)
+  Eigen::VectorXd fired_rate;   // each one's g's rate at the instant, before the handlers
 };
 EventWatch start_watch(std::span<const Event> events, double t, const Eigen::VectorXd& y);
+
+// the events that reach zero at one instant t (`indices`, ascending: the order the system declares them), handled
+// there each once, each handler reading the state the previous one left. False when the run ends here: at Zeno
+// (failed, at once), or at a terminal event among them, after the others of the instant have fired too (at one
+// instant no event comes after another), t_stop and y_stop then at the state after them all
+[[nodiscard]] bool handle_events(RunResult& result, std::span<const Event> events, std::span<const size_t> indices, double t, Eigen::VectorXd& y);
 
 // recomputes the state at fraction s of the step from its start; false when the step fails
 using Restep = std::function<bool(double s, Eigen::VectorXd& y)>;
@@ -45,10 +52,16 @@ struct Settled {
   bool go_on;  // false: a terminal event, or Zeno (the result says which)
 };
 
-// After a step (t, y_start) -> (t + h, y): if an event fired inside it (the earliest, where several did), carry
-// y to it, apply its handler (recording what happened in result) and return the event's time; either way
-// the watch moves to the new end of the step. The one event pass of every integrator that steps by itself
-// (fixed-step, GSL, the hand-written adaptive pairs).
+// After a step (t, y_start) -> (t + h, y): if events fired inside it, carry y to the earliest instant one did,
+// apply the handlers of every event that reaches zero at that instant (handle_events: each once, in the order the
+// system declares them), recording what happened in result, and return the instant; either way the watch moves to
+// the new end of the step. An event whose g is not finite at the step's end fails the run there, naming it. The
+// one event pass of every integrator that steps by itself (fixed-step, GSL, the hand-written adaptive pairs).
+//
+// One instant: the roots are found to where g is within 4 eps of the larger of its values at the bracket's ends
+// (or the bracket is 1e-15 of the step wide), so two events whose true roots coincide are located at most
+// 2e-15 h + 2 eps |t| apart (the widths, and the rounding of t + s h). Events located within that of the
+// earliest, or whose g at the earliest's state is within their own 4 eps of zero, fire with it.
 std::optional<Settled> settle_step_events(std::span<const Event> events, EventWatch& watch, double t, double h,
                                           const Eigen::VectorXd& y_start, Eigen::VectorXd& y, EventLocation location,
                                           const Restep& restep, RunResult& result);

@@ -1,5 +1,7 @@
 #include "sundials_support.hpp"
 
+#include "events.hpp"
+
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
@@ -109,10 +111,17 @@ int sparse_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user
 }
 
 int roots(sunrealtype t, N_Vector y, sunrealtype* gout, void* user_data) {
-  const auto& c = *static_cast<Callbacks*>(user_data);
+  auto& c = *static_cast<Callbacks*>(user_data);
   const Eigen::VectorXd state = view(y);
   const auto events = events_of(*c.system);
-  for (size_t i = 0; i < events.size(); ++i) gout[i] = events[i].g(t, state);
+  for (size_t i = 0; i < events.size(); ++i) {
+    gout[i] = events[i].g(t, state);
+    if (!std::isfinite(gout[i])) {
+      c.event_error = fmt::format("event '{}' is not finite ({}) at t = {:.9g}: its formula left its domain", events[i].name, gout[i], t);
+      c.event_error_t = t;
+      return 1;
+    }
+  }
   return 0;
 }
 
@@ -134,6 +143,7 @@ void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double 
                  const StepControl& control, RunResult& result) {
   const auto events = events_of(*callbacks.system);
   std::vector<int> found(events.size());
+  std::vector<size_t> fired;
   const auto n = static_cast<Eigen::Index>(callbacks.system->size());  // the state, leading y (IDA's unknowns go on)
   Eigen::Map<Eigen::VectorXd> ym(N_VGetArrayPointer(y), n);
   const double bound = divergence_bound(control, ym);
@@ -150,10 +160,14 @@ void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double 
         if (has_diverged(ym, bound) || !record_output(result, control, t, ym)) break;
         continue;
       }
+      // every event SUNDIALS found at this root (its rootsfound: all whose g vanishes within its root tolerance),
+      // handled in the order the system declares them
       driver.root_info(found.data());
-      const auto hit = std::find_if(found.begin(), found.end(), [](int r) { return r != 0; });
+      fired.clear();
+      for (size_t i = 0; i < found.size(); ++i)
+        if (found[i] != 0) fired.push_back(i);
       Eigen::VectorXd y_event = ym;
-      stop = !handle_event(result, events, static_cast<size_t>(hit - found.begin()), t, y_event);
+      stop = !handle_events(result, events, fired, t, y_event);
       ym = y_event;
       if (stop) break;
       driver.add_counters();
@@ -171,8 +185,9 @@ void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double 
     if (result.status != Status::ok) break;
     if (code < 0) {
       if (callbacks.non_finite || has_diverged(ym, bound)) mark_diverged(result, t);
-      else mark_failed(result, t, fmt::format("{}: {} returned {} ({}) at t = {:.9g}: {}", driver.method, driver.evolve_call, code,
-                                              driver.flag_name(code), t, callbacks.last_error));
+      else mark_failed(result, callbacks.event_error.empty() ? t : callbacks.event_error_t, fmt::format("{}: {} returned {} ({}) at t = {:.9g}: {}", driver.method, driver.evolve_call, code,
+                                              driver.flag_name(code), t,
+                                              callbacks.event_error.empty() ? callbacks.last_error : callbacks.event_error));
       break;
     }
     if (has_diverged(ym, bound)) {

@@ -51,6 +51,8 @@ struct Callbacks {
   const ImexSplit* split = nullptr;  // an IMEX run: the Jacobian callbacks give df_I/dy
   bool non_finite = false;           // f produced a non-finite value: the run has blown up
   std::string last_error;            // the solver's own message for the last failure
+  std::string event_error;           // an event's g was not finite: which, and when (the failure's reason)
+  double event_error_t = 0;          // that time
   Eigen::MatrixXd jac;               // dense df/dy scratch (n x n), sized by the first dense Jacobian call
   Eigen::SparseMatrix<double> sparse_jac;  // sparse df/dy scratch, fixed pattern
   Eigen::VectorXd projected;         // projection scratch

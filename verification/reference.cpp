@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <limits>
 #include <stdexcept>
 
 namespace stepwise {
@@ -17,7 +18,25 @@ constexpr double explicit_rtol = 1e-13, stiff_rtol = 1e-12;
 
 }  // namespace
 
-Reference converged_reference(const Model& model, double t_end) {
+StepControl limited(StepControl control, std::string method, double t_end, const ReferenceLimit& limit, double& reached) {
+  using Clock = std::chrono::steady_clock;
+  control.record_steps = true;
+  control.sink = [method, t_end, &limit, &reached, said = Clock::now()](double t, const Eigen::VectorXd&) mutable -> std::string {
+    reached = t;
+    const auto now = Clock::now();
+    if (now > limit.deadline) return "out of time";
+    if (limit.progress && now - said > std::chrono::seconds(1)) {
+      said = now;
+      limit.progress(fmt::format("the reference: {} at t = {:.4g} of {:.4g} s", method, t, t_end));
+    }
+    return {};
+  };
+  return control;
+}
+
+Reference converged_reference(const Model& model, double t_end, const ReferenceLimit* limit) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
   struct Pair {
     std::array<const char*, 2> methods;
     double rtol;
@@ -30,7 +49,18 @@ Reference converged_reference(const Model& model, double t_end) {
     std::array<Eigen::VectorXd, 2> y;
     bool finished = true;
     for (size_t k = 0; k < 2 && finished; ++k) {
-      const Measured m = run_and_measure(model, pair.methods[k], control, t_end, t_end);
+      const auto run_start = Clock::now();
+      double reached = 0;
+      const Measured m = run_and_measure(model, pair.methods[k], limit ? limited(control, pair.methods[k], t_end, *limit, reached) : control, t_end, t_end);
+      if (limit && Clock::now() > limit->deadline && m.result.status != Status::ok) {
+        // this run's pace to t_end, and the pair's other run at the same pace where it has yet to run
+        const double run_seconds = std::chrono::duration<double>(Clock::now() - run_start).count();
+        const double spent = std::chrono::duration<double>(Clock::now() - start).count();
+        const double whole_run = reached > 0 ? run_seconds * t_end / reached : std::numeric_limits<double>::infinity();
+        throw ReferenceOutOfTime(fmt::format("the reference ({} at rtol {:.0e}) reached t = {:.4g} of {:.4g} s in {:.3g} s", pair.methods[k], pair.rtol,
+                                             reached, t_end, run_seconds),
+                                 spent - run_seconds + whole_run * static_cast<double>(2 - k));
+      }
       finished = m.result.status == Status::ok;
       if (!finished) why += fmt::format("{}{} at rtol {:.0e}: {}", why.empty() ? "" : "; ", pair.methods[k], pair.rtol, m.result.message);
       y[k] = m.result.y_stop;

@@ -7,7 +7,11 @@
 #pragma once
 
 #include <stepwise/models/model.hpp>
+#include <stepwise/solvers/integrator.hpp>
 
+#include <chrono>
+#include <functional>
+#include <stdexcept>
 #include <string>
 
 namespace stepwise {
@@ -19,7 +23,25 @@ struct Reference {
   bool stiff_pair = false; // the explicit pair could not finish
 };
 
-// the reference of `model` at t_end; std::runtime_error naming the methods where no pair finishes
-Reference converged_reference(const Model& model, double t_end);
+// a deadline for the reference (a budgeted command's share), and where its progress is said while it runs
+struct ReferenceLimit {
+  std::chrono::steady_clock::time_point deadline;
+  std::function<void(const std::string& line)> progress;  // about once a second: which run, how far
+};
+
+// the deadline passed before the reference was had: which run was cut, how far it got, what it had cost
+struct ReferenceOutOfTime : std::runtime_error {
+  ReferenceOutOfTime(const std::string& what, double estimated_seconds) : std::runtime_error(what), estimated_seconds(estimated_seconds) {}
+  double estimated_seconds;  // what the whole reference would take, extrapolated from how far the cut run got
+};
+
+// `control` for a reference run of `method` under `limit`: each step's end goes to a sink that ends the run (as
+// diverged) once the deadline has passed, noting the time reached, and says the progress about once a second. The
+// steps are those taken without it
+StepControl limited(StepControl control, std::string method, double t_end, const ReferenceLimit& limit, double& reached);
+
+// the reference of `model` at t_end; std::runtime_error naming the methods where no pair finishes, and
+// ReferenceOutOfTime where `limit`'s deadline passes first
+Reference converged_reference(const Model& model, double t_end, const ReferenceLimit* limit = nullptr);
 
 }  // namespace stepwise

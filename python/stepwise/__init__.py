@@ -148,6 +148,9 @@ class StepSolution:
         q = ts if self._ascending else -ts
         # the step each time falls in: [ts[k], ts[k + 1]), the last step closed at its end
         k = np.clip(np.searchsorted(key, q, side="right") - 1, 0, max(self.n_segments - 1, 0))
+        # at a step's end, that step's own value (the last step's end too, which no step starts)
+        at_last = (q == key[-1]) if key.size else np.zeros(q.shape, dtype=bool)
+        k[at_last] = key.size - 1
         exact = key[k] == q
         out[:, exact] = self._ys[:, k[exact]]
         for step in np.unique(k[~exact]):
@@ -185,7 +188,9 @@ def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=Fals
     per component), jac (callable or matrix), max_step, and stepwise's dt (a fixed step, which the fixed-step
     methods need) and max_steps. Without t_eval the result holds the steps taken, as SciPy's does. events:
     callables g(t, y) with SciPy's ``terminal`` and ``direction`` attributes, located on the method's solution
-    (``t_events``, ``y_events``). dense_output: ``sol`` (a StepSolution). vectorized: fun is called with
+    (``t_events``, ``y_events``); events reaching zero at one instant are each recorded there once, in the
+    order of the list, and a terminal one among them ends the solve after all of them (SciPy drops those listed
+    after the terminal one; docs/scenes.md#events). dense_output: ``sol`` (a StepSolution). vectorized: fun is called with
     y of shape (n, 1). A reversed t_span integrates backwards."""
     # (options is this call's own dict: popped as read. The checks below take the common case first, as a solve
     # of a compiled system costs a few microseconds)

@@ -1,5 +1,6 @@
 """stepwise.solve_ivp: SciPy's signature and result, every method against an exact solution and against SciPy,
 compiled equations, and what bad input, a raising fun and Ctrl-C do."""
+import math
 import os
 import signal
 import threading
@@ -114,18 +115,28 @@ PENDULUM = {"x": "v", "v": "-g/L*sin(x)"}
 def test_equations_agree_with_the_same_python_fun():
     eq = stepwise.Equations(PENDULUM, parameters={"g": 9.81, "L": 1.0})
     assert eq.variables == ["x", "v"] and eq.compiled, eq.evaluation
-    fun = lambda t, y: [y[1], -9.81 * np.sin(y[0])]  # noqa: E731
-    # explicit methods: the same steps on the same f (a Newton method would differ by its Jacobian, exact against
-    # differences of fun)
+    # libm's sin, which the compiled equations call: the same formula by the same code, so the same steps; and
+    # numpy's, another implementation of sin (its AVX-512 code differs from libm's by up to 3 ulps on some machines),
+    # after which two adaptive runs may take different steps (docs/verification.md#what-is-compared-bitwise)
+    same = lambda t, y: [y[1], -9.81 * math.sin(y[0])]  # noqa: E731
+    other = lambda t, y: [y[1], -9.81 * np.sin(y[0])]  # noqa: E731
+    t_end, rtol = 10.0, 1e-10
+    t_eval = np.linspace(0, t_end, 41)
+    # explicit methods: the same f (a Newton method would differ by its Jacobian, exact against differences of fun)
     for method in ("verner98", "gsl-rk8pd", "odeint-dopri5"):
-        a = stepwise.solve_ivp(eq, (0, 10), [2.9, 0.0], method=method, rtol=1e-10, atol=1e-12)
-        b = stepwise.solve_ivp(fun, (0, 10), [2.9, 0.0], method=method, rtol=1e-10, atol=1e-12)
-        # the same formula evaluated by C and by numpy: a few ulps a call, summed over the run
+        a = stepwise.solve_ivp(eq, (0, t_end), [2.9, 0.0], method=method, rtol=rtol, atol=1e-12, t_eval=t_eval)
+        b = stepwise.solve_ivp(same, (0, t_end), [2.9, 0.0], method=method, rtol=rtol, atol=1e-12, t_eval=t_eval)
+        c = stepwise.solve_ivp(other, (0, t_end), [2.9, 0.0], method=method, rtol=rtol, atol=1e-12, t_eval=t_eval)
+        # the same steps: a few ulps a call, summed over the run
         assert np.max(np.abs(a.y - b.y)) <= tolerance("equations_run_roundoff") * 1e3, method
+        # maybe other steps: each run within its tolerance-proportional global error of the solution (a multiple
+        # of rtol |y| a unit of time), so within twice that of each other, at the same times
+        bound = 2 * tolerance("adaptive_agreement_factor") * rtol * np.max(np.abs(a.y)) * t_end
+        assert np.max(np.abs(a.y - c.y)) <= bound, method
     # second order: symplectic-euler applies to the equations, not to a Python fun
     assert stepwise.solve_ivp(eq, (0, 1), [1.0, 0.0], method="symplectic-euler", dt=1e-3).success
     with pytest.raises(ValueError, match="symplectic-euler"):
-        stepwise.solve_ivp(fun, (0, 1), [1.0, 0.0], method="symplectic-euler", dt=1e-3)
+        stepwise.solve_ivp(other, (0, 1), [1.0, 0.0], method="symplectic-euler", dt=1e-3)
 
 
 def test_equations_from_a_scene_file():
@@ -364,3 +375,109 @@ def test_a_scene_runs_events_into_its_summary_and_trajectory():
         assert r.y[r.names.index("vy"), rows[0]] == e["state"]["vy"]
         assert r.y[r.names.index("vy"), rows[1]] == e["state_after"]["vy"]
     assert np.all(np.diff(r.t) >= 0)
+
+
+# ---- events at one instant (docs/scenes.md#events): each fires once there, in the order of the events list
+
+def _rising(t, y):
+    return y[0] - 0.5
+
+
+def _falling(t, y):
+    return 0.5 - y[0]
+
+
+def _unit_speed(t, y):
+    return [1.0]
+
+
+def _solvers(rtol):
+    """stepwise's methods of each kind for the event cases: a fixed step landing on the instant, an explicit pair, BDF"""
+    return [("rk4", {"dt": 0.1}), ("verner98", {"rtol": rtol, "atol": rtol * 1e-3}), ("tsitouras54", {"rtol": rtol, "atol": rtol * 1e-3}),
+            ("cvode-bdf", {"rtol": rtol, "atol": rtol * 1e-3})]
+
+
+def test_events_at_one_instant_are_each_recorded_as_scipy_records_them():
+    rtol = 1e-9
+    theirs = scipy.integrate.solve_ivp(_unit_speed, (0, 1), [0.0], method="DOP853", rtol=rtol, atol=rtol * 1e-3, events=[_rising, _falling])
+    assert [len(t) for t in theirs.t_events] == [1, 1]
+    for method, options in _solvers(rtol):
+        ours = stepwise.solve_ivp(_unit_speed, (0, 1), [0.0], method=method, events=[_rising, _falling], **options)
+        assert [len(t) for t in ours.t_events] == [1, 1], (method, ours.t_events)
+        for k in range(2):
+            assert abs(ours.t_events[k][0] - theirs.t_events[k][0]) < 100 * rtol, (method, k)
+            assert np.allclose(ours.y_events[k][0], theirs.y_events[k][0], rtol=100 * rtol, atol=100 * rtol)
+
+
+def test_two_balls_falling_together_cross_the_floor_at_one_instant_as_in_scipy():
+    def balls(t, y):
+        return [y[2], y[3], -9.81, -9.81]
+
+    def floor1(t, y):
+        return y[0]
+
+    def floor2(t, y):
+        return y[1]
+
+    floor1.direction = floor2.direction = -1
+    rtol = 1e-9
+    y0 = [1.0, 1.0, 0.0, 0.0]
+    theirs = scipy.integrate.solve_ivp(balls, (0, 1), y0, method="DOP853", rtol=rtol, atol=rtol * 1e-3, events=[floor1, floor2])
+    t_hit = np.sqrt(2 / 9.81)
+    for method, options in _solvers(rtol):
+        ours = stepwise.solve_ivp(balls, (0, 1), y0, method=method, events=[floor1, floor2], **options)
+        assert [len(t) for t in ours.t_events] == [len(t) for t in theirs.t_events] == [1, 1], (method, ours.t_events)
+        assert ours.t_events[0][0] == ours.t_events[1][0], method
+        tol = 1e-12 if method == "rk4" else 100 * rtol
+        assert abs(ours.t_events[0][0] - t_hit) < tol and abs(theirs.t_events[0][0] - t_hit) < 100 * rtol, method
+        assert np.array_equal(ours.y[0], ours.y[1]), method
+
+
+def test_two_bouncing_balls_written_as_equations_stay_equal_to_the_bit():
+    balls = stepwise.Equations({"y1": "v1", "y2": "v2", "v1": "-g", "v2": "-g"}, parameters={"g": 9.81, "e": 0.8},
+                               events={"floor1": {"when": "y1", "direction": "falling", "action": {"v1": "-e*v1"}},
+                                       "floor2": {"when": "y2", "direction": "falling", "action": {"v2": "-e*v2"}}})
+    impacts = [np.sqrt(2 / 9.81)]
+    for k in (1, 2):
+        impacts.append(impacts[-1] + 2 * 0.8**k * np.sqrt(2 * 9.81) / 9.81)
+    for method in ("verner98", "tsitouras54", "cvode-bdf"):
+        sol = stepwise.solve_ivp(balls, (0, 2), [1.0, 1.0, 0.0, 0.0], method=method, rtol=1e-10, atol=1e-12)
+        first, second = sol.equation_events["floor1"][0], sol.equation_events["floor2"][0]
+        assert np.array_equal(first, second), (method, first, second)
+        assert np.allclose(first, impacts, atol=tolerance("event_time_per_rtol") * 1e-10, rtol=0), (method, first)
+        assert np.array_equal(sol.y[0], sol.y[1]) and np.array_equal(sol.y[2], sol.y[3]), method
+
+
+def test_a_terminal_event_at_an_instant_with_others_records_them_all():
+    # SciPy records the events of the step up to the first terminal one in its sorted order, so at one instant it
+    # drops those listed after the terminal one; stepwise records every event of the instant (docs/scenes.md#events)
+    def terminal(t, y):
+        return 0.5 - y[0]
+
+    terminal.terminal = True
+    rtol = 1e-9
+    theirs = scipy.integrate.solve_ivp(_unit_speed, (0, 1), [0.0], method="DOP853", rtol=rtol, atol=rtol * 1e-3,
+                                       events=[_rising, terminal, _rising])
+    for method, options in _solvers(rtol):
+        ours = stepwise.solve_ivp(_unit_speed, (0, 1), [0.0], method=method, events=[_rising, terminal, _rising], **options)
+        assert ours.status == 1 and abs(ours.t[-1] - 0.5) < 100 * rtol, method
+        assert [len(t) for t in ours.t_events] == [1, 1, 1], (method, ours.t_events)
+        # up to the terminal one, SciPy's
+        for k in range(2):
+            assert len(theirs.t_events[k]) == 1 and abs(ours.t_events[k][0] - theirs.t_events[k][0]) < 100 * rtol, (method, k)
+
+
+def test_dense_output_backwards_is_scipys_and_the_exact_solution():
+    rtol = 1e-8
+    t = np.linspace(10, 0, 997)
+    for method in ("verner98", "tsitouras54", "cvode-bdf"):
+        ours = stepwise.solve_ivp(oscillator, (10, 0), exact(10), method=method, rtol=rtol, atol=rtol * 1e-2, dense_output=True)
+        theirs = scipy.integrate.solve_ivp(oscillator, (10, 0), exact(10), method="DOP853", rtol=rtol, atol=rtol * 1e-2, dense_output=True)
+        y = ours.sol(t)
+        assert y.shape == (2, t.size)
+        # each a tolerance-proportional error over 10/(2 pi) periods: within it of the exact solution and of SciPy's
+        assert np.max(np.abs(y - exact(t))) < 1e3 * rtol, method
+        assert np.max(np.abs(y - theirs.sol(t))) < 2e3 * rtol, method
+        # at each step's end, the step's own value: the segment lookup finds the right step in decreasing time
+        for k in range(1, ours.t.size, max(1, ours.t.size // 7)):
+            assert np.allclose(ours.sol(ours.t[k]), ours.y[:, k], rtol=0, atol=1e-12), (method, k)
