@@ -182,7 +182,7 @@ void spectrum_along_run(const StudyScene& scene, Advice& advice) {
     std::vector<Eigen::VectorXd> states{model->initial_state()};
     states.insert(states.end(), r.trajectory.y.begin(), r.trajectory.y.end());
     for (size_t k = 0; k < states.size(); ++k) {
-      const Eigen::VectorXcd lambda = jacobian_spectrum(*model, times[k], states[k]);
+      const Eigen::VectorXcd lambda = leading_spectrum(*model, times[k], states[k]);
       for (const auto& l : lambda) {
         advice.fastest_decay = std::max(advice.fastest_decay, -l.real());
         advice.spectral_radius = std::max(advice.spectral_radius, std::abs(l));
@@ -271,7 +271,7 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
   if (reference.event_times) advice.event_count = reference.event_times->size();
   spectrum_along_run(scene, advice);
   // the worst-case spectrum for the stability predictions: the eigenvalues at the start and the fastest decay seen
-  Eigen::VectorXcd spectrum = jacobian_spectrum(*model, 0, model->initial_state());
+  Eigen::VectorXcd spectrum = leading_spectrum(*model, 0, model->initial_state());
   spectrum.conservativeResize(spectrum.size() + 1);
   spectrum[spectrum.size() - 1] = std::complex<double>(-advice.fastest_decay, 0);
 
@@ -504,13 +504,16 @@ int advise_command(const AdviseOptions& o) {
   check_advice_request(o.error, o.budget);
   PreparedRun prepared;
   const StudyScene scene = user_study_scene(o.run, &prepared);
+  const bool out_existed = fs::exists(o.out);
   ensure_writable_directory(o.out);
   const int threads = threads_or_default(o.threads);
   Advice a;
   try {
     a = advise(scene, o.error, o.budget, threads);
   } catch (const ReferenceOutOfTime& cut) {
-    // nothing written: the errors could not be measured
+    // nothing written: the errors could not be measured (the output directory made for them removed again)
+    std::error_code ignored;
+    if (!out_existed) fs::remove(o.out, ignored);
     print_error("advise", fmt::format("{}: the converged reference cannot be had within its share ({:.3g} s) of --budget {:g}; about --budget {:.0f} "
                                       "would do", cut.what(), reference_share * o.budget, o.budget, std::ceil(cut.estimated_seconds / reference_share)));
     return 1;

@@ -7,7 +7,7 @@
 namespace stepwise {
 
 double spectrum_time_scale(const Model& model, double t_end) {
-  const Eigen::VectorXcd spectrum = jacobian_spectrum(model, 0, model.initial_state());
+  const Eigen::VectorXcd spectrum = leading_spectrum(model, 0, model.initial_state());
   const double fastest = spectrum.size() ? spectrum.cwiseAbs().maxCoeff() : 0.0;
   if (!(fastest > 0) || !std::isfinite(fastest)) return t_end / 16;
   // at least 16 steps of the run, at most 2^30

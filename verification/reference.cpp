@@ -21,10 +21,15 @@ constexpr double explicit_rtol = 1e-13, stiff_rtol = 1e-12;
 StepControl limited(StepControl control, std::string method, double t_end, const ReferenceLimit& limit, double& reached) {
   using Clock = std::chrono::steady_clock;
   control.record_steps = true;
-  control.sink = [method, t_end, &limit, &reached, said = Clock::now()](double t, const Eigen::VectorXd&) mutable -> std::string {
+  control.sink = [method, t_end, &limit, &reached, said = Clock::now(), steps = 0L, max_steps = control.max_steps](double t, const Eigen::VectorXd&) mutable
+      -> std::string {
     reached = t;
     const auto now = Clock::now();
     if (now > limit.deadline) return "out of time";
+    // at this pace the run would pass its step budget (a stiff system held to an explicit method's tiny steps): it
+    // is ended now rather than when it has spent the budget's time on the steps
+    if (++steps >= 200 && t > 0 && static_cast<double>(steps) * t_end / t > 2 * static_cast<double>(max_steps))
+      return fmt::format("at its pace ({} steps to t = {:.3g}) it would pass its budget of {} steps before t_end", steps, t, max_steps);
     if (limit.progress && now - said > std::chrono::seconds(1)) {
       said = now;
       limit.progress(fmt::format("the reference: {} at t = {:.4g} of {:.4g} s", method, t, t_end));

@@ -36,8 +36,8 @@ struct ReferenceOutOfTime : std::runtime_error {
 };
 
 // `control` for a reference run of `method` under `limit`: each step's end goes to a sink that ends the run (as
-// diverged) once the deadline has passed, noting the time reached, and says the progress about once a second. The
-// steps are those taken without it
+// diverged) once the deadline has passed, noting the time reached, or once its pace says it would pass its step
+// budget twice over (from its 200th step on), and says the progress about once a second. The steps are those taken without it
 StepControl limited(StepControl control, std::string method, double t_end, const ReferenceLimit& limit, double& reached);
 
 // the reference of `model` at t_end; std::runtime_error naming the methods where no pair finishes, and

@@ -75,6 +75,13 @@ std::optional<double> predicted_stable_dt(const Method& method, const Eigen::Vec
 // for systems of a few hundred unknowns
 Eigen::VectorXcd jacobian_spectrum(const OdeSystem& system, double t, const Eigen::VectorXd& y);
 
+// The eigenvalues that bound a step and say a stiffness: all of them (jacobian_spectrum) for a system of up to
+// dense_spectrum_size unknowns, else the leading_eigenvalues of largest magnitude by restarted Arnoldi (Spectra's
+// GenEigsSolver on the system's sparse Jacobian, or the dense one), at a cost of matrix-vector products rather
+// than the n^3 of the whole spectrum (minutes at the flag's 6 000 unknowns)
+inline constexpr int dense_spectrum_size = 600, leading_eigenvalues = 24;
+Eigen::VectorXcd leading_spectrum(const OdeSystem& system, double t, const Eigen::VectorXd& y);
+
 // The largest h with |R(h lambda)| <= 1 for every eigenvalue: h is raised by factors of 2 from 1e-3 / max |lambda|
 // until some |R| exceeds 1 + 1e-9, then bisected to 1e-9. Positive real parts below 1e-6 of the largest |lambda|
 // are taken as 0 and smaller eigenvalues left out (a difference Jacobian resolves no finer). 0 where even the

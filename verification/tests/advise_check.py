@@ -10,7 +10,10 @@ For each case: advise within a small budget, then
   and a loaded machine stretches it; the time it took is printed, never held to the budget here);
 - the advised setting, given to `stepwise run` (the command a user is told to type), meets the error asked;
 - on a stiff scene (Van der Pol at mu = 1e6) the advice says stiff and advises no explicit method, and says why
-  the explicit ones lost (their predicted stable step)."""
+  the explicit ones lost (their predicted stable step);
+- the budget bounds the whole command, the reference included: on the 32 x 32 flag, whose converged reference takes
+  hours, advise says so in one line (which reference, how far it got, the budget that would do) with a progress
+  line before it, exits 1 and writes nothing (a hang bound only; its time is measured in bench_advise)."""
 import json
 import os
 import subprocess
@@ -77,6 +80,21 @@ with tempfile.TemporaryDirectory() as d:
             measured = a["reproduced"]["error"]
         if r.returncode != 0 or measured is None or measured > error:
             problems.append(f"{scene}: the advised setting run again gave error {measured} (exit {r.returncode}), asked {error}")
+
+    # the flag's reference cannot be had in a small budget: refused, within a (generous) hang bound
+    out = os.path.join(d, "flag")
+    budget = 4
+    r = subprocess.run([binary, "advise", os.path.join(scenes, "flag.toml"), "--error", "1e-2", "--budget", str(budget), "--out", out],
+                       capture_output=True, text=True, env=env, timeout=budget * 10 + 60)
+    lines = r.stderr.strip().splitlines()
+    last = lines[-1] if lines else ""
+    if r.returncode != 1 or "the converged reference cannot be had within its share" not in last or "--budget" not in last:
+        problems.append(f"flag: advise at --budget {budget}: exit {r.returncode}, last line {last!r}")
+    if not any(line.startswith("stepwise advise: the reference: ") for line in lines[:-1]):
+        problems.append(f"flag: no progress line during the reference: {lines}")
+    if os.path.exists(out):
+        problems.append("flag: advise refused but wrote its directory")
+    print(f"flag: {last}")
 
 for p in problems:
     print("FAIL", p)
