@@ -49,6 +49,8 @@ constexpr double sweep_share = 0.8;
 // the most of the budget the reference may take (its runs are cut at that deadline, and the advice refused); the
 // sweep then has what is left of its share
 constexpr double reference_share = 0.5;
+// the largest --budget taken: a day
+constexpr double max_budget_seconds = 86400;
 // the finest settings swept: rtol 1e-13, or t_end / 2^26 steps
 constexpr int finest_rtol_exponent = 13, finest_halving = 26;
 
@@ -169,7 +171,7 @@ std::vector<AdvisePoint> sweep_method(const StudyScene& scene, const Method& met
 }
 
 // the spectrum of the exact Jacobian at 16 points along a run of the scene
-void spectrum_along_run(const StudyScene& scene, Advice& advice) {
+void spectrum_along_run(const StudyScene& scene, Advice& advice, Clock::time_point deadline) {
   const auto model = scene_model(scene);
   std::vector<double> times;
   for (int k = 0; k <= 16; ++k) times.push_back(scene.t_end * k / 16.0);
@@ -181,7 +183,8 @@ void spectrum_along_run(const StudyScene& scene, Advice& advice) {
     if (r.status != Status::ok) continue;
     std::vector<Eigen::VectorXd> states{model->initial_state()};
     states.insert(states.end(), r.trajectory.y.begin(), r.trajectory.y.end());
-    for (size_t k = 0; k < states.size(); ++k) {
+    // (at the reference's deadline, the states' spectra so far)
+    for (size_t k = 0; k < states.size() && Clock::now() < deadline; ++k) {
       const Eigen::VectorXcd lambda = leading_spectrum(*model, times[k], states[k]);
       for (const auto& l : lambda) {
         advice.fastest_decay = std::max(advice.fastest_decay, -l.real());
@@ -269,7 +272,7 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
   }
   reference.event_times = reference_event_times(*model, scene.t_end, limit);
   if (reference.event_times) advice.event_count = reference.event_times->size();
-  spectrum_along_run(scene, advice);
+  spectrum_along_run(scene, advice, limit.deadline);
   // the worst-case spectrum for the stability predictions: the eigenvalues at the start and the fastest decay seen
   Eigen::VectorXcd spectrum = leading_spectrum(*model, 0, model->initial_state());
   spectrum.conservativeResize(spectrum.size() + 1);
@@ -485,8 +488,8 @@ std::string advice_json_text(const Advice& a, const std::string& scene_file) { r
 
 void check_advice_request(double error, double budget_seconds) {
   if (!(std::isfinite(error) && error > 0)) throw InputError(fmt::format("--error: must be a positive finite number, got {}", error));
-  if (!(std::isfinite(budget_seconds) && budget_seconds >= 1 && budget_seconds <= 86400))
-    throw InputError(fmt::format("--budget: must be between 1 and 86400 seconds, got {}", budget_seconds));
+  if (!(std::isfinite(budget_seconds) && budget_seconds >= 1 && budget_seconds <= max_budget_seconds))
+    throw InputError(fmt::format("--budget: must be between 1 and {:g} seconds, got {}", max_budget_seconds, budget_seconds));
 }
 
 Figure advice_figure(const Advice& advice) {
@@ -514,8 +517,11 @@ int advise_command(const AdviseOptions& o) {
     // nothing written: the errors could not be measured (the output directory made for them removed again)
     std::error_code ignored;
     if (!out_existed) fs::remove(o.out, ignored);
-    print_error("advise", fmt::format("{}: the converged reference cannot be had within its share ({:.3g} s) of --budget {:g}; about --budget {:.0f} "
-                                      "would do", cut.what(), reference_share * o.budget, o.budget, std::ceil(cut.estimated_seconds / reference_share)));
+    const double would_do = std::ceil(cut.estimated_seconds / reference_share);
+    print_error("advise", fmt::format("{}: the converged reference cannot be had within its share ({:.3g} s) of --budget {:g}; at its pace so far, {}",
+                                      cut.what(), reference_share * o.budget, o.budget,
+                                      would_do <= max_budget_seconds ? fmt::format("about --budget {:.0f} would do", would_do)
+                                                                     : fmt::format("more than the largest --budget ({:g} s)", max_budget_seconds)));
     return 1;
   }
 
