@@ -146,6 +146,20 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
     view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                                    Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
+    view_.potential = [this](const Eigen::Ref<const Eigen::VectorXd>& x) { return elastic_energy(x.data()); };
+    view_.elastic_force = [this](const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) {
+      // the springs at rest relative to each other: their Voigt damping is zero
+      const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(3 * free_);
+      add_elastic_forces(x.data(), at_rest.data(), f);
+    };
+    view_.elastic_jacobian = [this](const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx) {
+      const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(3 * free_);
+      Eigen::SparseMatrix<double> dfdv;
+      pattern_->zero(dfdx);
+      pattern_->zero(dfdv);
+      add_spring_force_jacobians(view_.springs, spring_slots_, x.data(), at_rest.data(), definite, dfdx, dfdv);
+      if (continuum_) add_continuum_force_jacobian(x.data(), definite, dfdx);
+    };
     set_up_split();
     if (!continuum_) read_springs_as_constraints();
   }

@@ -48,6 +48,19 @@ class HangingChain final : public Model, public SparseJacobian {
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
     view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                                    Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
+    view_.potential = [this](const Eigen::Ref<const Eigen::VectorXd>& x) { return spring_energy(view_.springs, x.data()); };
+    view_.elastic_force = [this](const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) {
+      // the springs at rest relative to each other: their Voigt damping is zero
+      const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(3 * n_);
+      add_spring_forces(view_.springs, x.data(), at_rest.data(), f.data());
+    };
+    view_.elastic_jacobian = [this](const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx) {
+      const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(3 * n_);
+      Eigen::SparseMatrix<double> dfdv;
+      pattern_.zero(dfdx);
+      pattern_.zero(dfdv);
+      add_spring_force_jacobians(view_.springs, slots_, x.data(), at_rest.data(), definite, dfdx, dfdv);
+    };
   }
   HangingChain(const HangingChain&) = delete;  // its capabilities hold `this`
   HangingChain& operator=(const HangingChain&) = delete;

@@ -42,6 +42,14 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
   j["factorizations"] = r.stats.factorizations;
   j["projections"] = r.stats.projections;
   j["contact_sweeps"] = r.stats.contact_sweeps;
+  if (r.stats.newton_iterations > 0) {
+    // a Newton on the incremental potential: its iterations and line-search halvings, in all and a step
+    const double steps = static_cast<double>(std::max(1L, r.stats.steps));
+    j["newton_iterations"] = r.stats.newton_iterations;
+    j["line_search_halvings"] = r.stats.line_search_halvings;
+    j["newton_iterations_per_step"] = static_cast<double>(r.stats.newton_iterations) / steps;
+    j["line_search_halvings_per_step"] = static_cast<double>(r.stats.line_search_halvings) / steps;
+  }
   j["cpu_seconds"] = r.stats.cpu_seconds;
   j["ranks"] = p.ranks;
   const auto names = sample_names(*p.model);

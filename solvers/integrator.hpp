@@ -70,11 +70,13 @@ struct Stats {
   long events = 0;          // events handled
   long projections = 0;     // projections onto the system's manifold (the Projection capability)
   long contact_sweeps = 0;  // Gauss-Seidel sweeps over contacts (solvers/contact_solve.hpp)
+  long newton_iterations = 0;     // Newton iterations on an incremental potential (implicit-euler-newton)
+  long line_search_halvings = 0;  // their line searches' halvings
   double cpu_seconds = 0;   // thread CPU time of the integration
   // the members, to copy a result between processes (report/pack.hpp)
   static auto fields(auto& s) {
     return std::tie(s.steps, s.rejected, s.rhs_evals, s.jac_evals, s.linear_solves, s.factorizations, s.events, s.projections, s.contact_sweeps,
-                    s.cpu_seconds);
+                    s.newton_iterations, s.line_search_halvings, s.cpu_seconds);
   }
 };
 

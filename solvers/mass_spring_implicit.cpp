@@ -1,9 +1,9 @@
 #include "mass_spring_implicit.hpp"
 
+#include "incremental_potential.hpp"
 #include "run_support.hpp"
 
 #include <Eigen/IterativeLinearSolvers>
-#include <unsupported/Eigen/IterativeSolvers>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -76,19 +76,12 @@ namespace {
 
 constexpr int max_direct_run = 64;
 constexpr int probe_iterations = 3;  // the kept factor's first CG iterations, whose rate predicts the rest
-constexpr double armijo = 1e-4;      // the fraction of a step's predicted decrease of |R| it must deliver
-constexpr int max_halvings = 10;     // the line search's shortest step: 2^-10 of Newton's
-// GMRES's relative tolerance for Newton's step: |R| / scale, within these (a loose solve far from the root,
-// where the step is a guess anyway; a tight one near it, where the step's error is the next residual)
-constexpr double gmres_floor = 1e-12, gmres_ceiling = 1e-2;
-// GMRES's iterations a Newton step (its restart is Eigen's 30): a preconditioner this far from J says that the
-// definite approximation no longer describes the step, and the step fails
-constexpr int gmres_iterations = 100;
 
 class MassSpringImplicit final : public FixedStepper {
  public:
   MassSpringImplicit(const CountedSystem& s, const MassSpringImplicitOptions& options)
-      : system_(s), options_(options), bw_(s, options.definite), n_(s.size() / 2) {
+      : system_(s), options_(options), bw_(s, options.definite), n_(s.size() / 2), potential_(s, mass_spring_of(s)),
+        newton_(NewtonOnPotential{.ordering = options.ordering}) {
     cg_.setTolerance(options.cg_residual);
     cg_.setMaxIterations(options.cg_max_iterations);
   }
@@ -102,75 +95,21 @@ class MassSpringImplicit final : public FixedStepper {
     y_next.head(n_) = y.head(n_) + h * y_next.tail(n_);
     if (!options_.newton) return true;
 
-    // Newton on R with its exact Jacobian J (an inexact Newton iteration: J d = -R solved by GMRES, preconditioned
-    // by the step's definite factor, to a relative residual that shrinks with |R|, so that the iteration
-    // converges superlinearly), each step halved until |R| falls by Armijo's fraction of the decrease J
-    // predicts. Far from the solution (the gusting flag's first step, at rest: its compressed springs and its
-    // wind turning with the normals) a full step of the definite approximation's iteration makes |R| grow,
-    // and no step along its direction need lower it; the exact direction always lowers |R| for a step short
-    // enough (R' J d = -|R|^2 where J d = -R), so the line search finds one
-    const double t1 = t + h;
-    double scale = 0;
-    const auto residual_at = [&](const Eigen::VectorXd& y1) {
-      bw_.assemble_force(t1, y1);
-      residual_ = bw_.mass().cwiseProduct(y1.tail(n_) - y.tail(n_)) - h * bw_.force();
-      scale = bw_.mass().cwiseProduct(y1.tail(n_)).norm() + h * bw_.force().norm();
-      return residual_.allFinite() ? residual_.norm() : std::numeric_limits<double>::infinity();
-    };
-    double norm = residual_at(y_next);
-    std::string why = fmt::format("did not reach a relative residual of {:.1e} in {} iterations", options_.newton_residual,
-                                  options_.newton_max_iterations);
-    for (int iteration = 0; iteration < options_.newton_max_iterations; ++iteration) {
-      if (!std::isfinite(norm)) {
-        why = "met a non-finite residual";
-        break;
-      }
-      if (norm <= options_.newton_residual * scale || norm == 0) return true;
-      if (!newton_direction(t1, y_next, h, norm / scale)) {
-        why = fmt::format("found no Newton step in {} GMRES iterations at a relative residual of {:.2e}", gmres_iterations, norm / scale);
-        break;
-      }
-      const double previous = norm, previous_scale = scale;
-      y_previous_ = y_next;
-      bool lowered = false;
-      for (int halving = 0; halving <= max_halvings && !lowered; ++halving) {
-        const double alpha = std::ldexp(1.0, -halving);
-        y_next.tail(n_) = y_previous_.tail(n_) + alpha * dv_;
-        y_next.head(n_) = y.head(n_) + h * y_next.tail(n_);
-        norm = residual_at(y_next);
-        lowered = norm <= (1 - armijo * alpha) * previous;
-      }
-      if (!lowered) {
-        // no step lowers |R|: round-off in R has the last word, and the last iterate is kept if that is within
-        // newton_stall
-        y_next = y_previous_;
-        if (previous <= options_.newton_stall * previous_scale) return true;
-        why = fmt::format("found no step lowering the relative residual {:.2e} (down to 2^-{} of Newton's)", previous / previous_scale, max_halvings);
-        break;
-      }
+    // backward Euler itself: Newton on the incremental potential G (incremental_potential.hpp), from the
+    // linearised step's answer, to the step's velocity tolerance
+    potential_.start(t, y, h);
+    x_newton_ = y_next.head(n_);
+    if (const std::string why = newton_.minimise(potential_, x_newton_, system_.stats()); !why.empty()) {
+      ++system_.stats().rejected;
+      failure = fmt::format("implicit-euler-newton: Newton on the incremental potential {} at t = {:.9g} (h = {:.3g})", why, t, h);
+      return false;
     }
-    ++system_.stats().rejected;
-    failure = fmt::format("implicit-euler-newton: the Newton iteration {} at t = {:.9g} (h = {:.3g})", why, t, h);
-    return false;
+    y_next.tail(n_) = (x_newton_ - y.head(n_)) / h;
+    y_next.head(n_) = x_newton_;
+    return true;
   }
 
  private:
-  // dv: Newton's step J dv = -R at (t1, y1), R the residual last computed (|R| / scale = `relative`), by
-  // GMRES preconditioned with the kept definite factor; false if it does not reduce |J dv + R| below |R|
-  // (then dv is no descent direction for |R|)
-  bool newton_direction(double t1, const Eigen::VectorXd& y1, double h, double relative) {
-    if (!factored_) return false;
-    bw_.assemble_exact(t1, y1, h);
-    rhs_ = -residual_;
-    gmres_.preconditioner().use(&factor_);
-    gmres_.setTolerance(std::clamp(relative, gmres_floor, gmres_ceiling));
-    gmres_.setMaxIterations(gmres_iterations);
-    gmres_.compute(bw_.exact_matrix());
-    dv_ = gmres_.solve(rhs_);
-    system_.stats().linear_solves += gmres_.iterations() + 1;
-    return dv_.allFinite() && (bw_.exact_matrix() * dv_ - rhs_).norm() < rhs_.norm();
-  }
-
   // dv = A^-1 b (the system's rhs, or `rhs`) by the option's way; false with the failing call named
   bool solve(double t, std::string& failure, const Eigen::VectorXd* rhs = nullptr) {
     const Eigen::VectorXd& b = rhs ? *rhs : bw_.rhs();
@@ -273,8 +212,9 @@ class MassSpringImplicit final : public FixedStepper {
   int direct_run_ = 1;    // how many the next failed trial of a kept factor refactorises directly
   double factor_seconds_ = 0, solve_seconds_ = 0;  // thread CPU time of the last factorisation, and of one CG iteration
   Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, FactorPreconditioner> cg_;
-  Eigen::GMRES<Eigen::SparseMatrix<double>, FactorPreconditioner> gmres_;
-  Eigen::VectorXd dv_, residual_, rhs_, guess_, y_previous_;
+  IncrementalPotential potential_;
+  PotentialNewton newton_;
+  Eigen::VectorXd dv_, guess_, x_newton_;
   Eigen::MatrixXd b_, x_;
 };
 

@@ -2,14 +2,12 @@
 // "Large steps in cloth simulation", eq. 15-16): with K = df/dx and D = df/dv at the step's start (the
 // symmetric definite approximation the system gives), one linear solve per step,
 //   (M - h D - h^2 K) dv = h (f0 + h K v0),   v1 = v0 + dv,   x1 = x0 + h v1,
-// the backward Euler step linearised once. With `newton`, the nonlinear backward Euler equations
-//   R(v1) = M (v1 - v0) - h f(x0 + h v1, v1) = 0
-// are iterated from that step to |R| <= newton_residual (|M v1| + h |f|) by Newton's method with R's exact
-// Jacobian (the model's exact K and D), its linear systems solved by GMRES preconditioned with the step's
-// definite factor, and a backtracking line search on |R| (the exact Jacobian's step is a descent direction
-// for |R|, the definite approximation's need not be). Where the backward Euler equations have no root near
-// the linearised step's answer (the gusting flag released flat at rest, at h = 1/60 s) no step lowers |R|
-// and the run fails, naming the step.
+// the backward Euler step linearised once. With `newton`, backward Euler itself: the step's incremental potential
+// G (incremental_potential.hpp: the elastic forces implicit, the others at the step's start) minimised by Newton
+// from the linearised step's answer, each element's Hessian made semidefinite, a line search on G, to a step that
+// moves no node faster than the velocity tolerance. (A Newton on the residual's norm with GMRES on the exact
+// Jacobian was measured before it: it stalls where a buckling sheet makes the energy non-convex, at points that
+// are no root, and failed the flag at every step from 1/120 s up.)
 //
 // The matrix is symmetric positive definite and its pattern never changes: CHOLMOD analyses it once (AMD or
 // METIS, whichever factor is cheaper) and factorises it with the analysis kept. How each solve is done:
@@ -46,9 +44,6 @@ struct MassSpringImplicitOptions {
                                   // spring makes indefinite (the factorisation then fails, reported)
   double cg_residual = 1e-8;      // relative residual of the kept-factor conjugate gradients
   int cg_max_iterations = 200;
-  double newton_residual = 1e-10;
-  double newton_stall = 1e-8;     // the residual an iteration that stops improving is accepted within
-  int newton_max_iterations = 20;
 };
 
 // the linear system of one step: A = M - h D - h^2 K and b = h (f0 + h K v0) at (t, y), for a mass-spring

@@ -55,6 +55,7 @@ Reference converged_reference(const Model& model, double t_end, const ReferenceL
     bool finished = true;
     for (size_t k = 0; k < 2 && finished; ++k) {
       const auto run_start = Clock::now();
+      if (limit && limit->progress) limit->progress(fmt::format("the reference: {} at rtol {:.0e} from t = 0 to {:.4g} s", pair.methods[k], pair.rtol, t_end));
       double reached = 0;
       const Measured m = run_and_measure(model, pair.methods[k], limit ? limited(control, pair.methods[k], t_end, *limit, reached) : control, t_end, t_end);
       if (limit && Clock::now() > limit->deadline && m.result.status != Status::ok) {

@@ -586,4 +586,10 @@ inline constexpr double event_time_exact_steps = 1e-12;
 // a root refined to round-off in the step's fraction s (1e-15) of a step h: where the event's time is exact
 inline double event_time_located(double h) { return 1e-13 + 1e-14 * h; }
 
+// Newton on the incremental potential with its exact Hessian near the minimiser: the error e_{k+1} <= C e_k^2, so the
+// steps' sizes contract at order 2 (log(m_{k+1} / m_k) / log(m_k / m_{k-1}) -> 2); 1.5 leaves room for the constant C
+// over the last few steps, and fails a Newton with a wrong Hessian (linear: order 1, as the projected one's 0.88 an
+// iteration on the flag's first step)
+inline constexpr double newton_quadratic_order = 1.5;
+
 }  // namespace stepwise::tolerance

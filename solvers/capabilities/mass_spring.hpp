@@ -35,6 +35,15 @@ struct MassSpringView {
   std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                      Eigen::SparseMatrix<double>& dfdv)>
       force_jacobians;
+  // the elastic potential Psi(x) (J) and its force f_e(x) = -grad Psi added into f (N, 3 nodes x 1): the part of
+  // f that backward Euler as a minimisation holds implicitly (solvers/incremental_potential.hpp); the rest of f
+  // (damping, drag, wind, gravity, a pick) it takes at the step's start. The definite K above is -grad^2 Psi
+  // with each spring's or element's Hessian made semidefinite
+  std::function<double(const Eigen::Ref<const Eigen::VectorXd>& x)> potential;
+  std::function<void(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f)> elastic_force;
+  // df_e/dx = -grad^2 Psi at x on force_jacobians' pattern: exact, or (definite) each spring's or element's
+  // Hessian made semidefinite
+  std::function<void(const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx)> elastic_jacobian;
 };
 
 inline const Requirement needs_mass_spring = needs<MassSpringView>("a mass-spring system (a cloth or chain scene)");

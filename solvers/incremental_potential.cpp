@@ -1,0 +1,136 @@
+#include "incremental_potential.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+
+namespace stepwise {
+
+namespace {
+
+constexpr double armijo = 1e-4;   // the fraction of the predicted decrease of G a step must deliver
+constexpr int max_halvings = 30;  // the shortest step tried: 2^-30 of Newton's
+// the mass term's raise tried on an indefinite Hessian: from 1/64 of M up to 64 M (then the projected Hessian)
+constexpr double min_shift = 1.0 / 64, max_shift = 64;
+
+}  // namespace
+
+IncrementalPotential::IncrementalPotential(const CountedSystem& system, const MassSpringView& view) : system_(system), view_(view) {
+  m_.resize(3 * Eigen::Index{view_.nodes});
+  for (int i = 0; i < view_.nodes; ++i) m_.segment<3>(3 * i).setConstant(view_.mass[i]);
+}
+
+void IncrementalPotential::start(double t0, const Eigen::VectorXd& y0, double h) {
+  const Eigen::Index n = m_.size();
+  t0_ = t0;
+  h_ = h;
+  x0_ = y0.head(n);
+  xb_ = x0_ + h * y0.tail(n);
+  // f0 = f(t0, y0) - f_e(x0): the whole force (M a) less the elastic one
+  f0_.resize(n);
+  second_order_acceleration(system_, *system_.as<SecondOrderView>(), t0, y0, f0_, scratch_);
+  f0_ = f0_.cwiseProduct(m_);
+  Eigen::VectorXd elastic = Eigen::VectorXd::Zero(n);
+  view_.elastic_force(x0_, elastic);
+  f0_ -= elastic;
+  force_jacobians(system_, view_, t0, y0, true, k_, d0_);
+}
+
+double IncrementalPotential::value(const Eigen::VectorXd& x) const {
+  const Eigen::VectorXd d = x - xb_;
+  const double inertia = d.cwiseAbs2().dot(m_) / (2 * h_ * h_) - d.dot(d0_ * d) / (2 * h_);
+  return inertia - f0_.dot(x) + view_.potential(x);
+}
+
+void IncrementalPotential::gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
+  const Eigen::VectorXd d = x - xb_;
+  g = d.cwiseProduct(m_) / (h_ * h_) - (d0_ * d) / h_ - f0_;
+  // - f_e(x): the elastic force subtracted in place
+  scratch_ = Eigen::VectorXd::Zero(x.size());
+  view_.elastic_force(x, scratch_);
+  g -= scratch_;
+}
+
+void IncrementalPotential::scaled_hessian(const Eigen::VectorXd& x, bool definite, Eigen::SparseMatrix<double>& a) const {
+  view_.elastic_jacobian(x, definite, k_);
+  Eigen::SparseMatrix<double> mass(m_.size(), m_.size());
+  mass.setIdentity();
+  mass.diagonal() = m_;
+  a = mass - h_ * d0_ - (h_ * h_) * k_;
+  a.makeCompressed();
+}
+
+std::string PotentialNewton::factor_positive_definite(const IncrementalPotential& potential, const Eigen::VectorXd& x, Stats& stats) {
+  ++stats.factorizations;
+  if (factor_.factorize(a_).empty()) {
+    shift_ = 0;
+    return "";
+  }
+  // not positive definite here: the exact Hessian with its mass term raised, A + tau M (Nocedal & Wright's Hessian
+  // modification, in the mass's metric), tau from a quarter of the last one that served, raised fourfold until the
+  // factor exists; past that, the semidefinite elements' Hessian
+  const Eigen::SparseMatrix<double> exact = a_;
+  for (shift_ = std::max(shift_ / 4, min_shift); shift_ <= max_shift; shift_ *= 4) {
+    a_ = exact;
+    a_.diagonal() += shift_ * potential.mass();
+    ++stats.factorizations;
+    if (factor_.factorize(a_).empty()) return "";
+  }
+  shift_ = 0;
+  potential.scaled_hessian(x, true, a_);
+  ++stats.factorizations;
+  return factor_.factorize(a_);
+}
+
+std::string PotentialNewton::minimise(const IncrementalPotential& potential, Eigen::VectorXd& x, Stats& stats) {
+  const double h = potential.h();
+  double value = potential.value(x);
+  const double start_value = value;
+  double moved = std::numeric_limits<double>::infinity();
+  for (int iteration = 0; iteration < options_.max_iterations; ++iteration) {
+    if (!std::isfinite(value)) return fmt::format("G is not finite at Newton iteration {}", iteration);
+    // the direction: (M - h D0 - h^2 K) dx = -h^2 grad G
+    potential.gradient(x, g_);
+    potential.scaled_hessian(x, false, a_);
+    if (!analysed_) {
+      if (auto e = factor_.analyze(a_, options_.ordering); !e.empty()) return e;
+      analysed_ = true;
+    }
+    if (auto e = factor_positive_definite(potential, x, stats); !e.empty()) return e;
+    rhs_ = -(h * h) * g_;
+    if (auto e = factor_.solve(rhs_, dx_); !e.empty()) return e;
+    ++stats.linear_solves;
+    ++stats.newton_iterations;
+    moved = dx_.col(0).lpNorm<Eigen::Infinity>() / h;
+    if (options_.observe) options_.observe(iteration, value, moved);
+    // converged: Newton's step moves no node faster than the tolerance; it is taken (its error is the next one's)
+    if (moved <= options_.velocity_tolerance) {
+      x += dx_.col(0);
+      return "";
+    }
+    // the line search on G itself
+    const double slope = g_.dot(dx_.col(0));
+    bool lowered = false;
+    for (int halving = 0; halving <= max_halvings && !lowered; ++halving) {
+      const double alpha = std::ldexp(1.0, -halving);
+      trial_ = x + alpha * dx_.col(0);
+      const double trial_value = potential.value(trial_);
+      lowered = trial_value <= value + armijo * alpha * slope;
+      if (lowered) {
+        x.swap(trial_);
+        value = trial_value;
+      } else {
+        ++stats.line_search_halvings;
+      }
+    }
+    if (!lowered)
+      return fmt::format("no step along Newton's direction lowered G at iteration {} (down to 2^-{} of it; G fell by {:.3g} J before, the step "
+                         "moved a node at {:.3g} m/s)",
+                         iteration, max_halvings, start_value - value, moved);
+  }
+  return fmt::format("did not converge in {} Newton iterations (G fell by {:.3g} J; the last step moved a node at {:.3g} m/s, the tolerance {:.1e})",
+                     options_.max_iterations, start_value - value, moved, options_.velocity_tolerance);
+}
+
+}  // namespace stepwise

@@ -1,0 +1,87 @@
+// Backward Euler on a mass-spring system (MassSpringView) as the minimisation of one incremental potential
+// (Martin, Thomaszewski, Grinspun & Gross 2011; Gast, Schroeder, Stomakhin, Jiang & Teran 2015, "Optimization
+// integrator for large time steps"; Kim & Eberle, "Dynamic Deformables", 2022):
+//     G(x) = 1/2 (x - xb)^T (M / h^2 - D0 / h) (x - xb) - f0^T x + Psi(x),    xb = x0 + h v0,
+// with Psi the elastic potential (springs, or the continuum's membrane and bending), f0 = f(t0, x0, v0) - f_e(x0)
+// every other force at the step's start (wind, a pick, gravity, drag, damping: lagged), and D0 = df/dv there
+// (symmetric negative semidefinite: the view's definite D; the damping taken implicitly to first order, as
+// Baraff & Witkin's step does). Its gradient vanishes exactly where
+//     M (v1 - v0) = h (f_e(x1) + f0 + D0 (v1 - v0)),    v1 = (x1 - x0) / h,
+// backward Euler's equations with the elastic forces implicit. M / h^2 - D0 / h is positive definite, so G is
+// bounded below wherever Psi is, and a descent method on G cannot stall at a point that is no minimum (a Newton
+// iteration on the residual's norm can, on a non-convex Psi: a buckling sheet). One definition, shared by every
+// solver of it: Newton here (implicit-euler-newton), the linearised step is its first Newton step from xb.
+#pragma once
+
+#include <stepwise/solvers/capabilities/mass_spring.hpp>
+#include <stepwise/solvers/run_support.hpp>
+#include <stepwise/solvers/sparse_cholesky.hpp>
+
+#include <Eigen/SparseCore>
+
+#include <functional>
+#include <string>
+
+namespace stepwise {
+
+class IncrementalPotential {
+ public:
+  IncrementalPotential(const CountedSystem& system, const MassSpringView& view);
+  // the step from (t0, y0 = (x0, v0)) of length h: xb, f0 and D0 (one evaluation of f, one of its Jacobians)
+  void start(double t0, const Eigen::VectorXd& y0, double h);
+  // G(x), and its gradient (3 nodes x 1)
+  double value(const Eigen::VectorXd& x) const;
+  void gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;
+  // h^2 times G's Hessian, M - h D0 - h^2 K(x): exact (positive definite near a minimum, where Newton then converges
+  // quadratically), or (definite) with each spring's or element's Hessian made semidefinite, positive definite
+  // everywhere. One evaluation of the elastic Jacobian
+  void scaled_hessian(const Eigen::VectorXd& x, bool definite, Eigen::SparseMatrix<double>& a) const;
+  double h() const { return h_; }
+  const Eigen::VectorXd& inertial() const { return xb_; }  // xb = x0 + h v0
+  const Eigen::VectorXd& x0() const { return x0_; }
+  const Eigen::VectorXd& mass() const { return m_; }  // each coordinate's lumped mass
+
+ private:
+  const CountedSystem& system_;
+  const MassSpringView& view_;
+  Eigen::VectorXd m_;                  // the lumped mass of each coordinate (3 nodes x 1)
+  double t0_ = 0, h_ = 0;
+  Eigen::VectorXd x0_, xb_, f0_;       // f0: the forces other than the elastic ones, at the step's start
+  Eigen::SparseMatrix<double> d0_;     // df/dv at the step's start (definite)
+  mutable Eigen::VectorXd scratch_;
+  mutable Eigen::SparseMatrix<double> k_;
+};
+
+// Newton on G: each direction from the sparse Cholesky factor (its analysis kept across steps) of G's exact Hessian
+// where it is positive definite, else of the one made semidefinite element by element (projecting every element,
+// as IPC does, drops the negative curvature of compressed springs that the mass term would carry: Newton then
+// converges linearly, 0.88 an iteration on the flag's first step at 1/30 s, measured), each step halved until G falls by Armijo's fraction of the decrease the gradient predicts (a descent direction of a
+// positive definite model always finds one); converged when the step moves no node faster than
+// `velocity_tolerance` (|dx|inf / h, as IPC judges it). From `x` (a first guess) to the minimiser, in x
+struct NewtonOnPotential {
+  int max_iterations = 200;
+  double velocity_tolerance = 1e-5;  // m/s (see implicit_euler.cpp for the derivation from a frame's pixel)
+  Ordering ordering = Ordering::cheaper;
+  // called at each iteration with G there and how fast Newton's step from there moves a node (m/s): the tests' view
+  std::function<void(int iteration, double value, double moved)> observe;
+};
+class PotentialNewton {
+ public:
+  explicit PotentialNewton(NewtonOnPotential options) : options_(options) {}
+  // "" when converged, else why not (naming the iteration, G's decrease and the last step); counts its iterations,
+  // halvings, factorisations and solves into stats
+  std::string minimise(const IncrementalPotential& potential, Eigen::VectorXd& x, Stats& stats);
+
+ private:
+  // the factor of a_ (the exact scaled Hessian at x) or of a positive definite modification of it
+  std::string factor_positive_definite(const IncrementalPotential& potential, const Eigen::VectorXd& x, Stats& stats);
+  NewtonOnPotential options_;
+  double shift_ = 0;  // the last mass term raise that gave a factor
+  SparseCholesky factor_;
+  bool analysed_ = false;
+  Eigen::SparseMatrix<double> a_;
+  Eigen::VectorXd g_, trial_;
+  Eigen::MatrixXd rhs_, dx_;
+};
+
+}  // namespace stepwise
