@@ -54,6 +54,8 @@ std::span<const ParamSpec> parameter_table() {
       {"pin_corners", 1, "", "pin the four corners (the seeds' flag)", Bound::flag},
       {"pin_top_corners", 0, "", "pin the two top (row 0) corners (a hanging sheet)", Bound::flag},
       {"pin_left_edge", 0, "", "pin the left (column 0) edge (a flag on a pole)", Bound::flag},
+      {"pin_top_edge", 0, "", "pin the whole top (row 0) edge (a sheet held along a line, where plane elasticity is not singular)", Bound::flag},
+      {"clamp_left_edge", 0, "", "pin the first two columns, so that the left edge can neither move nor turn (a clamped plate)", Bound::flag},
       {"pin_row", -1, "", "row of one more pinned node (-1: none)", Bound::finite},
       {"pin_column", -1, "", "column of that pinned node", Bound::finite},
       {"horizontal", 0, "", "sheet starts horizontal in the x-z plane (1) or vertical in x-y (0)", Bound::flag},
@@ -188,6 +190,10 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
     pole_ = p.at("pin_left_edge") == 1;
     if (pole_)
       for (int r = 0; r < rows_; ++r) pin(r, 0);
+    if (p.at("pin_top_edge") == 1)
+      for (int c = 0; c < columns_; ++c) pin(0, c);
+    if (p.at("clamp_left_edge") == 1)
+      for (int r = 0; r < rows_; ++r) pin(r, 0), pin(r, 1);
     const int pin_row = grid_index(p, "pin_row", 0, rows_ - 1, true), pin_column = grid_index(p, "pin_column", 0, columns_ - 1, true);
     if ((pin_row < 0) != (pin_column < 0))
       throw BadParameter(pin_row < 0 ? "pin_row" : "pin_column", "parameters 'pin_row' and 'pin_column' go together: give both or neither");

@@ -99,4 +99,36 @@ HangingSheet hanging_sheet(Params params, int side) {
   return out;
 }
 
+ClampedSheet clamped_sheet(Params params, int side) {
+  for (const auto& [key, value] : Params{{"rows", side}, {"columns", side}, {"width", 1.0}, {"height", 1.0}, {"pin_corners", 0},
+                                         {"pin_top_edge", 1}, {"wind_coefficient", 0}})
+    params[key] = value;
+  params = resolve_params(*find_model("cloth"), params);
+  const double g = params.at("g");
+  // the top row pinned: grid node k (below it) is state node k - side
+  const auto at = [&](int r, int c) { return 3 * Eigen::Index{r * side + c - side}; };
+  Eigen::VectorXd y;
+  ClampedSheet out;
+  for (int step = 1; step <= 4; ++step) {
+    params["g"] = g * step / 4;
+    const auto model = make_model("cloth", params);
+    if (y.size() == 0) y = model->initial_state();
+    const StaticEquilibrium eq = static_equilibrium(*model, y, in_plane(y.size() / 2));
+    out.iterations += eq.iterations;
+    y = eq.y;
+    if (!eq.failure.empty()) {
+      out.failure = fmt::format("g = {}: {}", params["g"], eq.failure);
+      break;
+    }
+  }
+  const double top = params.at("elevation");
+  const int bottom = side - 1;
+  const auto middle_y = [&](int r) { return side % 2 ? y[at(r, side / 2) + 1] : (y[at(r, side / 2 - 1) + 1] + y[at(r, side / 2) + 1]) / 2; };
+  const auto width_at = [&](int r) { return y[at(r, side - 1)] - y[at(r, 0)]; };
+  out.drop = (top - 1) - middle_y(bottom);
+  out.bottom_width = width_at(bottom);
+  out.middle_width = side % 2 ? width_at(side / 2) : (width_at(side / 2 - 1) + width_at(side / 2)) / 2;
+  return out;
+}
+
 }  // namespace stepwise

@@ -44,4 +44,18 @@ struct HangingSheet {
 // in four steps, each from the last one's equilibrium), the cloth with `params` (wind off)
 HangingSheet hanging_sheet(Params params, int side);
 
+// the well-posed hanging sheet: a 1 m square of side x side nodes held along its whole top edge (pin_top_edge),
+// hanging in its plane under gravity (four load steps). Hung from two points, plane elasticity is singular there and
+// the sag grows with every refinement; held along a line, the finite elements converge
+struct ClampedSheet {
+  double drop = 0;          // how far the bottom edge's middle has moved down (m)
+  double bottom_width = 0;  // the bottom edge's corners' distance (m; 1 at rest)
+  double middle_width = 0;  // the width halfway down (m; 1 at rest)
+  int iterations = 0;
+  std::string failure;
+  static auto fields(auto& s) { return std::tie(s.drop, s.bottom_width, s.middle_width, s.iterations, s.failure); }  // a sweep's result
+};
+ClampedSheet clamped_sheet(Params params, int side);
+
+
 }  // namespace stepwise

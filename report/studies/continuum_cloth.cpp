@@ -88,33 +88,83 @@ std::string refinement_figure(std::vector<Figure>& figures) {
   return add_figure(figures, "continuum_cloth", "", std::move(spec), "Springs and the continuum of the same material, hanging, by mesh");
 }
 
-// refinement: the hanging sheet by mesh, springs (the flag's constants, unscaled) and the continuum of the
-// material the springs measured as; `sides` gets the meshes' sides
+// a sheet at rest by mesh: springs (the flag's constants, unscaled) and the continuum of the material the springs
+// measured as, each side of `sides`, measured by `sheet`; in the order springs' sides, then the continuum's
+struct MeshPoint {
+  std::string model;
+  int side;
+};
+template <class Sheet>
+std::vector<Sheet> sheets_by_mesh(const StudyContext& ctx, const UniaxialStretch& springs, const std::vector<int>& sides, const char* what,
+                                  Sheet (*sheet)(Params, int), std::vector<MeshPoint>& points) {
+  points.clear();
+  for (const char* model : {"springs", "continuum"})
+    for (const int side : sides) points.push_back({model, side});
+  std::vector<std::string> labels;
+  for (const auto& p : points) labels.push_back(fmt::format("continuum-cloth {} {} {}x{}", what, p.model, p.side, p.side));
+  auto sheets = ctx.sweep<Sheet>(labels, [&](size_t i) {
+    return sheet(points[i].model == "springs" ? Params{{"continuum", 0}} : continuum_of(springs), points[i].side);
+  });
+  for (size_t i = 0; i < points.size(); ++i)
+    if (!sheets[i].failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: {}: {}", labels[i], sheets[i].failure));
+  return sheets;
+}
+
+// refinement: the sheet hanging from its two top corners by mesh; `sides` gets the meshes' sides
 Table refinement_table(const StudyContext& ctx, const UniaxialStretch& springs, std::vector<int>& sides) {
   sides = {8, 16, 32};
   if (!ctx.quick) sides.push_back(64);
   Table refinement{{"model", "side", "nodes", "spacing", "sag", "bottom_width", "middle_width", "bottom_drop", "newton_iterations"}, {}};
-  struct Point {
-    std::string model;
-    int side;
-  };
-  std::vector<Point> points;
-  for (const char* model : {"springs", "continuum"})
-    for (const int side : sides) points.push_back({model, side});
-  std::vector<std::string> labels;
-  for (const auto& p : points) labels.push_back(fmt::format("continuum-cloth {} {}x{}", p.model, p.side, p.side));
-  const auto sheets = ctx.sweep<HangingSheet>(labels, [&](size_t i) {
-    const Point& p = points[i];
-    const Params params = p.model == "springs" ? Params{{"continuum", 0}} : continuum_of(springs);
-    return hanging_sheet(params, p.side);
-  });
+  std::vector<MeshPoint> points;
+  const auto sheets = sheets_by_mesh<HangingSheet>(ctx, springs, sides, "two-point", hanging_sheet, points);
   for (size_t i = 0; i < points.size(); ++i) {
     const HangingSheet& s = sheets[i];
-    if (!s.failure.empty()) throw std::runtime_error(fmt::format("continuum-cloth: {}: {}", labels[i], s.failure));
     refinement.rows.push_back({points[i].model, long{points[i].side}, long{points[i].side * points[i].side}, 1.0 / (points[i].side - 1), s.sag,
                                s.bottom_width, s.middle_width, s.bottom_drop, long{s.iterations}});
   }
   return refinement;
+}
+
+// the well-posed refinement: the sheet held along its whole top edge, by mesh (8^2 to 32^2, 64^2 in full); the
+// continuum's order in the drop, and how far the springs' finest is from the continuum of its own material, in
+// percent and in pixels of the flag's frame
+struct ClampedRefinement {
+  Table table;
+  std::string md;
+};
+ClampedRefinement clamped_refinement(const StudyContext& ctx, const UniaxialStretch& springs) {
+  std::vector<int> sides{8, 16, 32};
+  if (!ctx.quick) sides.push_back(64);
+  ClampedRefinement out;
+  out.table = {{"model", "side", "nodes", "drop", "bottom_width", "middle_width"}, {}};
+  std::vector<MeshPoint> points;
+  const auto sheets = sheets_by_mesh<ClampedSheet>(ctx, springs, sides, "held along its top edge", clamped_sheet, points);
+  for (size_t i = 0; i < points.size(); ++i)
+    out.table.rows.push_back({points[i].model, long{points[i].side}, long{points[i].side * points[i].side}, sheets[i].drop, sheets[i].bottom_width,
+                              sheets[i].middle_width});
+  const size_t m = sides.size();  // the continuum's rows follow the springs'
+  const auto drop = [&](const std::string& model, size_t k) { return sheets[(model == "springs" ? 0 : m) + k].drop; };
+  const auto order = [&](const std::string& model) {
+    return observed_order(1.0 / (sides[m - 3] - 1), 1.0 / (sides[m - 2] - 1), 1.0 / (sides[m - 1] - 1), drop(model, m - 3), drop(model, m - 2),
+                          drop(model, m - 1));
+  };
+  const auto shown_order = [](std::optional<double> p) { return p ? fmt::format("{:.2f}", *p) : std::string("none (not monotone)"); };
+  const double pixel = flag_frame_extent / frame_pixels;
+  const double gap = drop("springs", m - 1) - drop("continuum", m - 1);
+  out.md = fmt::format(
+      "**Held along its whole top edge, both meshes converge**: the bottom edge's drop under gravity (in its plane) converges "
+      "at order {} for the finite elements and {} for the springs ({}², {}², {}²); at {}² the spring sheet drops {:+.1f}% "
+      "off the continuum of its own measured material, {:+.2g} mm, {:.2g} px of the flag's {:g}-pixel frame. Hung from two points "
+      "instead (below), plane elasticity is singular at the pins and neither converges.\n\n",
+      shown_order(order("continuum")), shown_order(order("springs")), sides[m - 3], sides[m - 2], sides[m - 1], sides[m - 1],
+      100 * (drop("springs", m - 1) / drop("continuum", m - 1) - 1), 1e3 * gap, std::abs(gap) / pixel, frame_pixels);
+  out.md += markdown_table(out.table, {{"model", "model"},
+                                       {"side", "nodes a side"},
+                                       {"drop", "bottom drop (m)", shown_as("{:.6f}")},
+                                       {"bottom_width", "bottom width (m)", shown_as("{:.6f}")},
+                                       {"middle_width", "width halfway down (m)", shown_as("{:.6f}")}});
+  out.md += "\n";
+  return out;
 }
 
 // the flag in motion: the seeds' gusting 32 x 32 flag with springs and with the continuum of the springs' own
@@ -376,12 +426,15 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
                                    {"bottom_width", "bottom width (m)", number("{:.5f}")},
                                    {"sag", "sag (m)", number("{:.5f}")}});
   md += "\n";
+  ClampedRefinement clamped = clamped_refinement(ctx, *springs);
+  md += clamped.md;
   std::vector<Figure> figures;
   md += refinement_figure(figures);
   EqualCpu motion = equal_cpu_table(ctx, continuum_of(*springs));
   md += equal_cpu_text(motion, *springs, flag, figures);
   return {{{"continuum_cloth_poisson", std::move(poisson)},
            {"continuum_cloth_refinement", std::move(refinement)},
+           {"continuum_cloth_clamped", std::move(clamped.table)},
            {"continuum_cloth_sides", std::move(narrowing)},
            {"continuum_cloth_equal_cpu", std::move(motion.table)}},
           md, figures};

@@ -273,7 +273,6 @@ TEST(Cloth, NewtonOnTheIncrementalPotentialLowersItAtEveryIterationAndEndsQuadra
   for (const double continuum : {0.0, 1.0}) {
     const auto flag = make_model("cloth", {{"continuum", continuum}});
     const NewtonTrace trace = newton_trace(*flag, 1.0 / 30);
-    for (size_t k = 0; k < trace.moved.size(); ++k) std::cout << k << " " << trace.moved[k] << " " << trace.value[k] << "\n";
     ASSERT_TRUE(trace.failure.empty()) << trace.failure;
     for (size_t k = 1; k < trace.value.size(); ++k) EXPECT_LE(trace.value[k], trace.value[k - 1]) << "continuum " << continuum << ", iteration " << k;
     // the order of the last contraction above round-off (a step of 1e-9 m/s moves a node 3e-11 m at 1/30 s)

@@ -282,3 +282,25 @@ TEST(Membrane, ImplicitEulerIsFirstOrderOnTheHangingContinuum) {
 
 }  // namespace
 }  // namespace stepwise
+
+namespace stepwise {
+namespace {
+
+TEST(Membrane, ASheetHeldAlongItsTopEdgeConvergesUnderRefinement) {
+  // held along a line (not from two points, where plane elasticity is singular): the drop's successive differences
+  // shrink at order >= 1 in the mesh size
+  std::vector<double> drops;
+  for (const int side : {8, 16, 32}) {
+    const ClampedSheet s = clamped_sheet({{"continuum", 1}, {"nu", 0.3}}, side);
+    ASSERT_TRUE(s.failure.empty()) << side << ": " << s.failure;
+    drops.push_back(s.drop);
+    std::cout << side << "^2: drop " << s.drop << " m, bottom width " << s.bottom_width << ", middle width " << s.middle_width << "\n";
+  }
+  // differences between meshes halving h: d1 = |D16 - D8|, d2 = |D32 - D16|, order log2(d1 / d2)
+  const double order = std::log2(std::abs(drops[1] - drops[0]) / std::abs(drops[2] - drops[1]));
+  std::cout << "order " << order << "\n";
+  EXPECT_GT(order, tolerance::fem_refinement_order);
+}
+
+}  // namespace
+}  // namespace stepwise
