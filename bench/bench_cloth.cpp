@@ -12,13 +12,18 @@
 //  - the continuum flag (`continuum = 1`: StVK membrane and bending elements on the same grid, 32 and 64) against
 //    the spring flag: assembly (force Jacobians, each element's Hessian projected, and the matrix), CHOLMOD's
 //    refactorisation and solve, and a whole implicit-euler step, the symbolic analysis kept across steps; and
-//    the continuum's assembly with the exact K against the projected one (what the projection costs).
+//    the continuum's assembly with the exact K against the projected one (what the projection costs);
+//  - one 1/60 s frame (one step from the same state) of backward Euler by Newton on the incremental potential
+//    (implicit-euler-newton) against the linearised step (implicit-euler, refactorising), springs and continuum, with
+//    the Newton iterations a frame, and its parts: the potential's gradient and its Hessian's assembly (the
+//    factorisation and the solve are the refactor and solve rows above).
 // One core: CHOLMOD's BLAS is kept on the calling thread (sparse_cholesky.cpp). The BLAS is Debian's
 // alternative (OpenBLAS when installed); LD_LIBRARY_PATH=/usr/lib/x86_64-linux-gnu/blas runs the reference
 // BLAS instead. The program prints the library its dgemm_ comes from.
 #include "run/scene.hpp"
 #include "models/model.hpp"
 #include "solvers/method_table.hpp"
+#include "solvers/incremental_potential.hpp"
 #include "solvers/mass_spring_implicit.hpp"
 #include "solvers/run_support.hpp"
 #include "solvers/sparse_cholesky.hpp"
@@ -234,6 +239,49 @@ void BM_hanging_step_refactor(benchmark::State& state) { steps(state, refactorin
 void BM_step_fast_mass_spring(benchmark::State& state) { steps(state, stepwise::make_fast_mass_spring); }
 void BM_continuum_step_kept_factor(benchmark::State& state) { steps(state, stepwise::make_implicit_euler, {}, true); }
 
+// one 1/60 s frame from the flag's state at 0.1 s, by the step `newton` says, refactorising every solve
+constexpr double frame = 1.0 / 60;
+void one_frame(benchmark::State& state, bool newton, bool continuum) {
+  Flag& f = flag(static_cast<int>(state.range(0)), {}, continuum);
+  stepwise::MassSpringImplicitOptions options;
+  options.newton = newton;
+  options.solve = stepwise::LinearSolve::refactor;
+  const auto stepper = stepwise::make_mass_spring_implicit(*f.counted, options);
+  Eigen::VectorXd y_next;
+  std::string failure;
+  const long iterations = f.stats.newton_iterations;
+  long frames = 0;
+  for (auto _ : state) {
+    if (!stepper->step(0.1, frame, f.y, y_next, failure)) state.SkipWithError(failure.c_str());
+    benchmark::DoNotOptimize(y_next.data());
+    ++frames;
+  }
+  state.counters["newton_iterations"] = static_cast<double>(f.stats.newton_iterations - iterations) / static_cast<double>(std::max(1L, frames));
+}
+void BM_frame_linearised(benchmark::State& state) { one_frame(state, false, false); }
+void BM_frame_newton(benchmark::State& state) { one_frame(state, true, false); }
+void BM_continuum_frame_linearised(benchmark::State& state) { one_frame(state, false, true); }
+void BM_continuum_frame_newton(benchmark::State& state) { one_frame(state, true, true); }
+
+// the incremental potential's parts at the frame's start: its gradient, and its Hessian assembled (M - h D0 - h^2 K)
+void potential_part(benchmark::State& state, bool continuum, bool hessian) {
+  Flag& f = flag(static_cast<int>(state.range(0)), {}, continuum);
+  stepwise::IncrementalPotential potential(*f.counted, *f.counted->as<stepwise::MassSpringView>());
+  potential.start(0.1, f.y, frame);
+  const Eigen::VectorXd x = potential.inertial();
+  Eigen::VectorXd g;
+  Eigen::SparseMatrix<double> a;
+  for (auto _ : state) {
+    if (hessian) potential.scaled_hessian(x, false, a);
+    else potential.gradient(x, g);
+    benchmark::DoNotOptimize(hessian ? a.valuePtr() : g.data());
+  }
+}
+void BM_potential_gradient(benchmark::State& state) { potential_part(state, false, false); }
+void BM_potential_hessian(benchmark::State& state) { potential_part(state, false, true); }
+void BM_continuum_potential_gradient(benchmark::State& state) { potential_part(state, true, false); }
+void BM_continuum_potential_hessian(benchmark::State& state) { potential_part(state, true, true); }
+
 #define FLAG_SIZES ->Arg(32)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)
 BENCHMARK(BM_cholmod_analyze_amd) FLAG_SIZES;
 BENCHMARK(BM_cholmod_analyze_metis) FLAG_SIZES;
@@ -255,6 +303,14 @@ BENCHMARK(BM_continuum_assemble) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_assemble_exact) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_cholmod_refactor) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_step_kept_factor) CONTINUUM_SIZES;
+BENCHMARK(BM_frame_linearised) CONTINUUM_SIZES;
+BENCHMARK(BM_frame_newton) CONTINUUM_SIZES;
+BENCHMARK(BM_continuum_frame_linearised) CONTINUUM_SIZES;
+BENCHMARK(BM_continuum_frame_newton) CONTINUUM_SIZES;
+BENCHMARK(BM_potential_gradient) CONTINUUM_SIZES;
+BENCHMARK(BM_potential_hessian) CONTINUUM_SIZES;
+BENCHMARK(BM_continuum_potential_gradient) CONTINUUM_SIZES;
+BENCHMARK(BM_continuum_potential_hessian) CONTINUUM_SIZES;
 
 }  // namespace
 
@@ -281,6 +337,10 @@ int main(int argc, char** argv) {
     pairs.emplace_back("BM_continuum_assemble" + arg, "BM_continuum_assemble_exact" + arg);
     pairs.emplace_back("BM_continuum_cholmod_refactor" + arg, "BM_cholmod_refactor" + arg);
     pairs.emplace_back("BM_continuum_step_kept_factor" + arg, "BM_step_kept_factor" + arg);
+    // the aim: the continuum's converged frame within 3x the springs' linearised one
+    pairs.emplace_back("BM_continuum_frame_newton" + arg, "BM_frame_linearised" + arg);
+    pairs.emplace_back("BM_frame_newton" + arg, "BM_frame_linearised" + arg);
+    pairs.emplace_back("BM_continuum_frame_newton" + arg, "BM_continuum_frame_linearised" + arg);
   }
   return stepwise::bench::run_with_ratios(argc, argv, pairs);
 }

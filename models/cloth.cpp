@@ -74,6 +74,9 @@ std::span<const ParamSpec> parameter_table() {
       {"nu", 0.3, "", "Poisson's ratio of the continuum sheet, in (-1, 0.5)", Bound::finite},
       {"thickness", 5e-4, "m", "thickness of the continuum sheet", Bound::positive},
       {"density", 1000, "kg/m^3", "density of the continuum sheet; its node masses are lumped from its triangles", Bound::positive},
+      {"rayleigh_beta", 0, "s", "the continuum's damping of its own: a viscous stress in the membrane, the elastic law times beta on "
+       "the strain rate (-beta K v in the linear limit: Rayleigh's stiffness-proportional damping; `drag` is the mass-proportional "
+       "part); gamma / stiffness matches a spring's Voigt damping", Bound::nonnegative},
   };
   return table;
 }
@@ -112,7 +115,8 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
         ground_y_(p.at("ground_y")),
         friction_(p.at("friction")),
         continuum_(p.at("continuum") == 1),
-        material_(p.at("E"), p.at("nu"), p.at("thickness")) {
+        material_(p.at("E"), p.at("nu"), p.at("thickness")),
+        beta_(p.at("rayleigh_beta")) {
     if (!(p.at("nu") > -1 && p.at("nu") < 0.5))
       throw BadParameter("nu", fmt::format("parameter 'nu' = {} must be in (-1, 0.5): 0.5 is an incompressible sheet and -1 one with no "
                                            "resistance to area change, where the plane-stress Lame parameters are infinite",
@@ -365,6 +369,7 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
       for (int i = 0; i < free_; ++i) BlockPattern::add(dfdv, diagonal_slots_[i], -view_.mass[i] * drag_ * Eigen::Matrix3d::Identity());
     add_spring_force_jacobians(view_.springs, spring_slots_, x, v, definite, dfdx, dfdv);
     if (continuum_) add_continuum_force_jacobian(x, definite, dfdx);
+    if (continuum_ && beta_ > 0) add_continuum_damping_jacobians(x, v, definite, dfdx, dfdv);
     if (forces == Forces::stiff || wind_k_ == 0) return;
     const Eigen::Vector3d w = wind_at(t);
     for (size_t k = 0; k < triangles_.size(); ++k) {
@@ -483,6 +488,9 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
   }
 
   Corners3 corners(const std::array<int, 3>& node, const double* x) const { return {corner(node[0], x), corner(node[1], x), corner(node[2], x)}; }
+  Corners3 corner_velocities(const std::array<int, 3>& node, const double* v) const {
+    return {corner_velocity(node[0], v), corner_velocity(node[1], v), corner_velocity(node[2], v)};
+  }
   std::vector<Eigen::Vector3d> corners(const std::vector<int>& node, const double* x) const {
     std::vector<Eigen::Vector3d> c;
     for (const int k : node) c.push_back(corner(k, x));
@@ -499,7 +507,8 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
       if (free_index_[k] >= 0) f.segment<3>(3 * free_index_[k]) += force;
     };
     for (const MembraneElement& e : elements_) {
-      const Vector9d fe = membrane_force(material_, e, corners(e.node, x));
+      Vector9d fe = membrane_force(material_, e, corners(e.node, x));
+      if (beta_ > 0) fe += membrane_damping_force(material_, e, corners(e.node, x), corner_velocities(e.node, v), beta_);
       for (int i = 0; i < 3; ++i) add(e.node[i], fe.segment<3>(3 * i));
     }
     for (const BendingStencil& s : stencils_) {
@@ -525,6 +534,23 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
           if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0)
             BlockPattern::add(dfdx, stencil_slots_[k][m * i + j],
                               -material_.bending * s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * Eigen::Matrix3d::Identity());
+    }
+  }
+
+  // the continuum's damping: df/dv (negative semidefinite) and, exact, df/dx (the viscous stress turning with F). The
+  // membrane's alone: the quadratic bending's constant Hessian times v would damp a curved sheet's rigid spin
+  void add_continuum_damping_jacobians(const double* x, const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                                       Eigen::SparseMatrix<double>& dfdv) const {
+    const auto add_element = [&](size_t k, const Matrix9d& J, Eigen::SparseMatrix<double>& to) {
+      const MembraneElement& e = elements_[k];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (free_index_[e.node[i]] >= 0 && free_index_[e.node[j]] >= 0) BlockPattern::add(to, triangle_slots_[k][3 * i + j], J.block<3, 3>(3 * i, 3 * j));
+    };
+    for (size_t k = 0; k < elements_.size(); ++k) {
+      const MembraneElement& e = elements_[k];
+      add_element(k, membrane_damping_velocity_jacobian(material_, e, corners(e.node, x), beta_), dfdv);
+      if (!definite) add_element(k, membrane_damping_position_jacobian(material_, e, corners(e.node, x), corner_velocities(e.node, v), beta_), dfdx);
     }
   }
 
@@ -587,6 +613,7 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
   double node_mass_ = 0;  // the spring sheet's (the continuum's masses are lumped: view_.mass)
   bool continuum_;
   MembraneMaterial material_;
+  double beta_;  // the continuum's Rayleigh beta (s): its viscous stress's retardation time
   std::vector<MembraneElement> elements_;  // the continuum's, one a triangle (triangles_'s order)
   std::vector<BendingStencil> stencils_;   // the continuum's, one an interior node
   Eigen::VectorXd mass3_;                  // each free node's mass, once a coordinate

@@ -37,6 +37,21 @@ Vector9d corner_gradient(const Eigen::Matrix<double, 3, 2>& G) {
   return g;
 }
 
+// the change of Ds when coordinate c of corner j moves by one (x0 moves both edges back)
+Eigen::Matrix<double, 3, 2> edge_change(int j, int c) {
+  Eigen::Matrix<double, 3, 2> dDs = Eigen::Matrix<double, 3, 2>::Zero();
+  if (j == 0)
+    dDs.row(c).setConstant(-1);
+  else
+    dDs(c, j - 1) = 1;
+  return dDs;
+}
+
+Eigen::Matrix2d symmetric_product(const Eigen::Matrix<double, 3, 2>& a, const Eigen::Matrix<double, 3, 2>& b) {
+  return (a.transpose() * b + b.transpose() * a) / 2;
+}
+
+
 }  // namespace
 
 Eigen::Matrix<double, 3, 2> deformation_gradient(const MembraneElement& e, const Corners3& x) { return edges(x) * e.rest_inverse; }
@@ -66,13 +81,8 @@ Matrix9d membrane_force_jacobian(const MembraneMaterial& m, const MembraneElemen
   Matrix9d H;  // d^2 W / dx^2, a column per coordinate
   for (int j = 0; j < 3; ++j)
     for (int c = 0; c < 3; ++c) {
-      Eigen::Matrix<double, 3, 2> dDs = Eigen::Matrix<double, 3, 2>::Zero();
-      if (j == 0)
-        dDs.row(c).setConstant(-1);
-      else
-        dDs(c, j - 1) = 1;
-      const Eigen::Matrix<double, 3, 2> dF = dDs * e.rest_inverse;
-      const Eigen::Matrix2d dE = (dF.transpose() * F + F.transpose() * dF) / 2;
+      const Eigen::Matrix<double, 3, 2> dF = edge_change(j, c) * e.rest_inverse;
+      const Eigen::Matrix2d dE = symmetric_product(dF, F);
       const Eigen::Matrix<double, 3, 2> dP = dF * S + F * membrane_stress(m, dE);
       H.col(3 * j + c) = corner_gradient(volume * dP * e.rest_inverse.transpose());
     }
@@ -80,6 +90,37 @@ Matrix9d membrane_force_jacobian(const MembraneMaterial& m, const MembraneElemen
   const Eigen::SelfAdjointEigenSolver<Matrix9d> eigen((H + H.transpose()) / 2);
   const Vector9d clamped = eigen.eigenvalues().cwiseMax(0.0);
   return -(eigen.eigenvectors() * clamped.asDiagonal() * eigen.eigenvectors().transpose());
+}
+
+Vector9d membrane_damping_force(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, const Corners3& v, double beta) {
+  const Eigen::Matrix<double, 3, 2> F = deformation_gradient(e, x), Fdot = edges(v) * e.rest_inverse;
+  const Eigen::Matrix<double, 3, 2> P = F * (beta * membrane_stress(m, symmetric_product(F, Fdot)));
+  return -corner_gradient(e.area * m.thickness * P * e.rest_inverse.transpose());
+}
+
+Matrix9d membrane_damping_velocity_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, double beta) {
+  const Eigen::Matrix<double, 3, 2> F = deformation_gradient(e, x);
+  Matrix9d J;
+  for (int j = 0; j < 3; ++j)
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Matrix<double, 3, 2> dFdot = edge_change(j, c) * e.rest_inverse;
+      const Eigen::Matrix<double, 3, 2> dP = F * (beta * membrane_stress(m, symmetric_product(F, dFdot)));
+      J.col(3 * j + c) = -corner_gradient(e.area * m.thickness * dP * e.rest_inverse.transpose());
+    }
+  return J;
+}
+
+Matrix9d membrane_damping_position_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, const Corners3& v, double beta) {
+  const Eigen::Matrix<double, 3, 2> F = deformation_gradient(e, x), Fdot = edges(v) * e.rest_inverse;
+  const Eigen::Matrix2d S = beta * membrane_stress(m, symmetric_product(F, Fdot));
+  Matrix9d J;
+  for (int j = 0; j < 3; ++j)
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Matrix<double, 3, 2> dF = edge_change(j, c) * e.rest_inverse;
+      const Eigen::Matrix<double, 3, 2> dP = dF * S + F * (beta * membrane_stress(m, symmetric_product(dF, Fdot)));
+      J.col(3 * j + c) = -corner_gradient(e.area * m.thickness * dP * e.rest_inverse.transpose());
+    }
+  return J;
 }
 
 namespace {

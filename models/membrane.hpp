@@ -72,6 +72,18 @@ double membrane_energy(const MembraneMaterial& m, const MembraneElement& e, cons
 Vector9d membrane_force(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x);
 Matrix9d membrane_force_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, bool definite);
 
+// Damping of its own (the Kelvin-Voigt solid's viscous stress, a dissipation potential): the strain rate
+// Edot = (F^T Fdot + Fdot^T F) / 2 drives the stress S_v = beta (2 mu Edot + lambda tr(Edot) I), the elastic law times a
+// retardation time beta (s), forces as the elastic stress's with S_v for S. In the linear limit the force is -beta K v,
+// Rayleigh's stiffness-proportional damping; at any deformation it is rotation-invariant (a rigid spin has Edot = 0)
+// and it dissipates: v . f = -A h beta (2 mu Edot:Edot + lambda tr(Edot)^2) <= 0. A spring's Voigt damping gamma
+// along its axis is the same law with beta = gamma / c, c its stiffness (f = -c (u.dx) u against -gamma (u.dv) u)
+Vector9d membrane_damping_force(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, const Corners3& v, double beta);
+// its derivative by the corners' velocities (symmetric negative semidefinite: minus beta times the elastic Hessian's
+// stress-free part) and by their positions
+Matrix9d membrane_damping_velocity_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, double beta);
+Matrix9d membrane_damping_position_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, const Corners3& v, double beta);
+
 struct BendingStencil {
   std::vector<int> node;  // an interior vertex, then its neighbours (grid nodes)
   Eigen::MatrixXd Q;      // c c^T / A_v

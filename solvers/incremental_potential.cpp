@@ -13,6 +13,8 @@ constexpr double armijo = 1e-4;   // the fraction of the predicted decrease of G
 constexpr int max_halvings = 30;  // the shortest step tried: 2^-30 of Newton's
 // the mass term's raise tried on an indefinite Hessian: from 1/64 of M up to 64 M (then the projected Hessian)
 constexpr double min_shift = 1.0 / 64, max_shift = 64;
+// G's round-off: a few dozen ulps of it, the sum of its terms' (inertia, the forces' work, the elements' energies)
+constexpr double round_off_decrease = 64 * std::numeric_limits<double>::epsilon();
 
 }  // namespace
 
@@ -41,6 +43,13 @@ double IncrementalPotential::value(const Eigen::VectorXd& x) const {
   const Eigen::VectorXd d = x - xb_;
   const double inertia = d.cwiseAbs2().dot(m_) / (2 * h_ * h_) - d.dot(d0_ * d) / (2 * h_);
   return inertia - f0_.dot(x) + view_.potential(x);
+}
+
+double IncrementalPotential::change(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  const Eigen::VectorXd d = x - xb_;
+  // 1/2 (d + dx)^T A (d + dx) - 1/2 d^T A d = dx^T A d + 1/2 dx^T A dx, A = M / h^2 - D0 / h (symmetric)
+  const Eigen::VectorXd a_dx = dx.cwiseProduct(m_) / (h_ * h_) - (d0_ * dx) / h_;
+  return a_dx.dot(d) + a_dx.dot(dx) / 2 - f0_.dot(dx) + (view_.potential(x + dx) - view_.potential(x));
 }
 
 void IncrementalPotential::gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
@@ -109,17 +118,21 @@ std::string PotentialNewton::minimise(const IncrementalPotential& potential, Eig
       x += dx_.col(0);
       return "";
     }
-    // the line search on G itself
+    // converged too where the decrease the step predicts is G's round-off: the gradient has vanished, and what is
+    // left of the step lies along directions G barely sees (a sheet that barely bends, buckling: a soft mode whose
+    // Newton step stays 1e-6 m/s long while G's slope along it is 1e-17 J, measured on the continuum flag)
     const double slope = g_.dot(dx_.col(0));
+    if (-slope <= round_off_decrease * std::abs(value)) return "";
+    // the line search on G itself
     bool lowered = false;
     for (int halving = 0; halving <= max_halvings && !lowered; ++halving) {
       const double alpha = std::ldexp(1.0, -halving);
-      trial_ = x + alpha * dx_.col(0);
-      const double trial_value = potential.value(trial_);
-      lowered = trial_value <= value + armijo * alpha * slope;
+      trial_ = alpha * dx_.col(0);
+      const double change = potential.change(x, trial_);
+      lowered = change <= armijo * alpha * slope;
       if (lowered) {
-        x.swap(trial_);
-        value = trial_value;
+        x += trial_;
+        value += change;
       } else {
         ++stats.line_search_halvings;
       }

@@ -31,6 +31,9 @@ class IncrementalPotential {
   void start(double t0, const Eigen::VectorXd& y0, double h);
   // G(x), and its gradient (3 nodes x 1)
   double value(const Eigen::VectorXd& x) const;
+  // G(x + dx) - G(x), its quadratic and linear parts as differences (G's own terms are of order |f0| |x|, and their
+  // round-off would hide the last Newton steps' decrease), the elastic part as Psi's difference
+  double change(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
   void gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;
   // h^2 times G's Hessian, M - h D0 - h^2 K(x): exact (positive definite near a minimum, where Newton then converges
   // quadratically), or (definite) with each spring's or element's Hessian made semidefinite, positive definite
@@ -52,15 +55,19 @@ class IncrementalPotential {
   mutable Eigen::SparseMatrix<double> k_;
 };
 
-// Newton on G: each direction from the sparse Cholesky factor (its analysis kept across steps) of G's exact Hessian
-// where it is positive definite, else of the one made semidefinite element by element (projecting every element,
-// as IPC does, drops the negative curvature of compressed springs that the mass term would carry: Newton then
-// converges linearly, 0.88 an iteration on the flag's first step at 1/30 s, measured), each step halved until G falls by Armijo's fraction of the decrease the gradient predicts (a descent direction of a
-// positive definite model always finds one); converged when the step moves no node faster than
-// `velocity_tolerance` (|dx|inf / h, as IPC judges it). From `x` (a first guess) to the minimiser, in x
+// Newton on G, from `x` (a first guess) to the minimiser, in x. Each direction comes from the sparse Cholesky factor
+// (its analysis kept across steps) of G's exact Hessian where it is positive definite, else of that Hessian with its
+// mass term raised (A + tau M, tau grown fourfold until the factor exists), else of the one made semidefinite element
+// by element. (Projecting every element, as IPC does, drops the negative curvature of compressed springs that the
+// mass term would carry: Newton then converges linearly, 0.88 an iteration on the flag's first step at 1/30 s.)
+// Each step is halved until G falls by Armijo's fraction of the decrease the gradient predicts (a descent direction
+// of a positive definite model always finds one). Converged when the step moves no node faster than
+// `velocity_tolerance` (|dx|inf / h, as IPC judges it), or when the decrease it predicts is G's round-off
 struct NewtonOnPotential {
   int max_iterations = 200;
-  double velocity_tolerance = 1e-5;  // m/s (see implicit_euler.cpp for the derivation from a frame's pixel)
+  // m/s: a step's velocity error e moves the nodes e h a step, e T over a run of T seconds; a tenth of a pixel of the
+  // flag's frame (1.5 m in 720 px: 2e-4 m) over its 5 s allows 4e-5 m/s, and 1e-5 keeps a factor of four
+  double velocity_tolerance = 1e-5;
   Ordering ordering = Ordering::cheaper;
   // called at each iteration with G there and how fast Newton's step from there moves a node (m/s): the tests' view
   std::function<void(int iteration, double value, double moved)> observe;

@@ -597,4 +597,9 @@ inline constexpr double newton_quadratic_order = 1.5;
 // two-point sheet's sag, order 0.45)
 inline constexpr double fem_refinement_order = 0.8;
 
+// the continuum's damping force against its velocity Jacobian times v: one linear map evaluated two ways (element by
+// element, then summed), each sum's round-off a few eps of the largest element force (at most |f| times the ~6
+// elements at a node over the cancellation): 1e-12 of 1 + |f|, where a wrong term is O(|f|)
+inline constexpr double damping_linear_map = 1e-12;
+
 }  // namespace stepwise::tolerance
