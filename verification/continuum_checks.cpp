@@ -62,72 +62,81 @@ Params continuum_of(const UniaxialStretch& springs) {
   return {{"continuum", 1}, {"E", springs.E}, {"nu", std::clamp(springs.nu, -0.9, 0.49)}};
 }
 
-HangingSheet hanging_sheet(Params params, int side) {
-  for (const auto& [key, value] : Params{{"rows", side}, {"columns", side}, {"width", 1.0}, {"height", 1.0}, {"pin_corners", 0},
-                                         {"pin_top_corners", 1}, {"wind_coefficient", 0}})
+namespace {
+
+// a 1 m square sheet of side x side nodes held by `support` (its pins' parameters), hanging in its plane under gravity
+// applied in four steps, each from the last one's equilibrium: the state, Newton's iterations, and why not where it failed
+struct Hung {
+  Eigen::VectorXd y;
+  int iterations = 0;
+  std::string failure;
+  double top = 0;  // the top row's height (m)
+};
+Hung hang_in_plane(Params params, int side, const Params& support) {
+  for (const auto& [key, value] : Params{{"rows", side}, {"columns", side}, {"width", 1.0}, {"height", 1.0}, {"pin_corners", 0}, {"wind_coefficient", 0}})
     params[key] = value;
+  for (const auto& [key, value] : support) params[key] = value;
   params = resolve_params(*find_model("cloth"), params);
   const double g = params.at("g");
-  // the two top corners pinned: grid node k is state node k - 1 on the top row, k - 2 below it
-  const auto at = [&](int r, int c) {
-    const int k = r * side + c;
-    return 3 * Eigen::Index{r == 0 ? k - 1 : k - 2};
-  };
-  Eigen::VectorXd y;
-  HangingSheet out;
+  Hung out;
+  out.top = params.at("elevation");
   for (int step = 1; step <= 4; ++step) {
     params["g"] = g * step / 4;
     const auto model = make_model("cloth", params);
-    if (y.size() == 0) y = model->initial_state();
-    const StaticEquilibrium eq = static_equilibrium(*model, y, in_plane(y.size() / 2));
+    if (out.y.size() == 0) out.y = model->initial_state();
+    const StaticEquilibrium eq = static_equilibrium(*model, out.y, in_plane(out.y.size() / 2));
     out.iterations += eq.iterations;
-    y = eq.y;
+    out.y = eq.y;
     if (!eq.failure.empty()) {
       out.failure = fmt::format("g = {}: {}", params["g"], eq.failure);
       break;
     }
   }
-  const double top = params.at("elevation");
-  const auto middle_y = [&](int r) {
-    return side % 2 ? y[at(r, side / 2) + 1] : (y[at(r, side / 2 - 1) + 1] + y[at(r, side / 2) + 1]) / 2;
-  };
-  out.sag = top - middle_y(0);
-  out.bottom_width = y[at(side - 1, side - 1)] - y[at(side - 1, 0)];
-  const auto width_at = [&](int r) { return y[at(r, side - 1)] - y[at(r, 0)]; };
-  out.middle_width = side % 2 ? width_at(side / 2) : (width_at(side / 2 - 1) + width_at(side / 2)) / 2;
-  out.bottom_drop = (top - 1) - middle_y(side - 1);
+  return out;
+}
+
+// the heights and widths of a hung sheet's rows, `at(r, c)` the state index of grid node (r, c)'s x
+template <class At>
+struct Rows {
+  const Eigen::VectorXd& y;
+  int side;
+  At at;
+  double middle_y(int r) const { return side % 2 ? y[at(r, side / 2) + 1] : (y[at(r, side / 2 - 1) + 1] + y[at(r, side / 2) + 1]) / 2; }
+  double width(int r) const { return y[at(r, side - 1)] - y[at(r, 0)]; }
+  double middle_width() const { return side % 2 ? width(side / 2) : (width(side / 2 - 1) + width(side / 2)) / 2; }
+};
+template <class At>
+Rows(const Eigen::VectorXd&, int, At) -> Rows<At>;
+
+}  // namespace
+
+HangingSheet hanging_sheet(Params params, int side) {
+  const Hung hung = hang_in_plane(std::move(params), side, {{"pin_top_corners", 1}});
+  // the two top corners pinned: grid node k is state node k - 1 on the top row, k - 2 below it
+  const Rows rows{hung.y, side, [side](int r, int c) {
+                    const int k = r * side + c;
+                    return 3 * Eigen::Index{r == 0 ? k - 1 : k - 2};
+                  }};
+  HangingSheet out;
+  out.iterations = hung.iterations;
+  out.failure = hung.failure;
+  out.sag = hung.top - rows.middle_y(0);
+  out.bottom_width = rows.width(side - 1);
+  out.middle_width = rows.middle_width();
+  out.bottom_drop = (hung.top - 1) - rows.middle_y(side - 1);
   return out;
 }
 
 ClampedSheet clamped_sheet(Params params, int side) {
-  for (const auto& [key, value] : Params{{"rows", side}, {"columns", side}, {"width", 1.0}, {"height", 1.0}, {"pin_corners", 0},
-                                         {"pin_top_edge", 1}, {"wind_coefficient", 0}})
-    params[key] = value;
-  params = resolve_params(*find_model("cloth"), params);
-  const double g = params.at("g");
+  const Hung hung = hang_in_plane(std::move(params), side, {{"pin_top_edge", 1}});
   // the top row pinned: grid node k (below it) is state node k - side
-  const auto at = [&](int r, int c) { return 3 * Eigen::Index{r * side + c - side}; };
-  Eigen::VectorXd y;
+  const Rows rows{hung.y, side, [side](int r, int c) { return 3 * Eigen::Index{r * side + c - side}; }};
   ClampedSheet out;
-  for (int step = 1; step <= 4; ++step) {
-    params["g"] = g * step / 4;
-    const auto model = make_model("cloth", params);
-    if (y.size() == 0) y = model->initial_state();
-    const StaticEquilibrium eq = static_equilibrium(*model, y, in_plane(y.size() / 2));
-    out.iterations += eq.iterations;
-    y = eq.y;
-    if (!eq.failure.empty()) {
-      out.failure = fmt::format("g = {}: {}", params["g"], eq.failure);
-      break;
-    }
-  }
-  const double top = params.at("elevation");
-  const int bottom = side - 1;
-  const auto middle_y = [&](int r) { return side % 2 ? y[at(r, side / 2) + 1] : (y[at(r, side / 2 - 1) + 1] + y[at(r, side / 2) + 1]) / 2; };
-  const auto width_at = [&](int r) { return y[at(r, side - 1)] - y[at(r, 0)]; };
-  out.drop = (top - 1) - middle_y(bottom);
-  out.bottom_width = width_at(bottom);
-  out.middle_width = side % 2 ? width_at(side / 2) : (width_at(side / 2 - 1) + width_at(side / 2)) / 2;
+  out.iterations = hung.iterations;
+  out.failure = hung.failure;
+  out.drop = (hung.top - 1) - rows.middle_y(side - 1);
+  out.bottom_width = rows.width(side - 1);
+  out.middle_width = rows.middle_width();
   return out;
 }
 
