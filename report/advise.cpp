@@ -250,7 +250,7 @@ Candidate verdict(const Method& method, const std::vector<AdvisePoint>& pts, dou
 
 }  // namespace
 
-Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads) {
+Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads, const std::function<void(const std::string& line)>& progress) {
   const auto start = Clock::now();
   Advice advice;
   advice.scene = scene.label;
@@ -260,7 +260,7 @@ Advice advise(const StudyScene& scene, double target, double budget_seconds, int
 
   // what the errors are measured against, within the reference's share of the budget (ReferenceOutOfTime past it)
   const ReferenceLimit limit{start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(reference_share * budget_seconds)),
-                             [](const std::string& line) { fmt::print(stderr, "stepwise advise: {}\n", line); }};
+                             progress};
   AdviseReference reference;
   if (model->has_exact()) {
     advice.reference = "the exact solution";
@@ -512,7 +512,7 @@ int advise_command(const AdviseOptions& o) {
   const int threads = threads_or_default(o.threads);
   Advice a;
   try {
-    a = advise(scene, o.error, o.budget, threads);
+    a = advise(scene, o.error, o.budget, threads, [](const std::string& line) { fmt::print(stderr, "stepwise advise: {}\n", line); });
   } catch (const ReferenceOutOfTime& cut) {
     // nothing written: the errors could not be measured (the output directory made for them removed again)
     std::error_code ignored;

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -69,8 +70,10 @@ struct Advice {
 // InputError, the command's one-line message, unless E is a positive finite number and the budget 1 to 86400 s
 void check_advice_request(double error, double budget_seconds);
 
-// the advice for a scene; `threads` runs the sweep's methods side by side
-Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads);
+// the advice for a scene; `threads` runs the sweep's methods side by side. The budget bounds the whole advice: its
+// reference gets half of it (ReferenceOutOfTime past that), saying its progress through `progress` where one is given
+Advice advise(const StudyScene& scene, double target, double budget_seconds, int threads,
+              const std::function<void(const std::string& line)>& progress = {});
 
 // the advice in Markdown under a heading of `heading` ("#", "###"): the answer first, the stiffness, the table of
 // verdicts; `command` is the command line it came from
