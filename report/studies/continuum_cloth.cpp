@@ -366,13 +366,14 @@ std::string equal_cpu_text(const EqualCpu& motion, const UniaxialStretch& spring
       "reference's at the frames (every 1/{:.0f} s), in pixels of a {:.0f}-pixel frame {:g} m tall; the other model at equal CPU "
       "is interpolated between its steps. The continuum is damped by its own viscous stress at the springs' rate (Rayleigh's β = γ / c "
       "= {:.2g} s, the springs' Voigt damping read as a material's); implicit Euler on it is {:.0f} px off at 1/60 s, {:.2f} CPU s per "
-      "simulated s. **At 1/60 s the spring mesh by backward Euler is {:.0f} px from the material it imitates, {:.0f} px of which is "
-      "the stepping** (its offset from its own converged run; the rest is the model).\n\n",
+      "simulated s. **At 1/60 s the spring mesh by backward Euler is {:.0f} px from the material it imitates; the model alone (the "
+      "springs converged in time) is {:.0f} px from it, and the stepping alone (the run against the springs' own converged run) "
+      "{:.0f} px** (largest offsets over the frames: the two parts do not add).\n\n",
       floor_px, undamped_px, damping, springs_px, continuum_px, closer, verdict, flag.at("rows"), flag.at("columns"), motion.t_end, springs.E,
       continuum_of(springs).at("nu"), 1e3 * flag.at("thickness"), 1 / (2 * flag_reference_dt), 1 / flag_reference_dt, motion.reference_pixels,
       1 / flag_frame, frame_pixels, flag_frame_extent, flag.at("damping") / flag.at("stiffness"), value(continuum_frame, "pixels_off"),
       value(continuum_frame, "cpu_per_simulated_second"), value(row_of("springs", "implicit-euler-newton", 1.0 / 60), "pixels_off"),
-      value(row_of("springs", "implicit-euler-newton", 1.0 / 60), "stepping_pixels"));
+      value(row_of("springs", "implicit-euler-newton", 1.0 / 60), "model_pixels"), value(row_of("springs", "implicit-euler-newton", 1.0 / 60), "stepping_pixels"));
   FigureSpec spec{.title = fmt::format("The flag over {:g} s against the converged continuum", motion.t_end),
                   .panels = {{.x_label = "CPU seconds per simulated second",
                               .y_label = "largest node offset (pixels of 720)",

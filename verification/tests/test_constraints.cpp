@@ -249,6 +249,25 @@ TEST(Ida, SolvesTheConstrainedScenesLikeCvodeBdfOnTheirOdeForm) {
   EXPECT_GE(std::log10(chain_errors[0] / chain_errors[1]) / 3, tolerance::min_tolerance_slope(1));
 }
 
+// compliant constraints in IDA's DAE (alpha > 0: a spring, lambda = -g / alpha, its velocity left free): the spring
+// pendulum and a small spring cloth (its springs read as compliant constraints, their Voigt damping off, which the
+// constraint methods leave out) agree with their ODE form run to convergence, within the two codes' tolerance
+TEST(Ida, CompliantConstraintsAreSpringsAsTheOdeFormHasThem) {
+  const double rtol = 1e-8;
+  const auto spring_pendulum = cartesian(1.0, 1e-3);
+  const auto cloth = make_model("cloth", {{"rows", 4}, {"columns", 4}, {"damping", 0}, {"pin_corners", 0}, {"pin_top_corners", 1}});
+  for (const auto& [model, t_end] : {std::pair{spring_pendulum.get(), 2.0}, std::pair{cloth.get(), 0.5}}) {
+    const Measured reference = run_and_measure(*model, "verner98", StepControl::adaptive(1e-12, 1e-14), t_end, t_end);
+    const Measured m = run_and_measure(*model, "ida", StepControl::adaptive(rtol, rtol), t_end, t_end);
+    ASSERT_EQ(reference.result.status, Status::ok) << reference.result.message;
+    ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+    const double scale = reference.result.y_stop.lpNorm<Eigen::Infinity>();
+    const double error = max_norm_error(m.result.y_stop, reference.result.y_stop);
+    std::cout << model->name() << ": ida at rtol " << rtol << " off the converged ODE by " << error << " (|y| " << scale << ")\n";
+    EXPECT_LE(error, tolerance::adaptive_agreement_factor * rtol * std::max(1.0, scale) * t_end) << model->name();
+  }
+}
+
 // a scene without constraints refuses the constrained methods, naming what they need
 TEST(PositionBased, AModelWithoutConstraintsIsRefused) {
   const auto pendulum = make_model("pendulum", {});
