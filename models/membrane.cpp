@@ -51,7 +51,6 @@ Eigen::Matrix2d symmetric_product(const Eigen::Matrix<double, 3, 2>& a, const Ei
   return (a.transpose() * b + b.transpose() * a) / 2;
 }
 
-
 }  // namespace
 
 Eigen::Matrix<double, 3, 2> deformation_gradient(const MembraneElement& e, const Corners3& x) { return edges(x) * e.rest_inverse; }

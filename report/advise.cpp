@@ -77,18 +77,9 @@ double with_event_error(double state_error, const RunResult& r, const std::vecto
 std::optional<std::vector<double>> reference_event_times(const Model& model, double t_end, const ReferenceLimit& limit) {
   const auto events = events_of(model);
   if (std::none_of(events.begin(), events.end(), [](const Event& e) { return !e.surface; })) return std::nullopt;
-  const std::vector<double> t_out{t_end};
-  const auto start = Clock::now();
-  double reached = 0;
-  const RunResult r = make_integrator(reference_method, limited(StepControl::adaptive(reference_rtol, 1e-3 * reference_rtol), std::string(reference_method),
-                                                                t_end, limit, reached))
-                          ->integrate(model, 0, model.initial_state(), t_out);
-  if (r.status != Status::ok && Clock::now() > limit.deadline) {
-    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    throw ReferenceOutOfTime(fmt::format("the reference run for the event times ({} at rtol {:.0e}) reached t = {:.4g} of {:.4g} s in {:.3g} s",
-                                         reference_method, reference_rtol, reached, t_end, seconds),
-                             reached > 0 ? seconds * t_end / reached : std::numeric_limits<double>::infinity());
-  }
+  const RunResult r = reference_run(model, std::string(reference_method), StepControl::adaptive(reference_rtol, 1e-3 * reference_rtol), t_end, &limit,
+                                    0, 0, "the reference run for the event times")
+                          .result;
   if (r.status != Status::ok) throw std::runtime_error(fmt::format("advise: the reference run for the event times ({}) failed: {}", reference_method, r.message));
   std::vector<double> times;
   for (const auto& e : r.events) times.push_back(e.t);

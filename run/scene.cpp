@@ -235,7 +235,6 @@ std::vector<EventSpec> events_in_file_order(const toml::table& events, const std
   return specs;
 }
 
-
 // the equations model's tables: variables, [initial], [equations], [exact], energy, [events.NAME]
 void equations_entry(const std::string& key, const toml::node& node, Scene& scene) {
   if (!scene.equations) scene.equations.emplace();

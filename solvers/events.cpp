@@ -254,6 +254,10 @@ void event_values(std::span<const Event> events, double t, const Eigen::VectorXd
   for (size_t i = 0; i < events.size(); ++i) g[static_cast<Eigen::Index>(i)] = events[i].g(t, y);
 }
 
+std::string not_finite_event(const Event& event, double g, double t) {
+  return fmt::format("event '{}' is not finite ({}) at t = {:.9g}: its formula left its domain", event.name, g, t);
+}
+
 bool handle_events(RunResult& result, std::span<const Event> events, std::span<const size_t> indices, double t, Eigen::VectorXd& y) {
   bool go_on = true;
   for (const size_t index : indices) {
@@ -271,7 +275,7 @@ std::optional<Settled> settle_step_events(std::span<const Event> events, EventWa
   event_values(events, t + h, y, watch.g_end);
   for (size_t i = 0; i < events.size(); ++i)
     if (const double g = watch.g_end[static_cast<Eigen::Index>(i)]; !std::isfinite(g)) {
-      mark_failed(result, t + h, fmt::format("event '{}' is not finite ({}) at t = {:.9g}: its formula left its domain", events[i].name, g, t + h));
+      mark_failed(result, t + h, not_finite_event(events[i], g, t + h));
       return Settled{t + h, false};
     }
   std::vector<Located> found = locate_events(events, watch, t, h, y_start, y, location, restep);

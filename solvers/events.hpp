@@ -18,6 +18,7 @@
 
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace stepwise {
@@ -42,6 +43,9 @@ EventWatch start_watch(std::span<const Event> events, double t, const Eigen::Vec
 // (failed, at once), or at a terminal event among them, after the others of the instant have fired too (at one
 // instant no event comes after another), t_stop and y_stop then at the state after them all
 [[nodiscard]] bool handle_events(RunResult& result, std::span<const Event> events, std::span<const size_t> indices, double t, Eigen::VectorXd& y);
+
+// why a run fails where event `event`'s g is not finite (g) at t: its name, the value and the time
+std::string not_finite_event(const Event& event, double g, double t);
 
 // recomputes the state at fraction s of the step from its start; false when the step fails
 using Restep = std::function<bool(double s, Eigen::VectorXd& y)>;

@@ -18,6 +18,15 @@ constexpr double round_off_decrease = 64 * std::numeric_limits<double>::epsilon(
 
 }  // namespace
 
+void step_matrix(const Eigen::VectorXd& mass, const Eigen::SparseMatrix<double>& d, const Eigen::SparseMatrix<double>& k, double h,
+                 Eigen::SparseMatrix<double>& a) {
+  Eigen::SparseMatrix<double> m(mass.size(), mass.size());
+  m.setIdentity();
+  m.diagonal() = mass;
+  a = m - h * d - (h * h) * k;
+  a.makeCompressed();
+}
+
 IncrementalPotential::IncrementalPotential(const CountedSystem& system, const MassSpringView& view) : system_(system), view_(view) {
   m_.resize(3 * Eigen::Index{view_.nodes});
   for (int i = 0; i < view_.nodes; ++i) m_.segment<3>(3 * i).setConstant(view_.mass[i]);
@@ -63,11 +72,7 @@ void IncrementalPotential::gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g
 
 void IncrementalPotential::scaled_hessian(const Eigen::VectorXd& x, bool definite, Eigen::SparseMatrix<double>& a) const {
   view_.elastic_jacobian(x, definite, k_);
-  Eigen::SparseMatrix<double> mass(m_.size(), m_.size());
-  mass.setIdentity();
-  mass.diagonal() = m_;
-  a = mass - h_ * d0_ - (h_ * h_) * k_;
-  a.makeCompressed();
+  step_matrix(m_, d0_, k_, h_, a);
 }
 
 std::string PotentialNewton::factor_positive_definite(const IncrementalPotential& potential, const Eigen::VectorXd& x, Stats& stats) {

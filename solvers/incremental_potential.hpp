@@ -24,6 +24,11 @@
 
 namespace stepwise {
 
+// a = M - h D - h^2 K (M diagonal, `mass` a coordinate each): the matrix of every implicit step on a mass-spring
+// system (Baraff & Witkin's, backward Euler's Newton, h^2 times the incremental potential's Hessian)
+void step_matrix(const Eigen::VectorXd& mass, const Eigen::SparseMatrix<double>& d, const Eigen::SparseMatrix<double>& k, double h,
+                 Eigen::SparseMatrix<double>& a);
+
 class IncrementalPotential {
  public:
   IncrementalPotential(const CountedSystem& system, const MassSpringView& view);

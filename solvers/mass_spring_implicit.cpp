@@ -41,11 +41,7 @@ void BaraffWitkinSystem::assemble_matrix(double t, const Eigen::VectorXd& y, dou
     a_.diagonal() += m_;
   } else {
     const bool first = a_.nonZeros() == 0;
-    Eigen::SparseMatrix<double> mass(m_.size(), m_.size());
-    mass.setIdentity();
-    mass.diagonal() = m_;
-    a_ = mass - h * d_ - (h * h) * k_;
-    a_.makeCompressed();
+    step_matrix(m_, d_, k_, h, a_);
     shared_pattern_ = first && k_.nonZeros() == d_.nonZeros() && k_.nonZeros() == a_.nonZeros() &&
                       std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), d_.innerIndexPtr()) &&
                       std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), a_.innerIndexPtr());
@@ -60,11 +56,7 @@ void BaraffWitkinSystem::assemble_force(double t, const Eigen::VectorXd& y) {
 
 void BaraffWitkinSystem::assemble_exact(double t, const Eigen::VectorXd& y, double h) {
   force_jacobians(system_, view_, t, y, false, exact_k_, exact_d_);
-  Eigen::SparseMatrix<double> mass(m_.size(), m_.size());
-  mass.setIdentity();
-  mass.diagonal() = m_;
-  j_ = mass - h * exact_d_ - (h * h) * exact_k_;
-  j_.makeCompressed();
+  step_matrix(m_, exact_d_, exact_k_, h, j_);
 }
 
 void BaraffWitkinSystem::assemble_rhs(const Eigen::VectorXd& y, double h) {

@@ -117,7 +117,7 @@ int roots(sunrealtype t, N_Vector y, sunrealtype* gout, void* user_data) {
   for (size_t i = 0; i < events.size(); ++i) {
     gout[i] = events[i].g(t, state);
     if (!std::isfinite(gout[i])) {
-      c.event_error = fmt::format("event '{}' is not finite ({}) at t = {:.9g}: its formula left its domain", events[i].name, gout[i], t);
+      c.event_error = not_finite_event(events[i], gout[i], t);
       c.event_error_t = t;
       return 1;
     }
@@ -185,9 +185,13 @@ void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double 
     if (result.status != Status::ok) break;
     if (code < 0) {
       if (callbacks.non_finite || has_diverged(ym, bound)) mark_diverged(result, t);
-      else mark_failed(result, callbacks.event_error.empty() ? t : callbacks.event_error_t, fmt::format("{}: {} returned {} ({}) at t = {:.9g}: {}", driver.method, driver.evolve_call, code,
-                                              driver.flag_name(code), t,
-                                              callbacks.event_error.empty() ? callbacks.last_error : callbacks.event_error));
+      else {
+        // an event's g not finite fails the run where it was found, for that reason; else the solver's own
+        const bool event = !callbacks.event_error.empty();
+        mark_failed(result, event ? callbacks.event_error_t : t,
+                    fmt::format("{}: {} returned {} ({}) at t = {:.9g}: {}", driver.method, driver.evolve_call, code, driver.flag_name(code), t,
+                                event ? callbacks.event_error : callbacks.last_error));
+      }
       break;
     }
     if (has_diverged(ym, bound)) {

@@ -16,8 +16,10 @@ namespace {
 constexpr long explicit_step_budget = 200'000;
 constexpr double explicit_rtol = 1e-13, stiff_rtol = 1e-12;
 
-}  // namespace
-
+// `control` for a reference run of `method` under `limit`: each step's end goes to a sink that ends the run (as
+// diverged) once the deadline has passed, noting the time reached, or once its pace says it would pass its step
+// budget twice over (from its 200th step on), and says the progress about once a second. The steps are those
+// taken without it
 StepControl limited(StepControl control, std::string method, double t_end, const ReferenceLimit& limit, double& reached) {
   using Clock = std::chrono::steady_clock;
   control.record_steps = true;
@@ -39,6 +41,27 @@ StepControl limited(StepControl control, std::string method, double t_end, const
   return control;
 }
 
+}  // namespace
+
+Measured reference_run(const Model& model, const std::string& method, const StepControl& control, double t_end, const ReferenceLimit* limit,
+                       double spent_before, int runs_after, const std::string& what) {
+  using Clock = std::chrono::steady_clock;
+  if (!limit) return run_and_measure(model, method, control, t_end, t_end);
+  const auto run_start = Clock::now();
+  if (limit->progress) limit->progress(fmt::format("{}: {} at rtol {:.0e} from t = 0 to {:.4g} s", what, method, control.rtol, t_end));
+  double reached = 0;
+  Measured m = run_and_measure(model, method, limited(control, method, t_end, *limit, reached), t_end, t_end);
+  if (Clock::now() > limit->deadline && m.result.status != Status::ok) {
+    // this run's pace to t_end, and the runs still to make at the same pace
+    const double run_seconds = std::chrono::duration<double>(Clock::now() - run_start).count();
+    const double whole_run = reached > 0 ? run_seconds * t_end / reached : std::numeric_limits<double>::infinity();
+    throw ReferenceOutOfTime(fmt::format("{} ({} at rtol {:.0e}) reached t = {:.4g} of {:.4g} s in {:.3g} s", what, method, control.rtol, reached, t_end,
+                                         run_seconds),
+                             spent_before + whole_run * static_cast<double>(1 + runs_after));
+  }
+  return m;
+}
+
 Reference converged_reference(const Model& model, double t_end, const ReferenceLimit* limit) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
@@ -54,19 +77,8 @@ Reference converged_reference(const Model& model, double t_end, const ReferenceL
     std::array<Eigen::VectorXd, 2> y;
     bool finished = true;
     for (size_t k = 0; k < 2 && finished; ++k) {
-      const auto run_start = Clock::now();
-      if (limit && limit->progress) limit->progress(fmt::format("the reference: {} at rtol {:.0e} from t = 0 to {:.4g} s", pair.methods[k], pair.rtol, t_end));
-      double reached = 0;
-      const Measured m = run_and_measure(model, pair.methods[k], limit ? limited(control, pair.methods[k], t_end, *limit, reached) : control, t_end, t_end);
-      if (limit && Clock::now() > limit->deadline && m.result.status != Status::ok) {
-        // this run's pace to t_end, and the pair's other run at the same pace where it has yet to run
-        const double run_seconds = std::chrono::duration<double>(Clock::now() - run_start).count();
-        const double spent = std::chrono::duration<double>(Clock::now() - start).count();
-        const double whole_run = reached > 0 ? run_seconds * t_end / reached : std::numeric_limits<double>::infinity();
-        throw ReferenceOutOfTime(fmt::format("the reference ({} at rtol {:.0e}) reached t = {:.4g} of {:.4g} s in {:.3g} s", pair.methods[k], pair.rtol,
-                                             reached, t_end, run_seconds),
-                                 spent - run_seconds + whole_run * static_cast<double>(2 - k));
-      }
+      const double spent = std::chrono::duration<double>(Clock::now() - start).count();
+      const Measured m = reference_run(model, pair.methods[k], control, t_end, limit, spent, static_cast<int>(1 - k), "the reference");
       finished = m.result.status == Status::ok;
       if (!finished) why += fmt::format("{}{} at rtol {:.0e}: {}", why.empty() ? "" : "; ", pair.methods[k], pair.rtol, m.result.message);
       y[k] = m.result.y_stop;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <stepwise/models/model.hpp>
+#include <stepwise/run/measure.hpp>
 #include <stepwise/solvers/integrator.hpp>
 
 #include <chrono>
@@ -35,10 +36,11 @@ struct ReferenceOutOfTime : std::runtime_error {
   double estimated_seconds;  // what the whole reference would take, extrapolated from how far the cut run got
 };
 
-// `control` for a reference run of `method` under `limit`: each step's end goes to a sink that ends the run (as
-// diverged) once the deadline has passed, noting the time reached, or once its pace says it would pass its step
-// budget twice over (from its 200th step on), and says the progress about once a second. The steps are those taken without it
-StepControl limited(StepControl control, std::string method, double t_end, const ReferenceLimit& limit, double& reached);
+// one reference run of `method` from t = 0 to t_end, under `limit` where given (its progress said as `what`):
+// ReferenceOutOfTime where the deadline cuts it, estimating the whole from `spent_before` (s) and this run's pace for
+// it and the `runs_after` of the same cost still to make
+Measured reference_run(const Model& model, const std::string& method, const StepControl& control, double t_end, const ReferenceLimit* limit,
+                       double spent_before, int runs_after, const std::string& what);
 
 // the reference of `model` at t_end; std::runtime_error naming the methods where no pair finishes, and
 // ReferenceOutOfTime where `limit`'s deadline passes first
