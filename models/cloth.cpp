@@ -473,7 +473,7 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
   }
 
   // the continuum: the grid's triangles as membrane elements in the sheet's own (across, down) coordinates,
-  // each interior node's bending stencil, and the node masses lumped from the triangles (a third of each's)
+  // the plate's bending stencils, and the node masses lumped from the triangles (a third of each's)
   void set_up_continuum(double dx, double dz, double density) {
     const auto material_point = [&](int k) { return Eigen::Vector2d((k % columns_) * dx, (k / columns_) * dz); };
     std::fill(view_.mass.begin(), view_.mass.end(), 0.0);
@@ -482,9 +482,7 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
       for (const int k : tri)
         if (free_index_[k] >= 0) view_.mass[free_index_[k]] += density * material_.thickness * elements_.back().area / 3;
     }
-    std::vector<bool> interior(rest_.size());
-    for (int k = 0; k < rows_ * columns_; ++k) interior[k] = k / columns_ > 0 && k / columns_ < rows_ - 1 && k % columns_ > 0 && k % columns_ < columns_ - 1;
-    stencils_ = bending_stencils(triangles_, rest_, interior);
+    stencils_ = plate_bending_stencils(rows_, columns_, dx, dz, material_.poisson);
   }
 
   Corners3 corners(const std::array<int, 3>& node, const double* x) const { return {corner(node[0], x), corner(node[1], x), corner(node[2], x)}; }
@@ -615,7 +613,7 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
   MembraneMaterial material_;
   double beta_;  // the continuum's Rayleigh beta (s): its viscous stress's retardation time
   std::vector<MembraneElement> elements_;  // the continuum's, one a triangle (triangles_'s order)
-  std::vector<BendingStencil> stencils_;   // the continuum's, one an interior node
+  std::vector<BendingStencil> stencils_;   // the continuum's bending, one a node and one a cell
   Eigen::VectorXd mass3_;                  // each free node's mass, once a coordinate
   std::vector<Eigen::Vector3d> rest_;  // every grid node's starting place (a pinned node stays there)
   std::vector<int> free_index_;         // grid node -> state node, -1 if pinned

@@ -1,6 +1,7 @@
 #include "membrane.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -124,45 +125,60 @@ Matrix9d membrane_damping_position_jacobian(const MembraneMaterial& m, const Mem
 
 namespace {
 
-// the cotangent of the angle at p in the triangle (p, q, r)
-double cot_at(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
-  const Eigen::Vector3d u = q - p, w = r - p;
-  return u.dot(w) / u.cross(w).norm();
+// a stencil's coefficients: grid node -> its weight in one finite difference
+using Difference = std::map<int, double>;
+
+// the second difference along a line of `count` nodes at position i (central inside, the nearest three on an edge), the
+// grid node of position j being node(j); empty where the line has fewer than three nodes
+template <class Node>
+Difference second_difference(int i, int count, double spacing, Node node) {
+  if (count < 3) return {};
+  const int centre = std::clamp(i, 1, count - 2);
+  return {{node(centre - 1), 1 / (spacing * spacing)}, {node(centre), -2 / (spacing * spacing)}, {node(centre + 1), 1 / (spacing * spacing)}};
+}
+
+// sum_t weight_t (c_t . x)^2 as a stencil: the nodes the differences touch and Q = sum_t weight_t c_t c_t^T
+BendingStencil quadratic_form(const std::vector<std::pair<double, Difference>>& terms) {
+  BendingStencil s;
+  std::map<int, Eigen::Index> index;
+  for (const auto& [weight, c] : terms)
+    for (const auto& [node, coefficient] : c)
+      if (index.emplace(node, static_cast<Eigen::Index>(s.node.size())).second) s.node.push_back(node);
+  s.Q = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(s.node.size()), static_cast<Eigen::Index>(s.node.size()));
+  for (const auto& [weight, c] : terms) {
+    Eigen::VectorXd v = Eigen::VectorXd::Zero(s.Q.rows());
+    for (const auto& [node, coefficient] : c) v[index.at(node)] += coefficient;
+    s.Q += weight * v * v.transpose();
+  }
+  return s;
+}
+
+Difference sum(Difference a, const Difference& b) {
+  for (const auto& [node, coefficient] : b) a[node] += coefficient;
+  return a;
 }
 
 }  // namespace
 
-std::vector<BendingStencil> bending_stencils(std::span<const std::array<int, 3>> triangles, std::span<const Eigen::Vector3d> rest,
-                                             const std::vector<bool>& interior) {
-  // each vertex's neighbours with their cotangent weights, and its barycentric area
-  std::vector<std::map<int, double>> weights(rest.size());
-  std::vector<double> area(rest.size(), 0.0);
-  for (const auto& t : triangles) {
-    const double a = (rest[t[1]] - rest[t[0]]).cross(rest[t[2]] - rest[t[0]]).norm() / 2;
-    for (int i = 0; i < 3; ++i) {
-      const int p = t[i], q = t[(i + 1) % 3], o = t[(i + 2) % 3];
-      const double w = cot_at(rest[o], rest[p], rest[q]) / 2;  // the edge (p, q)'s share from this triangle
-      weights[p][q] += w;
-      weights[q][p] += w;
-      area[p] += a / 3;
-    }
-  }
+std::vector<BendingStencil> plate_bending_stencils(int rows, int columns, double dx, double dy, double nu) {
+  const auto trapezoid = [](int i, int count, double spacing) { return i == 0 || i == count - 1 ? spacing / 2 : spacing; };
   std::vector<BendingStencil> stencils;
-  for (size_t v = 0; v < rest.size(); ++v) {
-    if (!interior[v]) continue;
-    BendingStencil s;
-    s.node.push_back(static_cast<int>(v));
-    Eigen::VectorXd c(static_cast<Eigen::Index>(weights[v].size() + 1));
-    c[0] = 0;
-    Eigen::Index k = 1;
-    for (const auto& [j, w] : weights[v]) {
-      s.node.push_back(j);
-      c[k++] = w;
-      c[0] -= w;
+  // each node: nu |x_XX + x_YY|^2 + (1 - nu) (|x_XX|^2 + |x_YY|^2), times its area
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < columns; ++c) {
+      const Difference xx = second_difference(c, columns, dx, [&](int j) { return r * columns + j; });
+      const Difference yy = second_difference(r, rows, dy, [&](int j) { return j * columns + c; });
+      const double area = trapezoid(c, columns, dx) * trapezoid(r, rows, dy);
+      stencils.push_back(quadratic_form({{nu * area, sum(xx, yy)}, {(1 - nu) * area, xx}, {(1 - nu) * area, yy}}));
     }
-    s.Q = c * c.transpose() / area[v];
-    stencils.push_back(std::move(s));
-  }
+  // each cell: 2 (1 - nu) |x_XY|^2 times its area
+  for (int r = 0; r + 1 < rows; ++r)
+    for (int c = 0; c + 1 < columns; ++c) {
+      const int k = r * columns + c;
+      const double w = 1 / (dx * dy);
+      const Difference xy{{k, w}, {k + 1, -w}, {k + columns, -w}, {k + columns + 1, w}};
+      stencils.push_back(quadratic_form({{2 * (1 - nu) * dx * dy, xy}}));
+    }
   return stencils;
 }
 

@@ -18,21 +18,21 @@
 // projects each element's Hessian onto the positive semidefinite cone (its negative eigenvalues set to zero:
 // Teran, Sifakis, Irving & Fedkiw 2005), so that the assembled matrix has a Cholesky factor.
 //
-// Bending: the isometric quadratic energy (Bergou, Wardetzky, Harmon, Zorin & Grinspun 2006; Wardetzky et al.,
-// "Discrete quadratic curvature energies", 2007) in its vertex form. For a sheet bending without stretching,
-// |Laplace-Beltrami x| = kappa_1 + kappa_2 and the plate's energy (D / 2) (kappa_1 + kappa_2)^2 per unit area is
-// quadratic in x with the rest shape's Laplacian. At each interior vertex v, with the rest shape's cotangent
-// weights w_vj = (cot a + cot b) / 2 over its edges (a, b the angles opposite the edge) and its barycentric
-// area A_v (a third of its triangles'):
-//     (L x)_v = sum_j w_vj (x_j - x_v),   W_b = (D / 2) sum_v |(L x)_v|^2 / A_v,   D = Y h^3 / (12 (1 - nu^2)),
-// so each vertex's stencil (v and its neighbours) has Q = c c^T / A_v (c = (-sum w, w_j...)), and the force -D Q x
-// and Jacobian -D Q (x the 3-D identity) are exact and constant: no dihedral angle, no indefinite bending
-// term for Newton. L x vanishes at every interior vertex of a flat placement (the cotangent Laplacian's linear
-// precision), and on a cylinder of radius R the energy is D / (2 R^2) per unit area of the interior vertices'
-// areas at any orientation on the grid (test_membrane). The edge form (Bergou's Q = 3 / (A_A + A_B) K K^T per
-// interior edge) was measured against it on this grid's triangulation: 3 times the plate's energy bending
-// along the grid's axes, 9 times across one family of diagonals (an anisotropy of the edge sum on right
-// triangles); the vertex form is the plate's in every direction.
+// Bending: Kirchhoff's plate, W_b = (D / 2) \int [nu (tr kappa)^2 + (1 - nu) kappa:kappa] dA with D = Y h^3 / (12 (1 - nu^2)),
+// written, as Bergou, Wardetzky, Harmon, Zorin & Grinspun (2006) write its mean-curvature part, as a quadratic in the
+// positions. For a flat rest sheet in Cartesian material coordinates (X across, Y down) and a deformation that does not
+// stretch it, the second derivatives of the placement are the second fundamental form along the normal,
+// x_{,IJ} = kappa_IJ n (the flat metric has no Christoffel symbols), so
+//     nu |x_XX + x_YY|^2 + (1 - nu) (|x_XX|^2 + |x_YY|^2 + 2 |x_XY|^2) = nu (tr kappa)^2 + (1 - nu) kappa:kappa,
+// quadratic in x, unchanged by any rotation, zero on any flat placement. Both parts are needed: the mean curvature alone
+// (the cotangent Laplacian's energy) has a zero-energy mode for every harmonic displacement, which a sheet with free
+// edges shows as edges that flop; kappa:kappa vanishes only on affine maps. On the grid: x_XX and x_YY by second
+// differences at every node (central; one-sided on the edges, from the nearest three nodes), x_XY by the cell's four
+// corners at its centre, each with the trapezoid rule's area (a node's dx dy, halved on an edge; a cell's dx dy). Each
+// term is D / 2 x^T Q x on a few nodes, so the force -D Q x and the Jacobian -D Q (x the 3-D identity) are exact and
+// constant: no dihedral angle, no indefinite bending term for Newton. On a cylinder of radius R the energy is D / (2 R^2)
+// per unit area at any orientation on the grid; a cantilever's tip deflection converges to Kirchhoff's plate strip
+// (test_membrane, verification/continuum_checks).
 #pragma once
 
 #include <Eigen/Dense>
@@ -85,12 +85,12 @@ Matrix9d membrane_damping_velocity_jacobian(const MembraneMaterial& m, const Mem
 Matrix9d membrane_damping_position_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, const Corners3& v, double beta);
 
 struct BendingStencil {
-  std::vector<int> node;  // an interior vertex, then its neighbours (grid nodes)
-  Eigen::MatrixXd Q;      // c c^T / A_v
+  std::vector<int> node;  // grid nodes
+  Eigen::MatrixXd Q;      // the energy is D / 2 sum_ij Q_ij x_i . x_j
 };
-// the stencils of a triangle mesh's vertices that `interior` marks, from the rest positions (the flat sheet)
-std::vector<BendingStencil> bending_stencils(std::span<const std::array<int, 3>> triangles, std::span<const Eigen::Vector3d> rest,
-                                             const std::vector<bool>& interior);
+// the plate's stencils on a rows x columns grid (node (r, c) is r columns + c) of rest spacing dx across and dy down: one a
+// node (its x_XX and x_YY), one a cell (its x_XY)
+std::vector<BendingStencil> plate_bending_stencils(int rows, int columns, double dx, double dy, double nu);
 double bending_energy(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x);
 // the force on each of the stencil's nodes, -D (Q x)_i
 std::vector<Eigen::Vector3d> bending_force(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x);

@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace stepwise {
@@ -46,6 +48,7 @@ StaticEquilibrium static_equilibrium(const OdeSystem& system, Eigen::VectorXd y,
   for (const Eigen::Index i : free) reactions[i] = 0;
   out.scale = std::max(f.norm(), 1e-300);
   double norm = free_part(f).norm();
+  bool stalled = false;  // judged at a stall: no failure after it
   SparseCholesky factor;
   Eigen::SparseMatrix<double> K, D;
   Eigen::MatrixXd rhs, dx;
@@ -53,15 +56,17 @@ StaticEquilibrium static_equilibrium(const OdeSystem& system, Eigen::VectorXd y,
     out.scale = std::max({out.scale, reactions.norm()});
     out.residuals.push_back(norm / out.scale);
     if (norm <= tolerance * out.scale) break;
-    view->force_jacobians(0, y, true, K, D);
-    const Eigen::SparseMatrix<double> A = -(S * K * S.transpose());
-    if (out.iterations == 0)
-      if (auto e = factor.analyze(A, Ordering::amd); !e.empty()) {
-        out.failure = fmt::format("static_equilibrium: {}", e);
-        break;
-      }
-    if (auto e = factor.factorize(A); !e.empty()) {
-      out.failure = fmt::format("static_equilibrium: {} at iteration {}", e, out.iterations);
+    // the exact Hessian where it is positive definite (Newton's quadratic convergence), else the definite one
+    std::string error;
+    for (const bool definite : {false, true}) {
+      view->force_jacobians(0, y, definite, K, D);
+      const Eigen::SparseMatrix<double> A = -(S * K * S.transpose());
+      if (out.iterations == 0 && !definite)
+        if (error = factor.analyze(A, Ordering::amd); !error.empty()) break;
+      if (error = factor.factorize(A); error.empty()) break;
+    }
+    if (!error.empty()) {
+      out.failure = fmt::format("static_equilibrium: {} at iteration {}", error, out.iterations);
       break;
     }
     rhs = free_part(f);
@@ -69,22 +74,49 @@ StaticEquilibrium static_equilibrium(const OdeSystem& system, Eigen::VectorXd y,
       out.failure = fmt::format("static_equilibrium: {} at iteration {}", e, out.iterations);
       break;
     }
-    // backtracking: the full step, halved until the residual falls (Armijo's sufficient decrease, 1e-4)
+    // Newton's step within `stall` of the positions: the equilibrium as far as they can say (a stiff membrane's internal
+    // forces, many times the load, leave a residual whose round-off the load's scale does not see)
+    if (dx.col(0).lpNorm<Eigen::Infinity>() <= stall * y.head(n).lpNorm<Eigen::Infinity>()) {
+      stalled = true;
+      break;
+    }
+    // backtracking: the full step, halved until the energy or the residual falls by Armijo's fraction (1e-4) of what
+    // the step predicts. The energy, Pi(x) = Psi(x) - f_o . x with the other forces f_o = f - f_e taken where the
+    // iteration stands (exact for gravity), is what a stiff membrane needs: Newton from a flat plate bends it without
+    // the in-plane shortening that keeps its midplane unstretched, and the residual of that stretch, many times the
+    // load, rejects the steps that lower Pi. The residual takes over where Pi's round-off hides its decrease
+    bool energy = static_cast<bool>(view->potential);
+    Eigen::VectorXd other;
+    double pi = 0, slope = 0;  // Pi here, and its derivative along the step (-f_free . dx)
+    if (energy) {
+      other = f;
+      Eigen::VectorXd elastic = Eigen::VectorXd::Zero(n);
+      view->elastic_force(y.head(n), elastic);
+      other -= elastic;
+      const double psi = view->potential(y.head(n)), work = other.dot(y.head(n));
+      pi = psi - work;
+      slope = -free_part(f).dot(dx.col(0));
+      // Pi's decrease is seen above its terms' round-off only
+      energy = -slope > 1e3 * std::numeric_limits<double>::epsilon() * (std::abs(psi) + std::abs(work));
+    }
     double alpha = 1;
     Eigen::VectorXd trial = y, f_trial;
     double trial_norm = 0;
-    for (;; alpha /= 2) {
+    bool accepted = false;
+    for (; !accepted && alpha >= 1e-6; alpha /= 2) {
       trial = y;
       for (Eigen::Index k = 0; k < nf; ++k) trial[free[static_cast<size_t>(k)]] += alpha * dx(k, 0);
       f_trial = force(trial);
       trial_norm = free_part(f_trial).norm();
-      if (trial_norm <= (1 - 1e-4 * alpha) * norm || alpha < 1e-6) break;
+      accepted = trial_norm <= (1 - 1e-4 * alpha) * norm ||
+                 (energy && view->potential(trial.head(n)) - other.dot(trial.head(n)) <= pi + 1e-4 * alpha * slope);
     }
-    if (!(trial_norm < norm)) {
-      // no step lowers |f|: the round-off of the forces' sum is reached. Within `stall` of the scale that is
-      // the equilibrium as far as the forces can say; above it, a failure
+    if (!accepted) {
+      // no step lowers |f| or Pi: the round-off of the forces' sum is reached. Within `stall` of the scale that is the
+      // equilibrium as far as the forces can say; above it, a failure
       if (norm > stall * out.scale)
         out.failure = fmt::format("static_equilibrium: the line search found no decrease of |f| = {:.3g} at iteration {}", norm, out.iterations);
+      stalled = true;
       break;
     }
     y = std::move(trial);
@@ -93,7 +125,7 @@ StaticEquilibrium static_equilibrium(const OdeSystem& system, Eigen::VectorXd y,
     reactions = f;
     for (const Eigen::Index i : free) reactions[i] = 0;
   }
-  if (out.failure.empty() && norm > std::max(tolerance, stall) * out.scale)
+  if (out.failure.empty() && norm > std::max(tolerance, stall) * out.scale && !stalled)
     out.failure = fmt::format("static_equilibrium: |f| = {:.3g} of {:.3g} after {} iterations", norm, out.scale, out.iterations);
   out.residual = norm / out.scale;
   out.y = std::move(y);

@@ -64,27 +64,25 @@ Params continuum_of(const UniaxialStretch& springs) {
 
 namespace {
 
-// a 1 m square sheet of side x side nodes held by `support` (its pins' parameters), hanging in its plane under gravity
-// applied in four steps, each from the last one's equilibrium: the state, Newton's iterations, and why not where it failed
+// the cloth with `params` under gravity applied in `steps` steps, each from the last one's equilibrium (its in-plane
+// shortening found before the next load bends it further): the state, Newton's iterations, and why not where it failed
 struct Hung {
   Eigen::VectorXd y;
   int iterations = 0;
   std::string failure;
   double top = 0;  // the top row's height (m)
 };
-Hung hang_in_plane(Params params, int side, const Params& support) {
-  for (const auto& [key, value] : Params{{"rows", side}, {"columns", side}, {"width", 1.0}, {"height", 1.0}, {"pin_corners", 0}, {"wind_coefficient", 0}})
-    params[key] = value;
-  for (const auto& [key, value] : support) params[key] = value;
+Hung settle_under_gravity(Params params, int steps, bool in_plane_only) {
   params = resolve_params(*find_model("cloth"), params);
   const double g = params.at("g");
   Hung out;
   out.top = params.at("elevation");
-  for (int step = 1; step <= 4; ++step) {
-    params["g"] = g * step / 4;
+  for (int step = 1; step <= steps; ++step) {
+    params["g"] = g * step / steps;
     const auto model = make_model("cloth", params);
     if (out.y.size() == 0) out.y = model->initial_state();
-    const StaticEquilibrium eq = static_equilibrium(*model, out.y, in_plane(out.y.size() / 2));
+    const Eigen::Index n = out.y.size() / 2;
+    const StaticEquilibrium eq = static_equilibrium(*model, out.y, in_plane_only ? in_plane(n) : std::vector<bool>(static_cast<size_t>(n), false));
     out.iterations += eq.iterations;
     out.y = eq.y;
     if (!eq.failure.empty()) {
@@ -93,6 +91,15 @@ Hung hang_in_plane(Params params, int side, const Params& support) {
     }
   }
   return out;
+}
+
+// a 1 m square sheet of side x side nodes held by `support` (its pins' parameters), hanging in its plane under gravity
+// applied in four steps
+Hung hang_in_plane(Params params, int side, const Params& support) {
+  for (const auto& [key, value] : Params{{"rows", side}, {"columns", side}, {"width", 1.0}, {"height", 1.0}, {"pin_corners", 0}, {"wind_coefficient", 0}})
+    params[key] = value;
+  for (const auto& [key, value] : support) params[key] = value;
+  return settle_under_gravity(std::move(params), 4, true);
 }
 
 // the heights and widths of a hung sheet's rows, `at(r, c)` the state index of grid node (r, c)'s x
@@ -137,6 +144,32 @@ ClampedSheet clamped_sheet(Params params, int side) {
   out.drop = (hung.top - 1) - rows.middle_y(side - 1);
   out.bottom_width = rows.width(side - 1);
   out.middle_width = rows.middle_width();
+  return out;
+}
+
+Params bending_plate() { return {{"continuum", 1}, {"E", 7e10}, {"nu", 0.33}, {"thickness", 0.01}, {"density", 2700}, {"g", 9.81}}; }
+
+BentStrip bent_strip(Params params, int side, double aspect) {
+  const double span = 1;
+  const int rows = static_cast<int>(std::lround(aspect * (side - 1))) + 1;
+  for (const auto& [key, value] : Params{{"rows", rows}, {"columns", side}, {"width", span}, {"height", aspect * span}, {"horizontal", 1},
+                                         {"pin_corners", 0}, {"clamp_left_edge", 1}, {"wind_coefficient", 0}, {"drag", 0}})
+    params[key] = value;
+  params = resolve_params(*find_model("cloth"), params);
+  const Hung bent = settle_under_gravity(params, 1, false);
+  BentStrip out;
+  out.iterations = bent.iterations;
+  out.failure = bent.failure;
+  const Eigen::VectorXd& y = bent.y;
+  // the first two columns pinned: grid node (r, c) is state node r (side - 2) + c - 2
+  const auto height = [&](int r) { return y[3 * (Eigen::Index{r} * (side - 2) + side - 3) + 1]; };
+  const double tip = rows % 2 ? height(rows / 2) : (height(rows / 2 - 1) + height(rows / 2)) / 2;
+  out.tip_deflection = params.at("elevation") - tip;
+  out.length = span * (side - 2) / (side - 1);
+  // the closed form's own rigidity, written from the plate theory and not taken from the model's material
+  const double E = params.at("E"), nu = params.at("nu"), t = params.at("thickness");
+  const double D = E * t * t * t / (12 * (1 - nu * nu)), q = params.at("density") * t * params.at("g");
+  out.analytic = q * std::pow(out.length, 4) / (8 * D);
   return out;
 }
 

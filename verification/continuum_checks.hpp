@@ -57,5 +57,27 @@ struct ClampedSheet {
 };
 ClampedSheet clamped_sheet(Params params, int side);
 
+// Bending against Kirchhoff's plate: a horizontal continuum sheet clamped along its left edge (clamp_left_edge: the first
+// two columns pinned, so the edge can neither move nor turn), bending under its own weight q = density thickness g.
+// A strip of span L (x) clamped along an edge `aspect` L long (z), `side` nodes along the span. Where the strip is long
+// along its clamped edge the middle of the free edge bends as the plate strip does, in cylindrical bending:
+//     tip deflection q L^4 / (8 D),   D = E t^3 / (12 (1 - nu^2))
+// (Euler-Bernoulli with the plate's rigidity: the strip cannot curl across itself in its middle). Near the free side
+// edges the plate curls (anticlastic bending) and softens toward the narrow beam's E t^3 / 12; at nu = 0 the strip's
+// answer is exact at every aspect. The deflection is small (the plate's linear theory) when q L^3 / (8 D) << 1.
+struct BentStrip {
+  double length = 0;          // L, the span from the clamped line (the second column) to the free edge (m)
+  double tip_deflection = 0;  // how far the free edge's middle has dropped (m)
+  double analytic = 0;        // q L^4 / (8 D) (m)
+  int iterations = 0;
+  std::string failure;
+  static auto fields(auto& s) { return std::tie(s.length, s.tip_deflection, s.analytic, s.iterations, s.failure); }  // a sweep's result
+};
+BentStrip bent_strip(Params params, int side, double aspect);
+// the plate the report and the suite bend: aluminium, 1 cm thick, a 1 m span under Earth's gravity (tip deflection
+// 5 mm, 0.5% of the span: linear), clamped along an edge four spans long
+Params bending_plate();
+inline constexpr double bending_plate_aspect = 4;
+
 
 }  // namespace stepwise
