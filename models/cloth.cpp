@@ -166,6 +166,10 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
       add_spring_force_jacobians(view_.springs, spring_slots_, x.data(), at_rest.data(), definite, dfdx, dfdv);
       if (continuum_) add_continuum_force_jacobian(x.data(), definite, dfdx);
     };
+    set_up_vertex_terms();
+    view_.vertex_elastic = [this](int node, const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, bool derivatives, VertexElastic& out) {
+      vertex_elastic(node, x.data(), definite, derivatives, out);
+    };
     set_up_split();
     if (!continuum_) read_springs_as_constraints();
   }
@@ -552,6 +556,44 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
     }
   }
 
+  // each free node's elastic terms: its springs, or its elements and bending stencils with its place in each
+  void set_up_vertex_terms() {
+    node_springs_ = springs_by_node(view_.springs, free_);
+    node_elements_.resize(static_cast<size_t>(free_));
+    node_stencils_.resize(static_cast<size_t>(free_));
+    for (size_t k = 0; k < elements_.size(); ++k)
+      for (int j = 0; j < 3; ++j)
+        if (const int i = free_index_[elements_[k].node[j]]; i >= 0) node_elements_[static_cast<size_t>(i)].emplace_back(static_cast<int>(k), j);
+    for (size_t k = 0; k < stencils_.size(); ++k)
+      for (size_t j = 0; j < stencils_[k].node.size(); ++j)
+        if (const int i = free_index_[stencils_[k].node[j]]; i >= 0) node_stencils_[static_cast<size_t>(i)].emplace_back(static_cast<int>(k), static_cast<int>(j));
+  }
+
+  // the elastic terms touching free node i (MassSpringView::vertex_elastic)
+  void vertex_elastic(int i, const double* x, bool definite, bool derivatives, VertexElastic& out) const {
+    const auto node = static_cast<size_t>(i);
+    add_springs_at_node(view_.springs, node_springs_[node], i, x, definite, derivatives, out);
+    for (const auto& [k, j] : node_elements_[node]) {
+      const MembraneElement& e = elements_[static_cast<size_t>(k)];
+      const Corners3 c = corners(e.node, x);
+      out.energy += membrane_energy(material_, e, c);
+      if (!derivatives) continue;
+      Eigen::Vector3d f;
+      Eigen::Matrix3d K;
+      membrane_corner(material_, e, c, j, definite, f, K);
+      out.force += f;
+      out.jacobian += K;
+    }
+    for (const auto& [k, j] : node_stencils_[node]) {
+      const BendingStencil& s = stencils_[static_cast<size_t>(k)];
+      const auto c = corners(s.node, x);
+      out.energy += bending_energy(material_.bending, s, c);
+      if (!derivatives) continue;
+      out.force += bending_force_on(material_.bending, s, c, static_cast<size_t>(j));
+      out.jacobian -= material_.bending * s.Q(j, j) * Eigen::Matrix3d::Identity();
+    }
+  }
+
   double kinetic_energy(const Eigen::VectorXd& y) const { return y.tail(3 * free_).cwiseAbs2().dot(mass3_) / 2; }
   double elastic_energy(const double* x) const {
     if (!continuum_) return spring_energy(view_.springs, x);
@@ -614,6 +656,9 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
   double beta_;  // the continuum's Rayleigh beta (s): its viscous stress's retardation time
   std::vector<MembraneElement> elements_;  // the continuum's, one a triangle (triangles_'s order)
   std::vector<BendingStencil> stencils_;   // the continuum's bending, one a node and one a cell
+  // each free node's elastic terms (vbd's view): springs by index; elements and stencils by (index, the node's place)
+  std::vector<std::vector<int>> node_springs_;
+  std::vector<std::vector<std::pair<int, int>>> node_elements_, node_stencils_;
   Eigen::VectorXd mass3_;                  // each free node's mass, once a coordinate
   std::vector<Eigen::Vector3d> rest_;  // every grid node's starting place (a pinned node stays there)
   std::vector<int> free_index_;         // grid node -> state node, -1 if pinned

@@ -61,6 +61,10 @@ class HangingChain final : public Model, public SparseJacobian {
       pattern_.zero(dfdv);
       add_spring_force_jacobians(view_.springs, slots_, x.data(), at_rest.data(), definite, dfdx, dfdv);
     };
+    view_.vertex_elastic = [this, by_node = springs_by_node(view_.springs, n_)](int node, const Eigen::Ref<const Eigen::VectorXd>& x, bool definite,
+                                                                               bool derivatives, VertexElastic& out) {
+      add_springs_at_node(view_.springs, by_node[static_cast<size_t>(node)], node, x.data(), definite, derivatives, out);
+    };
   }
   HangingChain(const HangingChain&) = delete;  // its capabilities hold `this`
   HangingChain& operator=(const HangingChain&) = delete;

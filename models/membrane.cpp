@@ -74,22 +74,43 @@ Vector9d membrane_force(const MembraneMaterial& m, const MembraneElement& e, con
   return -corner_gradient(e.area * m.thickness * P * e.rest_inverse.transpose());
 }
 
+namespace {
+
+// d^2 W / dx dx_(corner j, coordinate c): the Hessian's column for one coordinate, given F and S
+Vector9d hessian_column(const MembraneMaterial& m, const MembraneElement& e, const Eigen::Matrix<double, 3, 2>& F, const Eigen::Matrix2d& S, int j,
+                        int c) {
+  const Eigen::Matrix<double, 3, 2> dF = edge_change(j, c) * e.rest_inverse;
+  const Eigen::Matrix2d dE = symmetric_product(dF, F);
+  const Eigen::Matrix<double, 3, 2> dP = dF * S + F * membrane_stress(m, dE);
+  return corner_gradient(e.area * m.thickness * dP * e.rest_inverse.transpose());
+}
+
+// a symmetric matrix's negative eigenvalues set to zero
+template <class Matrix>
+Matrix semidefinite(const Matrix& H) {
+  const Eigen::SelfAdjointEigenSolver<Matrix> eigen((H + H.transpose()) / 2);
+  return eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() * eigen.eigenvectors().transpose();
+}
+
+}  // namespace
+
 Matrix9d membrane_force_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, bool definite) {
   const Eigen::Matrix<double, 3, 2> F = deformation_gradient(e, x);
   const Eigen::Matrix2d S = membrane_stress(m, green_strain(F));
-  const double volume = e.area * m.thickness;
   Matrix9d H;  // d^2 W / dx^2, a column per coordinate
   for (int j = 0; j < 3; ++j)
-    for (int c = 0; c < 3; ++c) {
-      const Eigen::Matrix<double, 3, 2> dF = edge_change(j, c) * e.rest_inverse;
-      const Eigen::Matrix2d dE = symmetric_product(dF, F);
-      const Eigen::Matrix<double, 3, 2> dP = dF * S + F * membrane_stress(m, dE);
-      H.col(3 * j + c) = corner_gradient(volume * dP * e.rest_inverse.transpose());
-    }
-  if (!definite) return -H;
-  const Eigen::SelfAdjointEigenSolver<Matrix9d> eigen((H + H.transpose()) / 2);
-  const Vector9d clamped = eigen.eigenvalues().cwiseMax(0.0);
-  return -(eigen.eigenvectors() * clamped.asDiagonal() * eigen.eigenvectors().transpose());
+    for (int c = 0; c < 3; ++c) H.col(3 * j + c) = hessian_column(m, e, F, S, j, c);
+  return definite ? Matrix9d(-semidefinite(H)) : Matrix9d(-H);
+}
+
+void membrane_corner(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, int j, bool definite, Eigen::Vector3d& force,
+                     Eigen::Matrix3d& jacobian) {
+  const Eigen::Matrix<double, 3, 2> F = deformation_gradient(e, x);
+  const Eigen::Matrix2d S = membrane_stress(m, green_strain(F));
+  force = -corner_gradient(e.area * m.thickness * F * S * e.rest_inverse.transpose()).segment<3>(3 * j);
+  Eigen::Matrix3d H;
+  for (int c = 0; c < 3; ++c) H.col(c) = hessian_column(m, e, F, S, j, c).segment<3>(3 * j);
+  jacobian = definite ? Eigen::Matrix3d(-semidefinite(H)) : Eigen::Matrix3d(-H);
 }
 
 Vector9d membrane_damping_force(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, const Corners3& v, double beta) {
@@ -189,12 +210,15 @@ double bending_energy(double D, const BendingStencil& s, std::span<const Eigen::
   return D / 2 * w;
 }
 
+Eigen::Vector3d bending_force_on(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x, size_t i) {
+  Eigen::Vector3d f = Eigen::Vector3d::Zero();
+  for (size_t j = 0; j < s.node.size(); ++j) f += s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * x[j];
+  return -D * f;
+}
+
 std::vector<Eigen::Vector3d> bending_force(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x) {
-  std::vector<Eigen::Vector3d> f(s.node.size(), Eigen::Vector3d::Zero());
-  for (size_t i = 0; i < s.node.size(); ++i) {
-    for (size_t j = 0; j < s.node.size(); ++j) f[i] += s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * x[j];
-    f[i] *= -D;
-  }
+  std::vector<Eigen::Vector3d> f(s.node.size());
+  for (size_t i = 0; i < s.node.size(); ++i) f[i] = bending_force_on(D, s, x, i);
   return f;
 }
 

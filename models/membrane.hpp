@@ -72,6 +72,11 @@ double membrane_energy(const MembraneMaterial& m, const MembraneElement& e, cons
 Vector9d membrane_force(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x);
 Matrix9d membrane_force_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, bool definite);
 
+// for a per-vertex solver (vbd): the force on corner j alone and its derivative by that corner's position (the 3 x 3
+// diagonal block of the force Jacobian, three of its columns; definite: that block made semidefinite)
+void membrane_corner(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, int j, bool definite, Eigen::Vector3d& force,
+                     Eigen::Matrix3d& jacobian);
+
 // Damping of its own (the Kelvin-Voigt solid's viscous stress, a dissipation potential): the strain rate
 // Edot = (F^T Fdot + Fdot^T F) / 2 drives the stress S_v = beta (2 mu Edot + lambda tr(Edot) I), the elastic law times a
 // retardation time beta (s), forces as the elastic stress's with S_v for S. In the linear limit the force is -beta K v,
@@ -92,6 +97,8 @@ struct BendingStencil {
 // node (its x_XX and x_YY), one a cell (its x_XY)
 std::vector<BendingStencil> plate_bending_stencils(int rows, int columns, double dx, double dy, double nu);
 double bending_energy(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x);
+// the force on the stencil's node i alone, -D (Q x)_i (its derivative by x_i is -D Q_ii times the identity)
+Eigen::Vector3d bending_force_on(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x, size_t i);
 // the force on each of the stencil's nodes, -D (Q x)_i
 std::vector<Eigen::Vector3d> bending_force(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x);
 

@@ -20,7 +20,40 @@ Eigen::Vector3d closing_of(const Spring& s, const double* v) {
   return s.a < 0 ? Eigen::Vector3d(vb) : Eigen::Vector3d(vb - Eigen::Map<const Eigen::Vector3d>(v + 3 * s.a));
 }
 
+// a spring's stiffness block dF/dr at zero closing speed (F = c (|r| - l) r / |r|, the force on a): exact, c u u^T + c
+// (1 - l / |r|) (I - u u^T), or (definite) its transverse part clamped at zero where the spring is compressed
+Eigen::Matrix3d stiffness_block(const Spring& s, const Eigen::Vector3d& r, bool definite) {
+  const double length = r.norm();
+  const Eigen::Vector3d u = r / length;
+  const Eigen::Matrix3d uu = u * u.transpose();
+  const double transverse = 1 - s.rest / length;
+  return s.stiffness * uu + s.stiffness * (definite ? std::max(0.0, transverse) : transverse) * (Eigen::Matrix3d::Identity() - uu);
+}
+
 }  // namespace
+
+void add_springs_at_node(std::span<const Spring> springs, std::span<const int> which, int node, const double* x, bool definite, bool derivatives,
+                         VertexElastic& out) {
+  for (const int k : which) {
+    const Spring& s = springs[static_cast<size_t>(k)];
+    const Eigen::Vector3d r = span_of(s, x);
+    const double stretch = r.norm() - s.rest;
+    out.energy += s.stiffness * stretch * stretch / 2;
+    if (!derivatives) continue;
+    const Eigen::Vector3d f = spring_force(r, Eigen::Vector3d::Zero().eval(), s.rest, s.stiffness, 0.0);  // on a; -f on b
+    out.force += node == s.b ? Eigen::Vector3d(-f) : f;
+    out.jacobian -= stiffness_block(s, r, definite);  // d(-f)/dx_b = d(f)/dx_a = -dF/dr
+  }
+}
+
+std::vector<std::vector<int>> springs_by_node(std::span<const Spring> springs, int nodes) {
+  std::vector<std::vector<int>> by(static_cast<size_t>(nodes));
+  for (size_t k = 0; k < springs.size(); ++k) {
+    by[static_cast<size_t>(springs[k].b)].push_back(static_cast<int>(k));
+    if (springs[k].a >= 0) by[static_cast<size_t>(springs[k].a)].push_back(static_cast<int>(k));
+  }
+  return by;
+}
 
 void add_spring_forces(std::span<const Spring> springs, const double* x, const double* v, double* f) {
   for (const Spring& s : springs) {
@@ -113,7 +146,7 @@ void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const
     const Eigen::Matrix3d uu = u * u.transpose(), across = Eigen::Matrix3d::Identity() - uu;
     Eigen::Matrix3d dr;
     if (definite) {
-      dr = s.stiffness * uu + s.stiffness * std::max(0.0, 1 - s.rest / length) * across;
+      dr = stiffness_block(s, r, true);
     } else {
       const Eigen::Vector3d w = closing_of(s, v);
       const double tension = s.stiffness * (length - s.rest) + s.damping * u.dot(w);

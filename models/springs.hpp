@@ -32,6 +32,13 @@ void add_spring_forces(std::span<const Spring> springs, const double* x, const d
 
 // the springs' potential energy, sum c e^2 / 2
 double spring_energy(std::span<const Spring> springs, const double* x);
+// the springs `which` (indices into springs), each touching `node`, added to a per-vertex solver's view of it: their
+// energy and, with `derivatives`, their elastic force on the node and its derivative by the node's position (definite:
+// the semidefinite approximation of add_spring_force_jacobians)
+void add_springs_at_node(std::span<const Spring> springs, std::span<const int> which, int node, const double* x, bool definite, bool derivatives,
+                         VertexElastic& out);
+// each node's springs (indices into springs), for add_springs_at_node
+std::vector<std::vector<int>> springs_by_node(std::span<const Spring> springs, int nodes);
 
 // the fixed sparsity of a network's 3n x 3n force Jacobians: a 3 x 3 block on the diagonal of every node
 // and at (i, j) and (j, i) for every pair of nodes a force couples (a spring's ends, a triangle's corners).

@@ -119,6 +119,7 @@ Study rigid_body_invariants_study();
 Study contacts_study();
 Study cloth_study();
 Study cloth_realtime_study();
+Study cloth_solvers_study();
 Study continuum_cloth_study();
 Study fluid_study();
 Study scaling_study();

@@ -150,7 +150,7 @@ void check_options(const RunOptions& o, PreparedRun& p) {
     if (!(*value >= 1 && *value <= max_substeps && std::floor(*value) == *value))
       throw InputError(fmt::format("{} {}: must be a whole number in 1..{}", option, *value, max_substeps));
     if (const Method* m = p.method.empty() ? nullptr : find_method(p.method); !m || !m->substepped)
-      throw InputError(fmt::format("{}: {} takes no substeps or iterations (pbd and xpbd do)", option, p.method.empty() ? "the method chosen for this scene" : p.method));
+      throw InputError(fmt::format("{}: {} takes no substeps or iterations (pbd, xpbd and vbd do)", option, p.method.empty() ? "the method chosen for this scene" : p.method));
     *field = static_cast<int>(*value);
   }
   // the step: the method's control, told now wherever the method is (a method chosen later is adaptive)

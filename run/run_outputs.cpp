@@ -50,6 +50,12 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
     j["newton_iterations_per_step"] = static_cast<double>(r.stats.newton_iterations) / steps;
     j["line_search_halvings_per_step"] = static_cast<double>(r.stats.line_search_halvings) / steps;
   }
+  if (r.stats.colours > 0) {
+    // a per-vertex solver (vbd): its colours, and how far its sweeps lowered the incremental potential, in all and a step
+    j["colours"] = r.stats.colours;
+    j["potential_decrease"] = r.stats.potential_decrease;
+    j["potential_decrease_per_step"] = r.stats.potential_decrease / static_cast<double>(std::max(1L, r.stats.steps));
+  }
   j["cpu_seconds"] = r.stats.cpu_seconds;
   j["ranks"] = p.ranks;
   const auto names = sample_names(*p.model);

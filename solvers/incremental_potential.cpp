@@ -75,6 +75,29 @@ void IncrementalPotential::scaled_hessian(const Eigen::VectorXd& x, bool definit
   step_matrix(m_, d0_, k_, h_, a);
 }
 
+IncrementalPotential::Vertex IncrementalPotential::vertex(int i, const Eigen::VectorXd& x, bool definite, bool derivatives) const {
+  const Eigen::Index at = 3 * Eigen::Index{i};
+  const Eigen::Vector3d e = x.segment<3>(at) - xb_.segment<3>(at);
+  // (D0 (x - xb))_i and D0's block (i, i), from D0's columns at node i (it is symmetric)
+  Eigen::Vector3d d0e = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d d0ii = Eigen::Matrix3d::Zero();
+  for (int c = 0; c < 3; ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(d0_, at + c); it; ++it) {
+      d0e[c] += it.value() * (x[it.row()] - xb_[it.row()]);
+      if (it.row() >= at && it.row() < at + 3) d0ii(it.row() - at, c) = it.value();
+    }
+  VertexElastic elastic;
+  view_.vertex_elastic(i, x, definite, derivatives, elastic);
+  const double m = m_[at], hh = h_ * h_;
+  // 1/2 d^T (M / h^2 - D0 / h) d's terms in e, the others' work, and node i's elastic terms
+  Vertex out;
+  out.value = m * e.squaredNorm() / (2 * hh) - (e.dot(d0e) - e.dot(d0ii * e) / 2) / h_ - f0_.segment<3>(at).dot(x.segment<3>(at)) + elastic.energy;
+  if (!derivatives) return out;
+  out.gradient = m * e / hh - d0e / h_ - f0_.segment<3>(at) - elastic.force;
+  out.hessian = m / hh * Eigen::Matrix3d::Identity() - d0ii / h_ - elastic.jacobian;
+  return out;
+}
+
 std::string PotentialNewton::factor_positive_definite(const IncrementalPotential& potential, const Eigen::VectorXd& x, Stats& stats) {
   ++stats.factorizations;
   if (factor_.factorize(a_).empty()) {

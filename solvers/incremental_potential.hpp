@@ -44,10 +44,21 @@ class IncrementalPotential {
   // quadratically), or (definite) with each spring's or element's Hessian made semidefinite, positive definite
   // everywhere. One evaluation of the elastic Jacobian
   void scaled_hessian(const Eigen::VectorXd& x, bool definite, Eigen::SparseMatrix<double>& a) const;
+  // G as a function of node i's position alone, the others held (a per-vertex solver's view, vbd's): its value up to
+  // a constant that does not depend on x_i, and with `derivatives` its gradient and 3 x 3 Hessian there (h^-2 times
+  // scaled_hessian's diagonal block; definite: each term's block made semidefinite). Touches only node i's terms:
+  // its springs or elements, and the rows of D0 at node i
+  struct Vertex {
+    double value = 0;
+    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+  };
+  Vertex vertex(int i, const Eigen::VectorXd& x, bool definite, bool derivatives) const;
   double h() const { return h_; }
   const Eigen::VectorXd& inertial() const { return xb_; }  // xb = x0 + h v0
   const Eigen::VectorXd& x0() const { return x0_; }
   const Eigen::VectorXd& mass() const { return m_; }  // each coordinate's lumped mass
+  const Eigen::VectorXd& other_forces() const { return f0_; }  // f0
 
  private:
   const CountedSystem& system_;

@@ -35,6 +35,9 @@ struct StepControl {
   // position iterations in one step
   int substeps = 1;
   int iterations = 4;
+  // threads a method's own parallel loops may use (vbd's colour sweeps; the same bits for any count). A run's CPU
+  // time is its calling thread's: a figure that compares costs runs on one
+  int threads = 1;
   // what the trajectory keeps at each output time: the whole state when empty, or a summary of it (a
   // particle system's energy and centroid rather than every particle)
   std::function<Eigen::VectorXd(const Eigen::VectorXd& y)> observe;
@@ -72,11 +75,13 @@ struct Stats {
   long contact_sweeps = 0;  // Gauss-Seidel sweeps over contacts (solvers/contact_solve.hpp)
   long newton_iterations = 0;     // Newton iterations on an incremental potential (implicit-euler-newton)
   long line_search_halvings = 0;  // their line searches' halvings
+  long colours = 0;               // the node colours a per-vertex solver sweeps (vbd)
+  double potential_decrease = 0;  // how far its sweeps lowered the incremental potential over the run (J)
   double cpu_seconds = 0;   // thread CPU time of the integration
   // the members, to copy a result between processes (report/pack.hpp)
   static auto fields(auto& s) {
     return std::tie(s.steps, s.rejected, s.rhs_evals, s.jac_evals, s.linear_solves, s.factorizations, s.events, s.projections, s.contact_sweeps,
-                    s.newton_iterations, s.line_search_halvings, s.cpu_seconds);
+                    s.newton_iterations, s.line_search_halvings, s.colours, s.potential_decrease, s.cpu_seconds);
   }
 };
 

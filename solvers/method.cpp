@@ -25,6 +25,7 @@ std::string_view to_string(Family family) {
     case Family::implicit_euler: return "implicit-euler";
     case Family::fast_mass_spring: return "fast-mass-spring";
     case Family::position_based: return "position-based";
+    case Family::vertex_block_descent: return "vertex-block-descent";
     case Family::constrained: return "constrained";
     case Family::rigid_splitting: return "rigid-splitting";
     case Family::sequential_impulses: return "sequential-impulses";

@@ -21,7 +21,7 @@ namespace stepwise {
 // `stepwise methods --json` as to_string spells it
 enum class Family {
   euler, symplectic_euler, rk4, embedded_pairs, odeint, gsl, cvode, arkode, rosenbrock, implicit_euler, fast_mass_spring,
-  position_based, constrained, rigid_splitting, sequential_impulses, wave_fd, stable_fluids, gpu
+  position_based, vertex_block_descent, constrained, rigid_splitting, sequential_impulses, wave_fd, stable_fluids, gpu
 };
 std::string_view to_string(Family family);  // "euler", "symplectic-euler", ..., "gpu"
 

@@ -22,6 +22,7 @@ void register_sequential_impulses_methods(MethodTable& table);
 void register_fast_mass_spring_methods(MethodTable& table);
 void register_stable_fluids_methods(MethodTable& table);
 void register_position_based_methods(MethodTable& table);
+void register_vbd_methods(MethodTable& table);
 void register_rattle_methods(MethodTable& table);
 void register_ida_methods(MethodTable& table);
 namespace gpu {
@@ -50,6 +51,7 @@ const MethodTable& table() {
     register_fast_mass_spring_methods(t);
     register_stable_fluids_methods(t);
     register_position_based_methods(t);
+    register_vbd_methods(t);
     register_rattle_methods(t);
     register_ida_methods(t);
     return t;

@@ -463,6 +463,11 @@ inline constexpr double cylinder_bending = 1e-3;
 // beam's E t^3 / 12, 11% at nu = 0.33) under 1% at the middle (0.8% measured). 2% holds both, where the rigidity without
 // its 1 - nu^2 is 11% off
 inline constexpr double plate_strip_bending = 0.02;
+// the incremental potential G of a step (solvers/incremental_potential.hpp) evaluated two ways, node by node (vbd's
+// view) and whole: a sum of some 10^4 terms (elements, springs, the inertia) each rounded to eps of itself, at most
+// n eps |G| apart (1.3e-12 |G| at n = 6000, the 32^2 continuum's terms); 1e-11 leaves a factor 8, where a node's
+// inertia without its h^2 (3600 times too stiff at 1/60 s) is off by orders of magnitude
+inline constexpr double potential_roundoff = 1e-11;
 // Newton's observed order from three successive residuals: 2 for quadratic convergence, up to the variation of
 // its error constant between iterations; 1 for a linearly converging (modified) iteration. 1.5 tells them apart
 inline constexpr double newton_order_floor = 1.5;

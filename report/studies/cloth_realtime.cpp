@@ -44,6 +44,14 @@ std::vector<Point> plan(bool quick) {
       points.push_back({"xpbd", c, fmt::format("1/60 s, {} substeps", s)});
     }
   };
+  // vbd (Chen et al. 2024: one step a frame, its sweeps over the coloured nodes)
+  const auto sweeps = [&](std::initializer_list<int> counts) {
+    for (const int k : counts) {
+      StepControl c = StepControl::fixed(1.0 / 60);
+      c.iterations = k;
+      points.push_back({"vbd", c, fmt::format("1/60 s, {} sweeps", k)});
+    }
+  };
   // the explicit high-order methods too: on this flag only an accurate trajectory stays within half a pixel
   // (small early differences grow as it billows), and they are stable at ~1.5e-3 s
   if (quick) {
@@ -56,6 +64,7 @@ std::vector<Point> plan(bool quick) {
     fixed("rk4", {1e-3});
     adaptive("tsitouras54", {1e-4});
     small_steps({20});
+    sweeps({10});
   } else {
     fixed("implicit-euler", {1.0 / 30, 1.0 / 60, 1.0 / 120, 1.0 / 240, 1.0 / 480});
     fixed("implicit-euler-newton", {1.0 / 30, 1.0 / 60, 1.0 / 120, 1.0 / 240});
@@ -65,6 +74,7 @@ std::vector<Point> plan(bool quick) {
     fixed("rk4", {1e-3, 5e-4});
     adaptive("tsitouras54", {1e-3, 1e-4, 1e-6});
     small_steps({5, 10, 20, 40, 80});
+    sweeps({2, 5, 10, 20});
     // no ARKODE point: its Newton iterations on KLU with 6 144 unknowns took 42-53 s of CPU per simulated second
     // at rtol 1e-2 (ark324 106 s, kvaerno43 84 s for the 2 s flag), 40-50 times real time and a third of the
     // full report's 10 minutes; the work-precision study measures ARKODE's implicit methods on a cloth (the
@@ -100,6 +110,7 @@ StudyOutput cloth_realtime(const StudyContext& ctx) {
     const Method& m = *find_method(p.method);
     costs.push_back(!p.control.dt                     ? 2e9
                     : m.source == Source::opengl_shader ? steps * 2.5e5
+                    : m.family == Family::vertex_block_descent ? steps * p.control.iterations * 150 * n
                     : m.substepped                      ? steps * p.control.substeps * p.control.iterations * 25 * n
                     : m.stability.oscillator_dt         ? steps * 25 * n * m.order.min
                                                         : steps * 5e6);

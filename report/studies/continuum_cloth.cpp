@@ -457,7 +457,6 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
   UniaxialStretch springs_measured;
   Table poisson = poisson_table(springs_measured);
   const UniaxialStretch* springs = &springs_measured;
-
   std::vector<int> sides;
   const Table refinement = refinement_table(ctx, *springs, sides);
   const auto value = [&](const std::string& model, int side, const char* column) {
@@ -477,7 +476,6 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
   const auto shown_order = [](std::optional<double> p) { return p ? fmt::format("{:.2f}", *p) : std::string("none (not monotone)"); };
   const double gap_sag = value("springs", n3, "sag") / value("continuum", n3, "sag") - 1;
   const double gap_width = value("springs", n3, "bottom_width") / value("continuum", n3, "bottom_width") - 1;
-
   const int sides_side = 32;
   const Table narrowing = sides_table(springs->E, sides_side);
   const auto widening_of = [&](const std::string& model, double nu) {
@@ -554,9 +552,8 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
                                    {"sag", "sag (m)", number("{:.5f}")}});
   md += "\n";
   ClampedRefinement clamped = clamped_refinement(ctx, *springs);
-  md += clamped.md;
   BendingRefinement bending = bending_refinement(ctx);
-  md += bending.md;
+  md += clamped.md + bending.md;
   std::vector<Figure> figures;
   md += refinement_figure(figures);
   // the continuum damped by its own viscous stress at the springs' rate: a spring's Voigt damping gamma is beta c, so

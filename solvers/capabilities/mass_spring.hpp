@@ -6,6 +6,7 @@
 
 #include <stepwise/solvers/ode_system.hpp>
 
+#include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
 #include <functional>
@@ -21,6 +22,14 @@ struct Spring {
   double stiffness = 0;                              // c (N/m)
   double damping = 0;                                // gamma (N s/m)
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // where a pinned spring hangs from (m)
+};
+
+// the elastic potential around one node, for a per-vertex solver (vbd): the energy of the terms (springs, elements,
+// stencils) that touch it, their force on it, and that force's derivative by the node's own position
+struct VertexElastic {
+  double energy = 0;                                   // J
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();     // N
+  Eigen::Matrix3d jacobian = Eigen::Matrix3d::Zero();  // N/m
 };
 
 struct MassSpringView {
@@ -44,6 +53,10 @@ struct MassSpringView {
   // df_e/dx = -grad^2 Psi at x on force_jacobians' pattern: exact, or (definite) each spring's or element's
   // Hessian made semidefinite
   std::function<void(const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx)> elastic_jacobian;
+  // Psi's terms that touch node i at x: their energy, and with `derivatives` their force on node i and its 3 x 3 block
+  // of df_e/dx (definite: each term's block made semidefinite). Two nodes that share no term (nor a block of
+  // force_jacobians' pattern) can be evaluated and moved at once: a colour of vbd's
+  std::function<void(int node, const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, bool derivatives, VertexElastic& out)> vertex_elastic;
 };
 
 inline const Requirement needs_mass_spring = needs<MassSpringView>("a mass-spring system (a cloth or chain scene)");

@@ -1,0 +1,67 @@
+#include "vertex_block_descent.hpp"
+
+#include <Eigen/Cholesky>
+
+#include <algorithm>
+#include <cmath>
+
+namespace stepwise {
+
+namespace {
+
+constexpr double armijo = 1e-4;  // the fraction of the predicted decrease a node's move must deliver
+constexpr int max_halvings = 8;  // the shortest move tried: 2^-8 of the node's Newton step (else it stays)
+
+// node i's Newton step on G, halved until G falls; G's decrease (0 where it stays)
+double move(const IncrementalPotential& potential, int i, Eigen::VectorXd& x) {
+  const IncrementalPotential::Vertex here = potential.vertex(i, x, true, true);
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(here.hessian);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) return 0;
+  const Eigen::Vector3d step = -ldlt.solve(here.gradient);
+  const double slope = here.gradient.dot(step);
+  if (!(slope < 0)) return 0;
+  const Eigen::Vector3d from = x.segment<3>(3 * i);
+  for (int halving = 0; halving <= max_halvings; ++halving) {
+    const double alpha = std::ldexp(1.0, -halving);
+    x.segment<3>(3 * i) = from + alpha * step;
+    const double change = potential.vertex(i, x, true, false).value - here.value;
+    if (change <= armijo * alpha * slope) return -change;
+  }
+  x.segment<3>(3 * i) = from;
+  return 0;
+}
+
+}  // namespace
+
+std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pattern) {
+  const Eigen::Index nodes = pattern.cols() / 3;
+  std::vector<int> colour(static_cast<size_t>(nodes), -1);
+  std::vector<char> taken;
+  std::vector<std::vector<int>> by_colour;
+  for (Eigen::Index i = 0; i < nodes; ++i) {
+    taken.assign(by_colour.size() + 1, 0);
+    for (Eigen::SparseMatrix<double>::InnerIterator it(pattern, 3 * i); it; ++it)
+      if (const int c = colour[static_cast<size_t>(it.row() / 3)]; c >= 0) taken[static_cast<size_t>(c)] = 1;
+    const auto c = static_cast<int>(std::find(taken.begin(), taken.end(), 0) - taken.begin());
+    colour[static_cast<size_t>(i)] = c;
+    if (static_cast<size_t>(c) == by_colour.size()) by_colour.emplace_back();
+    by_colour[static_cast<size_t>(c)].push_back(static_cast<int>(i));
+  }
+  return by_colour;
+}
+
+double vbd_sweep(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, int threads,
+                 Eigen::VectorXd& decrease) {
+  decrease.setZero(x.size() / 3);
+  for (const std::vector<int>& colour : colours) {
+    const auto count = static_cast<std::ptrdiff_t>(colour.size());
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+    for (std::ptrdiff_t k = 0; k < count; ++k) {
+      const int i = colour[static_cast<size_t>(k)];
+      decrease[i] += move(potential, i, x);
+    }
+  }
+  return decrease.sum();
+}
+
+}  // namespace stepwise

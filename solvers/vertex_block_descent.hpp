@@ -1,0 +1,31 @@
+// Vertex Block Descent (Chen, Liu, Yang & Yuksel, "Vertex Block Descent", ACM TOG 43(4), SIGGRAPH 2024; NVIDIA Warp's
+// VBDIntegrator): backward Euler's step as the minimiser of the incremental potential G
+// (solvers/incremental_potential.hpp, the one backward Euler's Newton minimises), by Gauss-Seidel over the nodes.
+// Each node in turn takes one Newton step on G as a function of its own position, the others held:
+//     dx_i = -H_i^-1 g_i,   g_i = m_i / h^2 (x_i - xb_i) - (D0 (x - xb))_i / h - f0_i - f_e,i(x),
+//     H_i = m_i / h^2 I - D0_ii / h - sum over the node's terms of their 3 x 3 block of df_e/dx_i, each made
+//           semidefinite (its negative eigenvalues set to zero: the paper's remedy for an indefinite local Hessian),
+// halved until G falls by Armijo's fraction of what the step predicts (kept where no halving does), so that no
+// node's move raises G and a sweep never increases it. The nodes are coloured greedily (in their order) so that no
+// two of a colour share a term of the elastic potential or a block of the force Jacobian; a colour's nodes move at
+// once, on OpenMP's threads, each reading only nodes of other colours: the answer does not depend on the thread count.
+#pragma once
+
+#include <stepwise/solvers/incremental_potential.hpp>
+
+#include <Eigen/SparseCore>
+
+#include <vector>
+
+namespace stepwise {
+
+// greedy colours of the nodes of a 3 x 3 block pattern (symmetric): each node the smallest colour none of its
+// neighbours has, in node order; the nodes of each colour
+std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pattern);
+
+// one sweep over the colours, x moved in place on `threads` threads; G's decrease over it (J). `decrease` is scratch
+// (each node's part, summed in node order: the same bits for any thread count)
+double vbd_sweep(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, int threads,
+                 Eigen::VectorXd& decrease);
+
+}  // namespace stepwise

@@ -1,0 +1,176 @@
+// Vertex Block Descent (solvers/vertex_block_descent.hpp, the vbd method): its colours share no term, its per-node
+// view of the incremental potential is G's own, a sweep never raises G (on the flag and on a scrambled start), its
+// answer does not depend on the thread count, and with enough sweeps its step is backward Euler's.
+#include "models/model.hpp"
+#include "run/measure.hpp"
+#include "solvers/incremental_potential.hpp"
+#include "solvers/run_support.hpp"
+#include "solvers/vertex_block_descent.hpp"
+#include "verification/tolerances.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <random>
+
+namespace stepwise {
+namespace {
+
+// the gusting flag (springs or the continuum), `side` nodes a side, after `frames` backward Euler steps of 1/60 s from
+// its flat start: stretched, bent and moving
+struct Flag {
+  std::unique_ptr<Model> model;
+  Eigen::VectorXd y;
+};
+Flag flag(double continuum, int side, int frames) {
+  Flag f{make_model("cloth", {{"continuum", continuum}, {"rows", side}, {"columns", side}}), {}};
+  f.y = f.model->initial_state();
+  if (frames > 0) {
+    const Measured m = run_and_measure(*f.model, "implicit-euler-newton", StepControl::fixed(1.0 / 60), frames / 60.0, frames / 60.0);
+    EXPECT_EQ(m.result.status, Status::ok) << m.result.message;
+    f.y = m.result.y_stop;
+  }
+  return f;
+}
+
+// one step's potential at h from y
+struct Step {
+  Stats stats;
+  CountedSystem system;
+  IncrementalPotential potential;
+  Step(const Model& model, const Eigen::VectorXd& y, double h) : system(model, stats), potential(system, *system.as<MassSpringView>()) {
+    potential.start(0, y, h);
+  }
+  std::vector<std::vector<int>> colours() {
+    Eigen::SparseMatrix<double> k, d;
+    system.as<MassSpringView>()->force_jacobians(0, Eigen::VectorXd::Zero(system.size()), true, k, d);
+    return colour_nodes(k);
+  }
+};
+
+TEST(Vbd, NoTwoNodesOfAColourShareATerm) {
+  for (const double continuum : {0.0, 1.0}) {
+    const Flag f = flag(continuum, 8, 0);
+    Step step(*f.model, f.y, 1.0 / 60);
+    const auto colours = step.colours();
+    std::vector<int> colour_of(static_cast<size_t>(step.system.size() / 6), -1);
+    for (size_t c = 0; c < colours.size(); ++c)
+      for (const int i : colours[c]) colour_of[static_cast<size_t>(i)] = static_cast<int>(c);
+    for (const int c : colour_of) ASSERT_GE(c, 0);
+    // two nodes share a term exactly where moving one changes the other's elastic force: read from vertex_elastic
+    const MassSpringView& view = *step.system.as<MassSpringView>();
+    const Eigen::VectorXd x = f.y.head(f.y.size() / 2);
+    for (int i = 0; i < view.nodes; ++i) {
+      Eigen::VectorXd moved = x;
+      moved.segment<3>(3 * i) += Eigen::Vector3d(0.01, -0.02, 0.015);
+      for (int j = 0; j < view.nodes; ++j) {
+        if (j == i || colour_of[static_cast<size_t>(j)] != colour_of[static_cast<size_t>(i)]) continue;
+        VertexElastic before, after;
+        view.vertex_elastic(j, x, true, true, before);
+        view.vertex_elastic(j, moved, true, true, after);
+        EXPECT_EQ(before.force, after.force) << "continuum " << continuum << ": nodes " << i << " and " << j << " share a colour and a term";
+      }
+    }
+    std::cout << "continuum " << continuum << ": " << colours.size() << " colours\n";
+  }
+}
+
+TEST(Vbd, EachNodesViewIsTheIncrementalPotentialsOwn) {
+  // G as a function of node i alone: its change is G's change, its gradient G's gradient at the node, its Hessian
+  // (exact) h^-2 times the step matrix's diagonal block
+  for (const double continuum : {0.0, 1.0}) {
+    const Flag f = flag(continuum, 8, 6);
+    const double h = 1.0 / 30;
+    Step step(*f.model, f.y, h);
+    const IncrementalPotential& G = step.potential;
+    const Eigen::VectorXd x = G.inertial();
+    Eigen::VectorXd gradient;
+    G.gradient(x, gradient);
+    Eigen::SparseMatrix<double> a;
+    G.scaled_hessian(x, false, a);
+    const Eigen::MatrixXd A(a);
+    const double g_scale = gradient.lpNorm<Eigen::Infinity>(), a_scale = A.lpNorm<Eigen::Infinity>() / (h * h);
+    for (const int i : {0, 17, 40}) {
+      const IncrementalPotential::Vertex v = G.vertex(i, x, false, true);
+      EXPECT_LT((v.gradient - gradient.segment<3>(3 * i)).lpNorm<Eigen::Infinity>(), tolerance::element_roundoff * g_scale) << continuum << " node " << i;
+      EXPECT_LT((v.hessian - A.block<3, 3>(3 * i, 3 * i) / (h * h)).lpNorm<Eigen::Infinity>(), tolerance::element_roundoff * a_scale) << continuum << " node " << i;
+      Eigen::VectorXd moved = x;
+      const Eigen::Vector3d d(1e-3, -2e-3, 5e-4);
+      moved.segment<3>(3 * i) += d;
+      const double local = G.vertex(i, moved, false, false).value - v.value;
+      Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+      dx.segment<3>(3 * i) = d;
+      const double global = G.change(x, dx);
+      EXPECT_NEAR(local, global, tolerance::potential_roundoff * (std::abs(G.value(x)) + std::abs(global))) << continuum << " node " << i;
+    }
+  }
+}
+
+TEST(Vbd, ASweepNeverRaisesTheIncrementalPotential) {
+  // the flag at 1/30 s, and the paper's scrambled start (every node placed at random in a cube the sheet's size)
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-0.75, 0.75);
+  for (const double continuum : {0.0, 1.0})
+    for (const bool scrambled : {false, true}) {
+      const Flag f = flag(continuum, 16, scrambled ? 0 : 6);
+      Eigen::VectorXd y = f.y;
+      if (scrambled) {
+        for (Eigen::Index i = 0; i < y.size() / 2; ++i) y[i] = u(rng);
+        y.tail(y.size() / 2).setZero();
+      }
+      Step step(*f.model, y, 1.0 / 30);
+      const auto colours = step.colours();
+      Eigen::VectorXd x = step.potential.inertial(), decrease;
+      double G = step.potential.value(x);
+      for (int sweep = 0; sweep < 20; ++sweep) {
+        const double reported = vbd_sweep(step.potential, colours, x, 1, decrease);
+        const double after = step.potential.value(x);
+        EXPECT_LE(after, G + tolerance::potential_roundoff * std::abs(G)) << "continuum " << continuum << (scrambled ? ", scrambled" : "") << ", sweep " << sweep;
+        EXPECT_NEAR(G - after, reported, tolerance::potential_roundoff * std::abs(G) * colours.size()) << continuum << " sweep " << sweep;
+        G = after;
+      }
+    }
+}
+
+TEST(Vbd, TheAnswerDoesNotDependOnTheThreadCount) {
+  for (const double continuum : {0.0, 1.0}) {
+    const auto model = make_model("cloth", {{"continuum", continuum}, {"rows", 16}, {"columns", 16}});
+    std::vector<Eigen::VectorXd> ends;
+    for (const int threads : {1, 2, 3}) {
+      StepControl control = StepControl::fixed(1.0 / 60);
+      control.iterations = 5;
+      control.threads = threads;
+      const Measured m = run_and_measure(*model, "vbd", control, 0.1, 0.1);
+      ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
+      ends.push_back(m.result.y_stop);
+    }
+    for (size_t k = 1; k < ends.size(); ++k) EXPECT_TRUE(ends[k] == ends[0]) << "continuum " << continuum << ", " << k + 1 << " threads";
+  }
+}
+
+TEST(Vbd, WithEnoughSweepsItsStepIsBackwardEulers) {
+  // one 1/60 s step of the 8 x 8 flag in motion: vbd's sweeps against Newton on the same G to 1e-9 m/s
+  for (const double continuum : {0.0, 1.0}) {
+    const Flag f = flag(continuum, 8, 6);
+    const double h = 1.0 / 60;
+    Step step(*f.model, f.y, h);
+    Eigen::VectorXd newton_x = step.potential.inertial();
+    PotentialNewton newton(NewtonOnPotential{.velocity_tolerance = 1e-9});
+    ASSERT_EQ(newton.minimise(step.potential, newton_x, step.stats), "");
+    const auto colours = step.colours();
+    Eigen::VectorXd x = step.potential.inertial(), decrease;
+    int sweeps = 0;
+    double gap = std::numeric_limits<double>::infinity();
+    for (; sweeps < 5000 && gap > NewtonOnPotential{}.velocity_tolerance; ++sweeps) {
+      vbd_sweep(step.potential, colours, x, 1, decrease);
+      gap = (x - newton_x).lpNorm<Eigen::Infinity>() / h;
+    }
+    std::cout << "continuum " << continuum << ": within " << gap << " m/s of Newton's step after " << sweeps << " sweeps\n";
+    EXPECT_LE(gap, NewtonOnPotential{}.velocity_tolerance) << "continuum " << continuum;
+  }
+}
+
+}  // namespace
+}  // namespace stepwise
