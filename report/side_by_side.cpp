@@ -58,10 +58,10 @@ const std::vector<Clip>& clips() {
       // rk4 in place of tsitouras54, which is stability-bound here (1 s of CPU a simulated second at any loose
       // tolerance) and takes no fixed step for the frames to fall on
       {"flag", {}, 2.0, 0.5, 1.0, {"", 0}, "real time: 1 s of CPU per simulated second", 0.25,
-       {{"implicit-euler", 1.0 / 60}, {"fast-mass-spring", 1.0 / 240}, {"rk4", 1e-3}, {"xpbd", 1.0 / 1200}}, {"rk4", 2.5e-4},
+       {{"implicit-euler", 1.0 / 60}, {"fast-mass-spring", 1.0 / 240}, {"rk4", 1e-3}, {"xpbd", 1.0 / 1200}, {"vbd", 1.0 / 60}}, {"rk4", 2.5e-4},
        "The seeds' 32 x 32 flag: the implicit methods take large steps and damp the billowing out; rk4 affords steps "
        "far below its stability limit; xpbd (its springs as compliant constraints) steps each frame in as many substeps "
-       "as the budget buys.",
+       "as the budget buys, and vbd takes one step a frame in as many sweeps as it buys.",
        5},
       // the two cloths of the second seed at one budget, implicit Euler's on the spring flag at 1/60 s: the springs,
       // and the continuum of the springs' own material (the continuum-cloth study's), against the continuum converged
@@ -109,10 +109,13 @@ struct ClipModels {
 };
 
 // contender `c` at n steps a frame of `interval`: n steps of interval / n, or a position-based method's one step a
-// frame in n substeps (of one iteration: Macklin et al.'s small steps)
+// frame in n substeps (of one iteration: Macklin et al.'s small steps), or vbd's one step a frame in n sweeps
 Panel panel_at(const Contender& c, int n, double interval, const ClipModels& models) {
-  Panel panel = find_method(c.method)->substepped ? Panel{c.method, interval, fmt::format("{} in {} substeps", step_text(interval), n), n}
-                                                  : Panel{c.method, interval / n, step_text(interval / n)};
+  const Method& method = *find_method(c.method);
+  Panel panel = method.family == Family::vertex_block_descent
+                    ? Panel{c.method, interval, fmt::format("{} in {} sweeps", step_text(interval), n), 0, {}, n}
+                : method.substepped ? Panel{c.method, interval, fmt::format("{} in {} substeps", step_text(interval), n), n}
+                                    : Panel{c.method, interval / n, step_text(interval / n)};
   if (models.named) panel.setting = fmt::format("{}  {}", c.continuum ? "continuum" : "springs", panel.setting);
   if (c.continuum) panel.sets = models.continuum_sets;
   return panel;
@@ -239,7 +242,7 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
       low = std::min(low, std::get<double>(cell_of(panels, panels.rows[k], "cpu_over_budget")));
       high = std::max(high, std::get<double>(cell_of(panels, panels.rows[k], "cpu_over_budget")));
     }
-    body += fmt::format("### {}\n\n{} The budget: {}, {} here; each method's step is the longest whole fraction of a frame (xpbd's: the most substeps of a frame) that its "
+    body += fmt::format("### {}\n\n{} The budget: {}, {} here; each method's step is the longest whole fraction of a frame (xpbd's: the most substeps of a frame; vbd's: the most sweeps of its one step a frame) that its "
                         "CPU time, measured at two steps beforehand, keeps within it (at least one step a frame). Filmed, they took "
                         "{:.2f} to {:.2f} of the budget (whole steps a frame, and CPU times that vary from run to run). The last panel "
                         "is the reference.\n\n",

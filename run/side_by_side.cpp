@@ -84,6 +84,7 @@ PreparedRun prepare_panel(const RunOptions& scene, const Panel& panel, double in
   run.dt = panel.dt;
   run.sets.insert(run.sets.end(), panel.sets.begin(), panel.sets.end());
   if (panel.substeps > 0) run.substeps = panel.substeps, run.iterations = 1;
+  if (panel.iterations > 0) run.iterations = panel.iterations;
   PreparedRun p = prepare_run(run);
   const double steps = interval / panel.dt;
   if (!(std::abs(steps - std::round(steps)) <= 1e-9 * steps))

@@ -17,6 +17,7 @@ struct Panel {
   std::string setting;  // how the label says the step ("dt 1/60 s")
   int substeps = 0;     // a position-based method's: its step in this many substeps of one iteration (0: not one)
   std::vector<std::string> sets;  // the panel's own scene overrides, key=value, after the scene's (its model's variant)
+  int iterations = 0;   // vbd's: its sweeps a step (0: the method's default)
 };
 
 struct SideBySideOptions {

@@ -93,7 +93,7 @@ std::string findings(const Table& table, const std::vector<Row>& rows, double t_
   }
   const std::string verdict =
       most_sweeps && linearised
-          ? fmt::format("After {} sweeps Vertex Block Descent's step leaves G {:.2g} times as far above its minimum as the linearised step's one "
+          ? fmt::format("After {} sweeps Vertex Block Descent's step leaves G {:.3g} times as far above its minimum as the linearised step's one "
                         "solve{}.",
                         rows[*most_sweeps].iterations, cell(*most_sweeps, "potential_gap") / cell(*linearised, "potential_gap"),
                         cell(*most_sweeps, "potential_gap") > cell(*linearised, "potential_gap")
