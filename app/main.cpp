@@ -100,11 +100,12 @@ int run(int argc, char** argv) {
   run_cmd->add_option("--out", run.out, "output directory")->required();
 
   std::string study_name, study_out;
-  bool study_quick = false;
+  bool study_quick = false, study_list = false;
   auto* study = app.add_subcommand("study", "run one study: " + stepwise::study_names());
-  study->add_option("name", study_name, "study name")->required();
+  study->add_option("name", study_name, "study name (required unless --list)");
+  study->add_flag("--list", study_list, "print each study's name and what it measures, a line each, and exit");
   study->add_flag("--quick", study_quick, "reduced sweep");
-  study->add_option("--out", study_out, "output directory")->required();
+  study->add_option("--out", study_out, "output directory (required unless --list)");
   int study_threads = 0;
   study->add_option("--threads", study_threads, "threads the sweep's points run on (default: one per core)")->check(CLI::Range(1, 1024));
   stepwise::RunOptions study_scene;
@@ -172,6 +173,12 @@ int run(int argc, char** argv) {
   if (*render_cmd) return stepwise::render_command(render);
   if (*advise_cmd) return stepwise::advise_command(advise);
   if (*study) {
+    if (study_list) {
+      for (const auto& [name, title] : stepwise::study_list()) fmt::print("{}  {}\n", name, title);
+      return 0;
+    }
+    if (study_name.empty()) throw stepwise::InputError("name is required (`stepwise study --list` lists the studies)");
+    if (study_out.empty()) throw stepwise::InputError("--out is required");
     if (study_scene.scene_file.empty() && !study_scene.sets.empty()) throw stepwise::InputError("--set: given without --scene");
     return stepwise::study_command(study_name, study_quick, study_threads, study_out,
                                    study_scene.scene_file.empty() ? std::nullopt : std::optional(study_scene));

@@ -34,10 +34,18 @@ namespace fs = std::filesystem;
 constexpr const char* pictures_study = "pictures";
 constexpr const char* side_by_side_study = "side-by-side";
 
+std::vector<std::pair<std::string, std::string>> study_list() {
+  std::vector<std::pair<std::string, std::string>> list;
+  for (const auto& s : studies()) list.emplace_back(s.name, s.title);
+  list.emplace_back(pictures_study, "Pictures: every scene rendered, the water with its caustic");
+  list.emplace_back(side_by_side_study, "Side by side: the methods in motion at one CPU budget, in videos");
+  return list;
+}
+
 std::string study_names() {
   std::string names;
-  for (const auto& s : studies()) names += (names.empty() ? "" : " | ") + std::string(s.name);
-  return names + " | " + pictures_study + " | " + side_by_side_study;
+  for (const auto& [name, title] : study_list()) names += (names.empty() ? "" : " | ") + name;
+  return names;
 }
 
 namespace {

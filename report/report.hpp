@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <utility>
 #include <vector>
 #include <string>
 #include <string_view>
@@ -15,6 +16,8 @@ namespace stepwise {
 
 // the study names, " | " between them
 std::string study_names();
+// every study `stepwise study` runs: its name and what it measures
+std::vector<std::pair<std::string, std::string>> study_list();
 
 // run one study into out/ (CSV, Markdown, its figures); its points on `threads` threads (0: one per core).
 // Exit status 0, 1 when a study or its figures failed, 2 for an unknown name or unwritable out

@@ -63,6 +63,25 @@ class Cli : public ::testing::Test {
   fs::path dir_;
 };
 
+// `stepwise study --list` and the list in docs/usage.md are one list
+TEST_F(Cli, TheStudiesListIsTheDocs) {
+  const Output o = run("study --list");
+  ASSERT_EQ(o.status, 0) << o.err;
+  std::string listed;
+  std::istringstream lines(o.out);
+  for (std::string line; std::getline(lines, line);) {
+    const auto gap = line.find("  ");
+    ASSERT_NE(gap, std::string::npos) << line;
+    listed += fmt::format("- `{}`: {}\n", line.substr(0, gap), line.substr(gap + 2));
+  }
+  const std::string usage = slurp(fs::path(STEPWISE_SOURCE_DIR) / "docs" / "usage.md");
+  const std::string open = "<!-- stepwise study --list -->\n", close = "<!-- end of the list -->";
+  const auto from = usage.find(open), to = usage.find(close);
+  ASSERT_TRUE(from != std::string::npos && to != std::string::npos) << "docs/usage.md has no studies list";
+  EXPECT_EQ(usage.substr(from + open.size(), to - from - open.size()), listed);
+  EXPECT_EQ(run("study --out x").status, 2);
+}
+
 // outputs are written through temporary files (mkstemp: 0600) and keep the permissions the umask gives a file
 // written the usual way: 0644 under umask 022, 0600 under 077
 TEST_F(Cli, OutputsGetTheUmasksPermissionsNotTheTemporaryFiles) {
