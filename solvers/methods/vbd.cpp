@@ -57,7 +57,6 @@ class VertexBlockDescent final : public FixedStepper {
       x_.segment<3>(3 * i) += h * h * last * along;
     }
     for (int sweep = 0; sweep < iterations_; ++sweep) system_.stats().potential_decrease += vbd_sweep(potential_, colours_, x_, threads_, decrease_);
-    system_.stats().projections += iterations_;
     previous_v_ = y.tail(n_);
     previous_h_ = h;
     y.tail(n_) = (x_ - y.head(n_)) / h;
