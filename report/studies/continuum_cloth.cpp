@@ -576,7 +576,7 @@ StudyOutput continuum_cloth(const StudyContext& ctx) {
 }  // namespace
 
 Study continuum_cloth_study() {
-  return {"continuum-cloth", "Cloth: the spring mesh against the continuum (finite elements) at rest", continuum_cloth};
+  return {"continuum-cloth", "Cloth: the spring mesh against the continuum (finite elements), at rest and in motion", continuum_cloth};
 }
 
 }  // namespace stepwise
