@@ -96,6 +96,8 @@ int run(int argc, char** argv) {
   run_cmd->add_option("--max-steps", run.max_steps, fmt::format("steps (and output rows) the run may take (default {:.0e})", stepwise::default_max_steps));
   run_cmd->add_option("--substeps", run.substeps, "substeps a step, for pbd, xpbd and vbd (default 1)");
   run_cmd->add_option("--iterations", run.iterations, "constraint sweeps (pbd, xpbd) or node sweeps (vbd) a substep (default 4)");
+  run_cmd->add_option("--threads", run.threads, "threads vbd's colour sweeps run on (default 1; the same answer on any count)");
+  run_cmd->add_option("--rho", run.rho, "vbd-chebyshev's estimate of its sweeps' rate, in (0, 1) (default 0.99)");
   run_cmd->add_option("--constraint", run.constraint, "project (the state put back on a constrained scene's constraints after each step) or baumgarte (its equations pulling a drift back), for an ODE method");
   run_cmd->add_option("--out", run.out, "output directory")->required();
 
@@ -140,6 +142,8 @@ int run(int argc, char** argv) {
   render_cmd->add_option("--max-steps", render.run.max_steps, fmt::format("steps the run may take (default {:.0e})", stepwise::default_max_steps));
   render_cmd->add_option("--substeps", render.run.substeps, "substeps a step, for pbd, xpbd and vbd (default 1)");
   render_cmd->add_option("--iterations", render.run.iterations, "constraint sweeps (pbd, xpbd) or node sweeps (vbd) a substep (default 4)");
+  render_cmd->add_option("--threads", render.run.threads, "threads vbd's colour sweeps run on (default 1; the same answer on any count)");
+  render_cmd->add_option("--rho", render.run.rho, "vbd-chebyshev's estimate of its sweeps' rate, in (0, 1) (default 0.99)");
   render_cmd->add_option("--constraint", render.run.constraint, "project (the state put back on a constrained scene's constraints after each step) or baumgarte (its equations pulling a drift back), for an ODE method");
   render_cmd->add_option("--frames", render.frames, "frames from t = 0 to t_end (default 60)");
   render_cmd->add_option("--size", render.size, "WIDTHxHEIGHT in pixels (default 1280x720)");

@@ -153,6 +153,21 @@ void check_options(const RunOptions& o, PreparedRun& p) {
       throw InputError(fmt::format("{}: {} takes no substeps or iterations (pbd, xpbd and vbd do)", option, p.method.empty() ? "the method chosen for this scene" : p.method));
     *field = static_cast<int>(*value);
   }
+  if (o.threads) {
+    constexpr double most_threads = 1024;
+    if (!(*o.threads >= 1 && *o.threads <= most_threads && std::floor(*o.threads) == *o.threads))
+      throw InputError(fmt::format("--threads {}: must be a whole number in 1..{}", *o.threads, most_threads));
+    if (const Method* m = p.method.empty() ? nullptr : find_method(p.method); !m || m->family != Family::vertex_block_descent)
+      throw InputError(fmt::format("--threads: {} runs on one thread (vbd's colour sweeps take threads)",
+                                   p.method.empty() ? "the method chosen for this scene" : p.method));
+    p.control.threads = static_cast<int>(*o.threads);
+  }
+  if (o.rho) {
+    if (!(*o.rho > 0 && *o.rho < 1)) throw InputError(fmt::format("--rho {}: Chebyshev's rate must lie between 0 and 1", *o.rho));
+    if (p.method != "vbd-chebyshev")
+      throw InputError(fmt::format("--rho: {} has no Chebyshev acceleration (vbd-chebyshev has)", p.method.empty() ? "the method chosen for this scene" : p.method));
+    p.control.chebyshev_rho = *o.rho;
+  }
   // the step: the method's control, told now wherever the method is (a method chosen later is adaptive)
   if (!p.method.empty()) p.control = step_control(o, s, *find_method(p.method), p.control);
   const double dt = p.control.dt.value_or(0);

@@ -21,6 +21,8 @@ struct RunOptions {
   std::optional<double> dt, rtol, atol, t_end, output_dt;
   std::optional<double> max_steps;  // the steps (and output rows) a run may take; default_max_steps
   std::optional<double> substeps, iterations;  // a position-based method's (StepControl's)
+  std::optional<double> threads;               // a method's own parallel loops' (vbd's colour sweeps; StepControl's)
+  std::optional<double> rho;                   // vbd-chebyshev's rate (StepControl's chebyshev_rho)
   // "project": a constrained scene's state put back on its constraints after each step; "baumgarte": its
   // equations of motion pulling a drift back (the model's baumgarte flag)
   std::optional<std::string> constraint;

@@ -94,6 +94,10 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
     j["substeps"] = p.control.substeps;
     j["iterations"] = p.control.iterations;
   }
+  if (const Method* method = find_method(p.method); method && method->family == Family::vertex_block_descent) {
+    j["threads"] = p.control.threads;
+    if (method->name == "vbd-chebyshev") j["chebyshev_rho"] = p.control.chebyshev_rho;
+  }
   // a scene's own equations: whether the compiled right-hand side ran or the interpreter, and why
   if (const auto e = equations_evaluation(*p.model)) {
     // a compile still running in the background when the run ended is stopped with the model

@@ -64,4 +64,29 @@ double vbd_sweep(const IncrementalPotential& potential, const std::vector<std::v
   return decrease.sum();
 }
 
+double vbd_iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, const VbdSweeps& how,
+                   Eigen::VectorXd& decrease) {
+  const double rho2 = how.rho * how.rho;
+  double total = 0, omega = 0;     // omega 0: the sequence starts again
+  Eigen::VectorXd older, old, dx;  // x_{k-2} and x_{k-1}
+  if (rho2 > 0) old = x;
+  for (int k = 1; k <= how.sweeps; ++k) {
+    total += vbd_sweep(potential, colours, x, how.threads, decrease);
+    if (!(rho2 > 0)) continue;
+    if (k >= 2) {
+      omega = omega == 0 ? 2 / (2 - rho2) : 4 / (4 - rho2 * omega);
+      dx = (omega - 1) * (x - older);
+      if (const double change = potential.change(x, dx); change < 0) {
+        x += dx;
+        total -= change;
+      } else {
+        omega = 0;
+      }
+    }
+    older = std::move(old);
+    old = x;
+  }
+  return total;
+}
+
 }  // namespace stepwise

@@ -28,4 +28,18 @@ std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pa
 double vbd_sweep(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, int threads,
                  Eigen::VectorXd& decrease);
 
+// `sweeps` sweeps from x, in place; G's decrease over them (J). With rho > 0, Chebyshev's semi-iterative acceleration
+// (Wang 2015, "A Chebyshev semi-iterative approach for accelerating projective and position-based dynamics", as the
+// VBD paper takes it): after sweep k >= 2 the swept x^_k is carried on to
+//     x_k = x_{k-2} + omega_k (x^_k - x_{k-2}),   omega_2 = 2 / (2 - rho^2),   omega_k = 4 / (4 - rho^2 omega_{k-1}),
+// rho the sweeps' rate (the iteration's spectral radius), given: the paper sets it by hand for each scene. An
+// extrapolation that would raise G is not taken, and the sequence starts again at omega_2: G still never rises
+struct VbdSweeps {
+  int sweeps = 1;
+  int threads = 1;
+  double rho = 0;  // Chebyshev's rate; 0: no acceleration
+};
+double vbd_iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, const VbdSweeps& how,
+                   Eigen::VectorXd& decrease);
+
 }  // namespace stepwise
