@@ -9,10 +9,13 @@
 //   energy = "..."                     # optional: an invariant to chart, in the variables and parameters
 //
 // GiNaC parses each formula against a symbol table holding only those names (and the functions of the
-// whitelist in equations.cpp), differentiates it for the exact Jacobian and its sparsity pattern, and prints C
+// whitelist in equations/tape.cpp), differentiates it for the exact Jacobian and its sparsity pattern, and prints C
 // source from the expression tree; that source is compiled once into a shared object cached by content hash
 // (models/native_code.hpp). Where no compiler is, a tape interpreter over the same tree evaluates f and df/dy.
-// GiNaC's types stay in equations.cpp. The model then is an ordinary Model.
+// The parts, a file each in models/equations/: tape.* (the tape and its interpreter), c_source.* (the C printed
+// from the tapes), symbolic.* (GiNaC: parsing, differentiation, the tape builder; GiNaC's types stay there and in
+// the model), spec_checks.* (the scene's shape and values), model.cpp (the model, its events, its Jacobian and
+// its compiled code). The model then is an ordinary Model.
 #pragma once
 
 #include <stepwise/models/model.hpp>

@@ -1,5 +1,5 @@
 // Generated C source compiled once into a shared object, cached by the source's content hash in the user's cache
-// directory, and loaded (the equations model's right-hand side and Jacobian, models/equations.cpp).
+// directory, and loaded (the equations model's right-hand side and Jacobian, models/equations/).
 //
 // The cache: $STEPWISE_CACHE, else $XDG_CACHE_HOME/stepwise, else ~/.cache/stepwise (made 0700). The directory
 // must be the user's own and writable by nobody else, or it is not used (a compiled object there would be code

@@ -17,7 +17,7 @@
 
 namespace stepwise {
 
-// f compiled from a scene's own equations (models/equations.cpp: C printed from the parsed formulas, loaded from
+// f compiled from a scene's own equations (models/equations/: C printed from the parsed formulas, loaded from
 // a shared object): a plain function pointer and the parameters it reads, sizes 2 to 4 (the shipped equation
 // scenes; larger systems call through the system, where f's own cost dominates the call's). The function takes
 // the state as N arguments and returns f as a struct of N doubles, so that the state and f pass in registers
