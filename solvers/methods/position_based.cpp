@@ -36,20 +36,9 @@ class PositionBased final : public PlainStepping<PositionBased> {
     double* x = y_next.data();
     double* v = x + n_;
     for (int s = 0; s < substeps_; ++s) {
-      c_.external(t + s * hs, x, v, a_.data());
-      ++system_.stats().rhs_evals;
-      for (Eigen::Index i = 0; i < n_; ++i) {
-        if (c_.inverse_mass[static_cast<size_t>(i / c_.dimension)] > 0) v[i] += hs * a_[i];
-        p_[i] = x[i] + hs * v[i];
-      }
-      std::fill(lambda_.begin(), lambda_.end(), 0.0);
-      for (int k = 0; k < iterations_; ++k)
-        for (size_t j = 0; j < c_.constraints.size(); ++j) project(j, hs);
-      for (Eigen::Index i = 0; i < n_; ++i) {
-        v[i] = (p_[i] - x[i]) / hs;
-        x[i] = p_[i];
-      }
-      system_.stats().projections += iterations_;
+      predict(t + s * hs, hs, x, v);
+      solve_constraints(hs);
+      update_velocities(hs, x, v);
     }
     RunningNorm norm;
     for (Eigen::Index i = 0; i < y_next.size(); ++i) norm.add(y_next[i]);
@@ -58,6 +47,32 @@ class PositionBased final : public PlainStepping<PositionBased> {
   }
 
  private:
+  // the substep's three phases. Predict: the velocities from the external acceleration alone, the positions
+  // from them (v += h a, p = x + h v)
+  void predict(double t, double hs, const double* x, double* v) {
+    c_.external(t, x, v, a_.data());
+    ++system_.stats().rhs_evals;
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      if (c_.inverse_mass[static_cast<size_t>(i / c_.dimension)] > 0) v[i] += hs * a_[i];
+      p_[i] = x[i] + hs * v[i];
+    }
+  }
+  // solve: `iterations` Gauss-Seidel sweeps over the constraints on the predicted positions (xpbd's multipliers
+  // from 0)
+  void solve_constraints(double hs) {
+    std::fill(lambda_.begin(), lambda_.end(), 0.0);
+    for (int k = 0; k < iterations_; ++k)
+      for (size_t j = 0; j < c_.constraints.size(); ++j) project(j, hs);
+    system_.stats().projections += iterations_;
+  }
+  // update: the velocities from the positions' change, and the positions
+  void update_velocities(double hs, double* x, double* v) const {
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      v[i] = (p_[i] - x[i]) / hs;
+      x[i] = p_[i];
+    }
+  }
+
   // constraint j on the predicted positions, in place
   void project(size_t j, double hs) {
     const DistanceConstraint& c = c_.constraints[j];
