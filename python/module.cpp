@@ -675,7 +675,42 @@ PYBIND11_MODULE(_stepwise, m) {
         py::arg("max_steps"));
   m.def("advise", &advise_scene, py::arg("scene"), py::arg("error"), py::arg("budget"), py::arg("set"), py::arg("threads"));
   m.def("study", &study_scene, py::arg("name"), py::arg("scene"), py::arg("set"), py::arg("quick"), py::arg("threads"));
-  py::class_<Equations>(m, "Equations", "a system written as equations: parsed, differentiated and compiled once (models/equations.hpp)")
+  py::class_<Equations>(m, "Equations", R"doc(A system written as equations: parsed, differentiated and compiled once (models/equations.hpp).
+
+Parameters
+----------
+equations : dict of str to str
+    Each variable's derivative as a formula: {"x": "v", "v": "-g/L*sin(x)"}; the variables are its keys, in order.
+parameters : dict of str to float, optional
+    The names the formulas may use besides the variables and t.
+initial : dict of str to float, optional
+    The initial state, by variable.
+energy : str, optional
+    An invariant to chart, in the variables and parameters.
+exact : dict of str to str, optional
+    Each variable as a formula in t and the parameters (errors are measured against it).
+events : dict of str to dict, optional
+    Events by name: {"when": g, "direction": -1|0|1, "action": {variable: formula}, "terminal": bool, "rest": rule}.
+compile : bool, optional
+    Compile f and its Jacobian to machine code (default True); else the tape interpreter runs.
+
+Attributes
+----------
+variables : list of str
+parameters : dict of str to float
+compiled : bool
+    Whether the compiled code runs.
+evaluation : str
+    Why the compiled code or the interpreter runs.
+
+Raises
+------
+ValueError
+    A formula that does not parse or cannot be evaluated, an unknown symbol, a variable without an equation or an
+    initial value (the message names the formula and its column).
+TypeError
+    An events entry that is not a dict.
+)doc")
       .def(py::init(&make_python_equations), py::arg("equations"), py::arg("parameters") = std::map<std::string, double>{}, py::arg("initial") = py::none(),
            py::arg("energy") = py::none(), py::arg("exact") = py::none(), py::arg("events") = py::none(), py::arg("compile") = true)
       .def_static("from_scene", &equations_from_scene, py::arg("file"), py::arg("compile") = true)

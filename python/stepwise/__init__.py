@@ -56,8 +56,37 @@ def _sets(set):
 
 
 def run(scene, method=None, dt=None, rtol=None, atol=None, t_end=None, output_dt=None, set=None, max_steps=None):
-    """Run a scene file (a path, or a shipped scene by name: "pendulum") as ``stepwise run`` runs it, with
-    the same overrides; the numbers equal trajectory.csv's and summary.json's to the bit."""
+    """Run a scene file as ``stepwise run`` runs it, with the same overrides.
+
+    Parameters
+    ----------
+    scene : str or path
+        A scene file, or a shipped scene by name (``"pendulum"``).
+    method : str, optional
+        A method's name (``methods()``); default the scene's, else one chosen for it.
+    dt, rtol, atol : float, optional
+        A fixed step (s), or the tolerances of an adaptive method.
+    t_end, output_dt : float, optional
+        The end time and the sampling interval (s); default the scene's, and t_end / 1000.
+    set : dict of str to float, optional
+        Scene parameters overridden, as ``--set key=value``.
+    max_steps : float, optional
+        The steps (and output rows) the run may take.
+
+    Returns
+    -------
+    RunResult
+        ``t`` (N,), ``y`` (n, N) of the columns ``names``, ``energy`` (N,) where the model has one, and
+        ``summary`` (summary.json's fields, docs/outputs.md). The numbers equal trajectory.csv's and
+        summary.json's to the bit.
+
+    Raises
+    ------
+    ValueError
+        Bad input, with the command line's one-line message (the file, line or key).
+    TypeError
+        ``set`` not a dict.
+    """
     out = _stepwise.run(str(scene), method, dt, rtol, atol, t_end, output_dt, _sets(set), max_steps)
     return RunResult(out["columns"], out["values"], out["summary"])
 
@@ -180,18 +209,64 @@ def _event_attributes(events):
 
 
 def solve_ivp(fun, t_span, y0, method="verner98", t_eval=None, dense_output=False, events=None, vectorized=False, args=None, **options):
-    """``scipy.integrate.solve_ivp``'s signature and result, stepped by a stepwise method.
+    """Solve an initial value problem with SciPy's signature and result, stepped by a stepwise method.
 
-    fun: ``fun(t, y)`` returning dy/dt (shape (n,)), or a ``stepwise.Equations`` (compiled, no Python in
-    the loop; its own ``events`` are watched too). method: any of ``methods()`` (default verner98); SciPy's
-    "RK45", "RK23" and "BDF" name the same methods here. Options: rtol (1e-3), atol (1e-6, a number or one
-    per component), jac (callable or matrix), max_step, and stepwise's dt (a fixed step, which the fixed-step
-    methods need) and max_steps. Without t_eval the result holds the steps taken, as SciPy's does. events:
-    callables g(t, y) with SciPy's ``terminal`` and ``direction`` attributes, located on the method's solution
-    (``t_events``, ``y_events``); events reaching zero at one instant are each recorded there once, in the
-    order of the list, and a terminal one among them ends the solve after all of them (SciPy drops those listed
-    after the terminal one; docs/scenes.md#events). dense_output: ``sol`` (a StepSolution). vectorized: fun is called with
-    y of shape (n, 1). A reversed t_span integrates backwards."""
+    Parameters
+    ----------
+    fun : callable or Equations
+        ``fun(t, y)`` returning dy/dt of shape (n,) (with ``args``: ``fun(t, y, *args)``); or a
+        ``stepwise.Equations``, compiled once, with no Python in the loop, whose own events are watched too.
+    t_span : 2-tuple of float
+        The interval (t0, tf); tf < t0 integrates backwards.
+    y0 : array_like, shape (n,)
+        The initial state (real numbers).
+    method : str, optional
+        Any name ``methods()`` lists (default ``"verner98"``). SciPy's ``"RK45"``, ``"RK23"`` and ``"BDF"`` name the
+        same methods here; ``"DOP853"``, ``"Radau"`` and ``"LSODA"`` raise, naming the closest.
+    t_eval : array_like, optional
+        Times at which the solution is stored, within t_span; without them, the steps taken, as SciPy's.
+    dense_output : bool, optional
+        Whether ``sol`` is a ``StepSolution`` callable at any time in t_span.
+    events : callable or list of callables, optional
+        ``g(t, y)`` with SciPy's ``terminal`` and ``direction`` attributes, located on the method's solution.
+        Events reaching zero at one instant are each recorded there once, in the order of the list, and a terminal
+        one among them ends the solve after all of them (docs/scenes.md#events).
+    vectorized : bool, optional
+        ``fun`` is called with y of shape (n, 1).
+    args : tuple, optional
+        Extra arguments to ``fun``, ``jac`` and the events.
+    **options
+        ``rtol`` (1e-3) and ``atol`` (1e-6; a number, or one per component), ``jac`` (callable or matrix),
+        ``max_step``; stepwise's ``dt`` (a fixed step, which the fixed-step methods need) and ``max_steps``.
+        SciPy's ``first_step``, ``min_step``, ``jac_sparsity``, ``lband`` and ``uband`` are accepted with SciPy's
+        warning that they have no effect.
+
+    Returns
+    -------
+    OdeResult
+        SciPy's fields: ``t`` (N,), ``y`` (n, N), ``sol``, ``t_events``, ``y_events``, ``nfev``, ``njev``, ``nlu``,
+        ``status`` (0 reached tf, 1 a terminal event, -1 failed), ``message``, ``success``; and stepwise's:
+        ``method``, ``stats`` (every counter: steps, rejected, rhs_evals, ...) and ``equation_events`` (an
+        Equations' own events: {name: (times, states just before its action)}).
+
+    Raises
+    ------
+    ValueError
+        A bad t_span, y0 of another shape than 1-D, t_eval outside t_span or not 1-D, atol of the wrong shape or
+        negative, a non-positive max_step, an unknown method or one of SciPy's that stepwise has not, ``args`` with
+        an Equations, or a bad event attribute.
+    TypeError
+        ``fun`` not callable, complex or non-numeric y0 or options, a method that is not a string, or an option
+        neither SciPy's nor stepwise's.
+
+    Examples
+    --------
+    >>> import numpy as np, stepwise
+    >>> sol = stepwise.solve_ivp(lambda t, y: [y[1], -9.81 * np.sin(y[0])], (0, 10), [2.9, 0.0],
+    ...                          method="verner98", rtol=1e-8, atol=1e-10)
+    >>> sol.success
+    True
+    """
     # (options is this call's own dict: popped as read. The checks below take the common case first, as a solve
     # of a compiled system costs a few microseconds)
     rtol = _number("rtol", options.pop("rtol", 1e-3))
