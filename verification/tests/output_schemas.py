@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Every kind of summary.json `stepwise run` writes, validated against docs/summary.schema.json (Debian's
-python3-jsonschema): the schema allows no field it does not list, so a field added to the code without the docs
-fails here.
+"""Every kind of summary.json `stepwise run` writes, validated against docs/summary.schema.json, and a
+render.json and an advice.json against theirs (Debian's python3-jsonschema): a schema allows no field it does not
+list, so a field added to the code without the docs fails here.
 
-usage: summary_schema.py STEPWISE SCENES_DIR SCHEMA
+usage: output_schemas.py STEPWISE SCENES_DIR DOCS_DIR
 
 The runs cover each field the summary writes only sometimes: a fixed and an adaptive step, events and a scene's own
 events with their states, a method chosen for the user, a constrained scene (drift, projection, a position-based
@@ -31,10 +31,14 @@ RUNS = [
 
 
 def main():
-    stepwise, scenes, schema_path = sys.argv[1:4]
-    schema = json.load(open(schema_path))
-    jsonschema.Draft202012Validator.check_schema(schema)
-    validator = jsonschema.Draft202012Validator(schema)
+    stepwise, scenes, docs = sys.argv[1:4]
+
+    def validator(name):
+        schema = json.load(open(os.path.join(docs, f"{name}.schema.json")))
+        jsonschema.Draft202012Validator.check_schema(schema)
+        return jsonschema.Draft202012Validator(schema)
+
+    summaries = validator("summary")
     seen, problems = set(), []
     with tempfile.TemporaryDirectory() as d:
         for k, (scene, args) in enumerate(RUNS):
@@ -50,8 +54,19 @@ def main():
                 continue
             summary = json.load(open(os.path.join(out, "summary.json")))
             seen |= set(summary) | {f"events.{key}" for e in summary["events"] for key in e}
-            for error in validator.iter_errors(summary):
+            for error in summaries.iter_errors(summary):
                 problems.append(f"{scene} {' '.join(args)}: {'/'.join(map(str, error.absolute_path)) or 'summary'}: {error.message}")
+        # a render (two small frames) and an advice (a short budget)
+        others = [("render", "render.json", ["render", os.path.join(scenes, "pendulum.toml"), "--frames", "2", "--size", "64x48"]),
+                  ("advice", "advice.json", ["advise", os.path.join(scenes, "pendulum.toml"), "--error", "1e-4", "--budget", "3"])]
+        for name, file, args in others:
+            out = os.path.join(d, name)
+            done = subprocess.run([stepwise, *args, "--out", out], capture_output=True, text=True, timeout=600)
+            if done.returncode != 0:
+                problems.append(f"{' '.join(args)}: exit {done.returncode}: {done.stderr.strip()}")
+                continue
+            for error in validator(name).iter_errors(json.load(open(os.path.join(out, file)))):
+                problems.append(f"{file}: {'/'.join(map(str, error.absolute_path)) or name}: {error.message}")
     # the runs reach what they are for: the fields written only sometimes
     for field in ("dt", "rtol", "events.state", "method_choice", "constraint_drift", "constraint", "substeps", "newton_iterations", "colours",
                   "chebyshev_rho", "equations", "energy_initial"):
@@ -59,7 +74,7 @@ def main():
             problems.append(f"no run wrote {field}: the runs no longer cover it")
     for p in problems:
         print(p)
-    print(f"summary_schema: {len(RUNS)} runs, {len(problems)} problem(s)")
+    print(f"output_schemas: {len(RUNS)} runs, a render and an advice, {len(problems)} problem(s)")
     return 1 if problems else 0
 
 
