@@ -263,14 +263,15 @@ void BM_frame_newton(benchmark::State& state) { one_frame(state, true, false); }
 void BM_continuum_frame_linearised(benchmark::State& state) { one_frame(state, false, true); }
 void BM_continuum_frame_newton(benchmark::State& state) { one_frame(state, true, true); }
 
-// one 1/60 s frame from the flag's state at 0.1 s by a fixed-step method of the table: vbd (10 sweeps, on `threads`)
-// or xpbd (20 substeps of one sweep); wall-clock time (vbd's threads share the frame)
+// one 1/60 s frame from the flag's state at 0.1 s by a fixed-step method of the table: vbd or vbd-chebyshev (10
+// sweeps, on `threads`) or xpbd (20 substeps of one sweep); wall-clock time (vbd's threads share the frame)
 void frame_by(benchmark::State& state, const char* method, int threads, bool continuum) {
   Flag& f = flag(static_cast<int>(state.range(0)), {}, continuum);
   stepwise::StepControl control = stepwise::StepControl::fixed(frame);
   control.threads = threads;
-  control.iterations = std::string(method) == "vbd" ? 10 : 1;
-  control.substeps = std::string(method) == "vbd" ? 1 : 20;
+  const bool vbd = std::string(method).starts_with("vbd");
+  control.iterations = vbd ? 10 : 1;
+  control.substeps = vbd ? 1 : 20;
   const auto integrator = stepwise::make_integrator(method, control);
   const std::vector<double> t_out{0.1 + frame};
   for (auto _ : state) {
@@ -281,9 +282,11 @@ void frame_by(benchmark::State& state, const char* method, int threads, bool con
 }
 void BM_frame_vbd(benchmark::State& state) { frame_by(state, "vbd", 1, false); }
 void BM_frame_vbd_2_threads(benchmark::State& state) { frame_by(state, "vbd", 2, false); }
+void BM_frame_vbd_chebyshev(benchmark::State& state) { frame_by(state, "vbd-chebyshev", 1, false); }
 void BM_frame_xpbd(benchmark::State& state) { frame_by(state, "xpbd", 1, false); }
 void BM_continuum_frame_vbd(benchmark::State& state) { frame_by(state, "vbd", 1, true); }
 void BM_continuum_frame_vbd_2_threads(benchmark::State& state) { frame_by(state, "vbd", 2, true); }
+void BM_continuum_frame_vbd_chebyshev(benchmark::State& state) { frame_by(state, "vbd-chebyshev", 1, true); }
 
 // the incremental potential's parts at the frame's start: its gradient, and its Hessian assembled (M - h D0 - h^2 K)
 void potential_part(benchmark::State& state, bool continuum, bool hessian) {
@@ -331,9 +334,11 @@ BENCHMARK(BM_continuum_frame_linearised) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_frame_newton) CONTINUUM_SIZES;
 BENCHMARK(BM_frame_vbd) CONTINUUM_SIZES->UseRealTime();
 BENCHMARK(BM_frame_vbd_2_threads) CONTINUUM_SIZES->UseRealTime();
+BENCHMARK(BM_frame_vbd_chebyshev) CONTINUUM_SIZES->UseRealTime();
 BENCHMARK(BM_frame_xpbd) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_frame_vbd) CONTINUUM_SIZES->UseRealTime();
 BENCHMARK(BM_continuum_frame_vbd_2_threads) CONTINUUM_SIZES->UseRealTime();
+BENCHMARK(BM_continuum_frame_vbd_chebyshev) CONTINUUM_SIZES->UseRealTime();
 BENCHMARK(BM_potential_gradient) CONTINUUM_SIZES;
 BENCHMARK(BM_potential_hessian) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_potential_gradient) CONTINUUM_SIZES;

@@ -128,6 +128,28 @@ std::string findings(const Table& table, const std::vector<Row>& rows, double t_
       acceleration, stability, recovery);
 }
 
+// G - G* against the sweeps (vbd, plain and accelerated) and against the CPU (every method's one step, the springs)
+FigureSpec gap_figure() {
+  const std::string at_frame = fmt::format("{}", frame);
+  return {
+      .title = "The 32 x 32 flag at 1/60 s: how far one step leaves the incremental potential above its minimum",
+      .panels = {{.title = "against vbd's sweeps",
+                  .x_label = "sweeps a step",
+                  .y_label = "G - G* (J)",
+                  .log_x = true,
+                  .log_y = true,
+                  .layers = {{.table = "cloth_solvers", .x = "iterations", .y = "potential_gap", .series = "method", .split = {"model"}, .split_dashed = true,
+                              .label = "{} ({model})", .where = {{"method", {"vbd", "vbd-chebyshev"}}, {"dt", {at_frame}}, {"model", {"springs", "continuum"}}}}}},
+                 {.title = "against the CPU, springs",
+                  .x_label = "CPU seconds per simulated second",
+                  .y_label = "G - G* (J)",
+                  .log_x = true,
+                  .log_y = true,
+                  .layers = {{.table = "cloth_solvers", .x = "cpu_per_simulated_second", .y = "potential_gap", .series = "method",
+                              .where = {{"dt", {at_frame}}, {"model", {"springs"}}}, .complete = {"potential_gap"},
+                              .hover = {{"iterations", "sweeps"}, {"substeps", "substeps"}}}}}}};
+}
+
 }  // namespace
 
 StudyOutput cloth_solvers(const StudyContext& ctx) {
@@ -220,26 +242,7 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
     }
   StudyOutput out;
   out.markdown = findings(table, rows, t_end, recovery);
-  // G - G* against the sweeps (vbd, plain and accelerated) and against the CPU (every method's one step, the springs)
-  const std::string at_frame = fmt::format("{}", frame);
-  FigureSpec spec{
-      .title = "The 32 x 32 flag at 1/60 s: how far one step leaves the incremental potential above its minimum",
-      .panels = {{.title = "against vbd's sweeps",
-                  .x_label = "sweeps a step",
-                  .y_label = "G - G* (J)",
-                  .log_x = true,
-                  .log_y = true,
-                  .layers = {{.table = "cloth_solvers", .x = "iterations", .y = "potential_gap", .series = "method", .split = {"model"}, .split_dashed = true,
-                              .label = "{} ({model})", .where = {{"method", {"vbd", "vbd-chebyshev"}}, {"dt", {at_frame}}, {"model", {"springs", "continuum"}}}}}},
-                 {.title = "against the CPU, springs",
-                  .x_label = "CPU seconds per simulated second",
-                  .y_label = "G - G* (J)",
-                  .log_x = true,
-                  .log_y = true,
-                  .layers = {{.table = "cloth_solvers", .x = "cpu_per_simulated_second", .y = "potential_gap", .series = "method",
-                              .where = {{"dt", {at_frame}}, {"model", {"springs"}}}, .complete = {"potential_gap"},
-                              .hover = {{"iterations", "sweeps"}, {"substeps", "substeps"}}}}}}};
-  out.markdown += add_figure(out.figures, "cloth_solvers", "", std::move(spec), "The flag's one step: G − G* against sweeps and against CPU");
+  out.markdown += add_figure(out.figures, "cloth_solvers", "", gap_figure(), "The flag's one step: G − G* against sweeps and against CPU");
   out.markdown += markdown_table(table, {{"model", "model"},
                                          {"method", "method"},
                                          {"dt", "dt (s)", shown_as("{:.4f}")},
