@@ -30,31 +30,8 @@ import tempfile
 import time
 
 failures = []
-# columns that are CPU or wall times, or rates and ratios of them
-TIMING = {"cpu_seconds", "cpu_per_simulated_second", "other_model_pixels_at_equal_cpu", "draw_ms_per_frame", "collapse_steps_per_second", "runner_up_cpu_seconds",
-          "runner_up_over_best"}
-# tables whose rows are chosen by CPU time (the cheapest method for an error, the fronts, the real-time verdicts)
-CHOSEN_BY_TIME = {"recommendations.csv", "work_precision_pareto.csv", "cloth_realtime_verdicts.csv",
-                  # the scaling model's tables: a cell's measured cost times the model
-                  "scaling_cell.csv", "scaling_model.csv", "scaling_crossover.csv",
-                  # the advice: its sweep stops where a method first meets the error within a wall-clock budget, and
-                  # its verdicts rank the methods by CPU time
-                  "advice_sweep.csv", "advice_summary.csv", "advice_candidates.csv",
-                  # the side-by-side videos: each method's step is the one its measured CPU time a step fits in the budget
-                  "side_by_side.csv", "side_by_side_frames.csv",
-                  # the constrained methods' cheapest setting for an error
-                  "constraints_cheapest.csv"}
-# tables of implicit-euler's cloth, and the rows of implicit-euler's methods elsewhere, reproducible to its
-# kept-factor residual
-KEPT_FACTOR = {"cloth_families.csv", "cloth_momentum.csv", "cloth_realtime.csv",
-               # backward Euler's Newton starts from the linearised step's answer; the cloth solvers' rows are measured
-               # against that Newton's runs
-               "continuum_cloth_newton.csv", "cloth_solvers.csv"}
-KEPT_FACTOR_METHODS = {"implicit-euler", "implicit-euler-newton"}
-# and in those rows the counts of the work done, which the factor's reuse changes: CG's or GMRES's iterations
-# preconditioned by an older factor, and the residuals Newton's line search evaluates, differ with the factor kept
-KEPT_FACTOR_COUNTS = {"rhs_evals", "linear_solves", "jac_evals", "factorizations", "newton_iterations", "newton_iterations_mean",
-                      "line_search_halvings_mean"}
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "report"))
+from timed_tables import CHOSEN_BY_TIME, KEPT_FACTOR_COUNTS, TIMING, kept_factor_row, kept_factor_tolerance, numbers_agree  # noqa: E402
 
 
 def expect(condition, what):
@@ -74,17 +51,6 @@ def run(args, **kw):
     return subprocess.run(args, capture_output=True, text=True, timeout=900, **kw)
 
 
-def numbers_agree(a, b, rel):
-    try:
-        x, y = float(a), float(b)
-    except ValueError:
-        return a == b
-    if x == y or (x != x and y != y):
-        return True
-    # relative to the value, absolute below 1: a round-off quantity (a momentum error of 1e-15) differs by round-off
-    return abs(x - y) <= rel * max(abs(x), abs(y), 1.0)
-
-
 def compare_tables(serial, ranked, label, rel):
     names = sorted(n for n in os.listdir(serial) if n.endswith(".csv"))
     expect(names == sorted(n for n in os.listdir(ranked) if n.endswith(".csv")), f"{label}: the same CSV files")
@@ -97,10 +63,9 @@ def compare_tables(serial, ranked, label, rel):
         if not a or a[0] != (b[0] if b else None) or len(a) != len(b):
             expect(False, f"{label}: {name}: header or row count differs")
             continue
-        keep = [i for i, h in enumerate(a[0]) if h not in TIMING]
-        method = a[0].index("method") if "method" in a[0] else None
+        keep = [i for i, h in enumerate(a[0]) if not TIMING.search(h)]
         for ra, rb in zip(a[1:], b[1:]):
-            tolerant = name in KEPT_FACTOR or (method is not None and ra[method] in KEPT_FACTOR_METHODS)
+            tolerant = kept_factor_row(name, a[0], ra)
             same = (all(numbers_agree(ra[i], rb[i], rel) for i in keep if a[0][i] not in KEPT_FACTOR_COUNTS) if tolerant
                     else all(ra[i] == rb[i] for i in keep))
             if not same:
@@ -116,7 +81,7 @@ def main():
     if not shutil.which("mpirun"):
         print("mpirun not found: install Open MPI's launcher (sudo apt-get install openmpi-bin) to run the MPI tests")
         return 77
-    rel = float(re.search(r"kept_factor_reproducibility\s*=\s*([0-9.eE+-]+)", open(tolerances).read()).group(1))
+    rel = kept_factor_tolerance(os.path.dirname(os.path.dirname(tolerances)))
     d = tempfile.mkdtemp(prefix="stepwise-mpi-")
     try:
         # studies, byte for byte
