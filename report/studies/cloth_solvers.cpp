@@ -48,7 +48,7 @@ std::vector<Row> plan(bool quick) {
   }
   rows.push_back({"springs", "fast-mass-spring"});
   for (const int s : substeps) rows.push_back({"springs", "xpbd", frame, 1, s});
-  for (const char* model : {"springs", "continuum-stiff"}) {
+  for (const char* model : quick ? std::vector<const char*>{"springs"} : std::vector<const char*>{"springs", "continuum-stiff"}) {
     rows.push_back({model, "implicit-euler-newton", 1.0 / 30});
     rows.push_back({model, "vbd", 1.0 / 30, 10});
   }
@@ -116,7 +116,7 @@ std::string findings(const Table& table, const std::vector<Row>& rows, double t_
   return fmt::format(
       "**Off converged backward Euler at 1/60 s on the 32 × 32 flag over {:g} s — springs: {}; {}; {}; {}; {}. Continuum: {}; {}; {}.** "
       "{} {}"
-      "Stability (1/30 s, the continuum at 100 × E, and vbd from every node scrambled): {}. {}Each row's G − G* is how far "
+      "Stability (the rows at 1/30 s, continuum-stiff being the continuum at 100 × E, and vbd from every node scrambled): {}. {}Each row's G − G* is how far "
       "its one step from the flag in motion leaves G above its minimum (J, Newton's to 1e-9 m/s); its pixels, how far its "
       "run is from converged backward Euler's at the same step, the largest node offset over the frames in a 720-pixel "
       "frame 1.5 m tall (the scrambled start: at the last frame). A billowing flag magnifies small differences: the "

@@ -268,7 +268,7 @@ std::string setting_of(const FlagRun& r) {
 }
 
 EqualCpu equal_cpu_table(const StudyContext& ctx, const Params& continuum) {
-  const double t_end = ctx.quick ? 0.5 : 1.0;
+  const double t_end = ctx.quick ? 0.25 : 1.0;
   std::vector<double> dts{1.0 / 15, 1.0 / 30, 1.0 / 60, 1.0 / 120};
   if (!ctx.quick) dts.push_back(1.0 / 240);
   // (the springs undamped too: the continuum has no damping of its own, the springs' Voigt damping is part of their model)
