@@ -144,28 +144,29 @@ void check_options(const RunOptions& o, PreparedRun& p) {
   if (o.constraint && *o.constraint != "project" && *o.constraint != "baumgarte")
     throw InputError(fmt::format("--constraint {}: the constraint treatments are project (the state put back on the constraints after each step) "
                                  "and baumgarte (the equations of motion pulling any drift back)", *o.constraint));
-  // a position-based method's substeps and iterations: whole numbers, and only for such a method
+  // a method's own options (a position-based or vbd method's substeps and iterations, vbd's threads,
+  // vbd-chebyshev's rate): each in its range, and only for a method that takes it
+  const Method* method = p.method.empty() ? nullptr : find_method(p.method);
+  const std::string method_named = p.method.empty() ? "the method chosen for this scene" : p.method;
+  const auto whole = [](const std::optional<double>& value, const char* option, long most) {
+    if (!(*value >= 1 && *value <= static_cast<double>(most) && std::floor(*value) == *value))
+      throw InputError(fmt::format("{} {}: must be a whole number in 1..{}", option, *value, most));
+    return static_cast<int>(*value);
+  };
   for (const auto& [value, option, field] : {std::tuple{o.substeps, "--substeps", &p.control.substeps}, std::tuple{o.iterations, "--iterations", &p.control.iterations}}) {
     if (!value) continue;
-    if (!(*value >= 1 && *value <= max_substeps && std::floor(*value) == *value))
-      throw InputError(fmt::format("{} {}: must be a whole number in 1..{}", option, *value, max_substeps));
-    if (const Method* m = p.method.empty() ? nullptr : find_method(p.method); !m || !m->substepped)
-      throw InputError(fmt::format("{}: {} takes no substeps or iterations (pbd, xpbd and vbd do)", option, p.method.empty() ? "the method chosen for this scene" : p.method));
-    *field = static_cast<int>(*value);
+    *field = whole(value, option, max_substeps);
+    if (!method || !method->substepped)
+      throw InputError(fmt::format("{}: {} takes no substeps or iterations (pbd, xpbd and vbd do)", option, method_named));
   }
   if (o.threads) {
-    constexpr double most_threads = 1024;
-    if (!(*o.threads >= 1 && *o.threads <= most_threads && std::floor(*o.threads) == *o.threads))
-      throw InputError(fmt::format("--threads {}: must be a whole number in 1..{}", *o.threads, most_threads));
-    if (const Method* m = p.method.empty() ? nullptr : find_method(p.method); !m || m->family != Family::vertex_block_descent)
-      throw InputError(fmt::format("--threads: {} runs on one thread (vbd's colour sweeps take threads)",
-                                   p.method.empty() ? "the method chosen for this scene" : p.method));
-    p.control.threads = static_cast<int>(*o.threads);
+    p.control.threads = whole(o.threads, "--threads", 1024);
+    if (!method || method->family != Family::vertex_block_descent)
+      throw InputError(fmt::format("--threads: {} runs on one thread (vbd's colour sweeps take threads)", method_named));
   }
   if (o.rho) {
     if (!(*o.rho > 0 && *o.rho < 1)) throw InputError(fmt::format("--rho {}: Chebyshev's rate must lie between 0 and 1", *o.rho));
-    if (p.method != "vbd-chebyshev")
-      throw InputError(fmt::format("--rho: {} has no Chebyshev acceleration (vbd-chebyshev has)", p.method.empty() ? "the method chosen for this scene" : p.method));
+    if (p.method != "vbd-chebyshev") throw InputError(fmt::format("--rho: {} has no Chebyshev acceleration (vbd-chebyshev has)", method_named));
     p.control.chebyshev_rho = *o.rho;
   }
   // the step: the method's control, told now wherever the method is (a method chosen later is adaptive)
