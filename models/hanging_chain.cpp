@@ -39,32 +39,11 @@ class HangingChain final : public Model, public SparseJacobian {
         mass_(p.at("mass")),
         drag_(p.at("drag")),
         g_(p.at("g")),
-        view_{n_, std::vector<double>(n_, mass_), chain_springs(n_, p)},
-        pattern_(n_, spring_pairs(view_.springs)),
-        slots_(spring_slots(view_.springs, pattern_)) {
+        springs_(std::vector<double>(n_, mass_), chain_springs(n_, p), 3, drag_) {
     y0_ = Eigen::VectorXd::Zero(6 * n_);
     for (int k = 0; k < n_; ++k) y0_[3 * k + 1] = -(k + 1) * p.at("rest_length");
     second_order_.positions = 3 * n_;
     second_order_.acceleration = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) { acceleration(t, y, a); };
-    view_.force_jacobians = [this](double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
-                                   Eigen::SparseMatrix<double>& dfdv) { force_jacobians(t, y, definite, dfdx, dfdv); };
-    view_.potential = [this](const Eigen::Ref<const Eigen::VectorXd>& x) { return spring_energy(view_.springs, x.data()); };
-    view_.elastic_force = [this](const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) {
-      // the springs at rest relative to each other: their Voigt damping is zero
-      const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(3 * n_);
-      add_spring_forces(view_.springs, x.data(), at_rest.data(), f.data());
-    };
-    view_.elastic_jacobian = [this](const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx) {
-      const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(3 * n_);
-      Eigen::SparseMatrix<double> dfdv;
-      pattern_.zero(dfdx);
-      pattern_.zero(dfdv);
-      add_spring_force_jacobians(view_.springs, slots_, x.data(), at_rest.data(), definite, dfdx, dfdv);
-    };
-    view_.vertex_elastic = [this, by_node = springs_by_node(view_.springs, n_)](int node, const Eigen::Ref<const Eigen::VectorXd>& x, bool definite,
-                                                                               bool derivatives, VertexElastic& out) {
-      add_springs_at_node(view_.springs, by_node[static_cast<size_t>(node)], node, x.data(), definite, derivatives, out);
-    };
   }
   HangingChain(const HangingChain&) = delete;  // its capabilities hold `this`
   HangingChain& operator=(const HangingChain&) = delete;
@@ -81,7 +60,7 @@ class HangingChain final : public Model, public SparseJacobian {
   }
   int size() const override { return 6 * n_; }
   bool autonomous() const override { return true; }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, view_, network_, as_part<SparseJacobian>(*this)); }
+  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, springs_.view(), springs_.network(), as_part<SparseJacobian>(*this)); }
   std::vector<std::string> state_names() const override {
     std::vector<std::string> names;
     for (const char* q : {"", "v"})
@@ -97,28 +76,20 @@ class HangingChain final : public Model, public SparseJacobian {
   }
   void acceleration(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> a) const {
     a.setZero();
-    add_spring_forces(view_.springs, y.data(), y.data() + 3 * n_, a.data());
+    add_spring_forces(springs_.view().springs, y.data(), y.data() + 3 * n_, a.data());
     a /= mass_;
     a -= drag_ * y.tail(3 * n_);
     for (int k = 0; k < n_; ++k) a[3 * k + 1] -= g_;
   }
 
-  void sparse_jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
+  void sparse_jacobian(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::SparseMatrix<double>& dfdy) const override {
     Eigen::SparseMatrix<double> dfdx, dfdv;
-    force_jacobians(t, y, false, dfdx, dfdv);
-    mass_spring_jacobian(dfdx, dfdv, view_.mass, dfdy);
-  }
-
-  void force_jacobians(double, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
-                       Eigen::SparseMatrix<double>& dfdv) const {
-    pattern_.zero(dfdx);
-    pattern_.zero(dfdv);
-    for (int k = 0; k < n_; ++k) pattern_.add(dfdv, k, k, -mass_ * drag_ * Eigen::Matrix3d::Identity());
-    add_spring_force_jacobians(view_.springs, slots_, y.data(), y.data() + 3 * n_, definite, dfdx, dfdv);
+    springs_.force_jacobians(y.data(), y.data() + 3 * n_, false, dfdx, dfdv);
+    mass_spring_jacobian(dfdx, dfdv, springs_.view().mass, dfdy);
   }
 
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
-    double e = mass_ * y.tail(3 * n_).squaredNorm() / 2 + spring_energy(view_.springs, y.data());
+    double e = mass_ * y.tail(3 * n_).squaredNorm() / 2 + spring_energy(springs_.view().springs, y.data());
     for (int k = 0; k < n_; ++k) e += mass_ * g_ * y[3 * k + 1];
     return e;
   }
@@ -138,10 +109,7 @@ class HangingChain final : public Model, public SparseJacobian {
   int n_;
   double mass_, drag_, g_;
   SecondOrderView second_order_;  // y = (x, v), with the acceleration below
-  MassSpringView view_;
-  SpringNetworkView network_{&view_};  // its elastic forces are the springs alone
-  BlockPattern pattern_;
-  std::vector<std::array<BlockPattern::Slot, 4>> slots_;
+  SpringNetwork springs_;  // the elastic forces and the drag's Jacobian
   Eigen::VectorXd y0_;
 };
 

@@ -1,6 +1,7 @@
 #include "pendulum_cartesian.hpp"
 
 #include "pendulum.hpp"
+#include "springs.hpp"
 #include "solvers/capabilities/distance_constraints.hpp"
 #include "solvers/capabilities/second_order.hpp"
 
@@ -33,20 +34,30 @@ class PendulumCartesian final : public Model {
       a[0] = 0;
       a[1] = -g;
     };
+    // a compliant rod is a spring of stiffness 1 / alpha from the pivot: a mass-spring system in the plane
+    if (compliance_ > 0) rod_ = std::make_unique<SpringNetwork>(std::vector{mass_}, std::vector{Spring{-1, 0, length_, 1 / compliance_}}, 2);
   }
+  PendulumCartesian(const PendulumCartesian&) = delete;  // its rod's view holds the rod
+  PendulumCartesian& operator=(const PendulumCartesian&) = delete;
   std::string_view name() const override { return "pendulum-cartesian"; }
   int size() const override { return 4; }
   bool autonomous() const override { return true; }
   std::vector<std::string> state_names() const override { return {"x", "y", "vx", "vy"}; }
   Eigen::VectorXd initial_state() const override { return from_angle(theta0_, omega0_); }
-  const void* capability(const std::type_info& type) const override { return offer(type, second_order_, constraints_); }
+  const void* capability(const std::type_info& type) const override {
+    if (rod_)
+      if (const void* found = offer(type, rod_->view(), rod_->network())) return found;
+    return offer(type, second_order_, constraints_);
+  }
 
   void rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     const Eigen::Vector2d x = y.head<2>(), v = y.tail<2>(), g(0, -g_);
     Eigen::Vector2d a;
-    if (compliance_ > 0) {
-      const double r = x.norm();
-      a = g - (r - length_) / (mass_ * compliance_) * x / r;
+    if (rod_) {
+      a = g;
+      Eigen::Vector2d pull = Eigen::Vector2d::Zero();
+      add_spring_forces(rod_->view().springs, x.data(), v.data(), pull.data(), 2);
+      a += pull / mass_;
     } else {
       // g = (|x|^2 - L^2) / 2: g'' = |v|^2 + x . a held at -2 w g' - w^2 g (0 without Baumgarte)
       const double drift = 0.5 * (x.squaredNorm() - length_ * length_), rate = x.dot(v);
@@ -83,6 +94,7 @@ class PendulumCartesian final : public Model {
   double theta0_, omega0_, g_, length_, mass_, compliance_;
   double baumgarte_;  // w (1/s), 0: off
   std::unique_ptr<Model> reduced_;  // the pendulum in its angle: the exact solution
+  std::unique_ptr<SpringNetwork> rod_;  // the compliant rod (compliance > 0) as a spring from the pivot
   SecondOrderView second_order_{2};
   DistanceConstraints constraints_;
 };

@@ -8,7 +8,9 @@
 //   alpha = 0:  a = g + lambda x,  lambda = -(|v|^2 + x . g) / |x|^2
 //   alpha > 0:  a = g - (|x| - L) / (m alpha) x / |x|      (a spring of stiffness 1/alpha)
 // Position-based methods step it through the DistanceConstraints capability instead (gravity, then the
-// constraint projected). Exact (alpha = 0): the reduced pendulum's theta(t) at x = L (sin theta, -cos theta),
+// constraint projected). A compliant rod is also a mass-spring system in the plane (MassSpringView, one pinned
+// spring: models/springs.hpp's SpringNetwork), for the methods of backward Euler's incremental potential (vbd,
+// implicit-euler, implicit-euler-newton) and the prefactored fast-mass-spring. Exact (alpha = 0): the reduced pendulum's theta(t) at x = L (sin theta, -cos theta),
 // v = L omega (cos theta, sin theta). Energy m |v|^2 / 2 + m g y (+ (|x| - L)^2 / (2 alpha)).
 #pragma once
 

@@ -9,15 +9,23 @@ namespace stepwise {
 
 namespace {
 
-// x_b - x_a (the anchor for a pinned spring)
-Eigen::Vector3d span_of(const Spring& s, const double* x) {
-  return Eigen::Map<const Eigen::Vector3d>(x + 3 * s.b) - (s.a < 0 ? s.anchor : Eigen::Vector3d(Eigen::Map<const Eigen::Vector3d>(x + 3 * s.a)));
+// x_b - x_a (the anchor for a pinned spring), x holding `dimension` coordinates a node (the rest of r zero)
+Eigen::Vector3d span_of(const Spring& s, const double* x, int dimension) {
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  for (int c = 0; c < dimension; ++c) r[c] = x[dimension * s.b + c] - (s.a < 0 ? s.anchor[c] : x[dimension * s.a + c]);
+  return r;
 }
 
 // v_b - v_a (an anchor does not move)
-Eigen::Vector3d closing_of(const Spring& s, const double* v) {
-  const Eigen::Map<const Eigen::Vector3d> vb(v + 3 * s.b);
-  return s.a < 0 ? Eigen::Vector3d(vb) : Eigen::Vector3d(vb - Eigen::Map<const Eigen::Vector3d>(v + 3 * s.a));
+Eigen::Vector3d closing_of(const Spring& s, const double* v, int dimension) {
+  Eigen::Vector3d w = Eigen::Vector3d::Zero();
+  for (int c = 0; c < dimension; ++c) w[c] = v[dimension * s.b + c] - (s.a < 0 ? 0.0 : v[dimension * s.a + c]);
+  return w;
+}
+
+// f[dimension i ..) += g's first `dimension` entries
+void add_at(double* f, int i, int dimension, const Eigen::Vector3d& g) {
+  for (int c = 0; c < dimension; ++c) f[dimension * i + c] += g[c];
 }
 
 // a spring's stiffness block dF/dr at zero closing speed (F = c (|r| - l) r / |r|, the force on a): exact, c u u^T + c
@@ -33,10 +41,10 @@ Eigen::Matrix3d stiffness_block(const Spring& s, const Eigen::Vector3d& r, bool 
 }  // namespace
 
 void add_springs_at_node(std::span<const Spring> springs, std::span<const int> which, int node, const double* x, bool definite, bool derivatives,
-                         VertexElastic& out) {
+                         VertexElastic& out, int dimension) {
   for (const int k : which) {
     const Spring& s = springs[static_cast<size_t>(k)];
-    const Eigen::Vector3d r = span_of(s, x);
+    const Eigen::Vector3d r = span_of(s, x, dimension);
     const double stretch = r.norm() - s.rest;
     out.energy += s.stiffness * stretch * stretch / 2;
     if (!derivatives) continue;
@@ -55,24 +63,24 @@ std::vector<std::vector<int>> springs_by_node(std::span<const Spring> springs, i
   return by;
 }
 
-void add_spring_forces(std::span<const Spring> springs, const double* x, const double* v, double* f) {
+void add_spring_forces(std::span<const Spring> springs, const double* x, const double* v, double* f, int dimension) {
   for (const Spring& s : springs) {
-    const Eigen::Vector3d force = spring_force(span_of(s, x), closing_of(s, v), s.rest, s.stiffness, s.damping);
-    Eigen::Map<Eigen::Vector3d>(f + 3 * s.b) -= force;
-    if (s.a >= 0) Eigen::Map<Eigen::Vector3d>(f + 3 * s.a) += force;
+    const Eigen::Vector3d force = spring_force(span_of(s, x, dimension), closing_of(s, v, dimension), s.rest, s.stiffness, s.damping);
+    add_at(f, s.b, dimension, -force);
+    if (s.a >= 0) add_at(f, s.a, dimension, force);
   }
 }
 
-double spring_energy(std::span<const Spring> springs, const double* x) {
+double spring_energy(std::span<const Spring> springs, const double* x, int dimension) {
   double e = 0;
   for (const Spring& s : springs) {
-    const double stretch = span_of(s, x).norm() - s.rest;
+    const double stretch = span_of(s, x, dimension).norm() - s.rest;
     e += s.stiffness * stretch * stretch / 2;
   }
   return e;
 }
 
-BlockPattern::BlockPattern(int nodes, std::span<const std::pair<int, int>> pairs) : nodes_(nodes) {
+BlockPattern::BlockPattern(int nodes, std::span<const std::pair<int, int>> pairs, int dimension) : nodes_(nodes), dimension_(dimension) {
   std::vector<std::vector<int>> columns(nodes);
   for (int j = 0; j < nodes; ++j) columns[j].push_back(j);
   for (const auto& [i, j] : pairs) {
@@ -90,7 +98,8 @@ BlockPattern::BlockPattern(int nodes, std::span<const std::pair<int, int>> pairs
 }
 
 void BlockPattern::zero(Eigen::SparseMatrix<double>& m) const {
-  const Eigen::Index n = 3 * Eigen::Index{nodes_}, entries = 9 * static_cast<Eigen::Index>(rows_.size());
+  const int d = dimension_;
+  const Eigen::Index n = d * Eigen::Index{nodes_}, entries = d * d * static_cast<Eigen::Index>(rows_.size());
   if (m.rows() == n && m.cols() == n && m.isCompressed() && m.nonZeros() == entries) {
     std::fill(m.valuePtr(), m.valuePtr() + entries, 0.0);
     return;
@@ -99,11 +108,11 @@ void BlockPattern::zero(Eigen::SparseMatrix<double>& m) const {
   m.resizeNonZeros(entries);
   Eigen::Index k = 0;
   for (int j = 0; j < nodes_; ++j)
-    for (int c = 0; c < 3; ++c) {
-      m.outerIndexPtr()[3 * j + c] = static_cast<int>(k);
+    for (int c = 0; c < d; ++c) {
+      m.outerIndexPtr()[d * j + c] = static_cast<int>(k);
       for (int b = column_start_[j]; b < column_start_[j + 1]; ++b)
-        for (int r = 0; r < 3; ++r, ++k) {
-          m.innerIndexPtr()[k] = 3 * rows_[b] + r;
+        for (int r = 0; r < d; ++r, ++k) {
+          m.innerIndexPtr()[k] = d * rows_[b] + r;
           m.valuePtr()[k] = 0;
         }
     }
@@ -115,7 +124,8 @@ BlockPattern::Slot BlockPattern::slot(int i, int j) const {
   const auto found = std::lower_bound(first, last, i);
   if (found == last || *found != i) throw std::out_of_range("BlockPattern::slot: block outside the pattern");
   const Eigen::Index blocks = last - first, rank = found - first;
-  return {9 * Eigen::Index{column_start_[j]} + 3 * rank, 3 * blocks};
+  const int d = dimension_;
+  return {d * d * Eigen::Index{column_start_[j]} + d * rank, d * blocks, d};
 }
 
 std::vector<std::pair<int, int>> spring_pairs(std::span<const Spring> springs) {
@@ -137,10 +147,10 @@ std::vector<std::array<BlockPattern::Slot, 4>> spring_slots(std::span<const Spri
 }
 
 void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const std::array<BlockPattern::Slot, 4>> slots, const double* x,
-                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv) {
+                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv, int dimension) {
   for (size_t k = 0; k < springs.size(); ++k) {
     const Spring& s = springs[k];
-    const Eigen::Vector3d r = span_of(s, x);
+    const Eigen::Vector3d r = span_of(s, x, dimension);
     const double length = r.norm();
     const Eigen::Vector3d u = r / length;
     const Eigen::Matrix3d uu = u * u.transpose(), across = Eigen::Matrix3d::Identity() - uu;
@@ -148,7 +158,7 @@ void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const
     if (definite) {
       dr = stiffness_block(s, r, true);
     } else {
-      const Eigen::Vector3d w = closing_of(s, v);
+      const Eigen::Vector3d w = closing_of(s, v, dimension);
       const double tension = s.stiffness * (length - s.rest) + s.damping * u.dot(w);
       dr = s.stiffness * uu + tension / length * across + s.damping / length * u * (across * w).transpose();
     }
@@ -169,7 +179,7 @@ void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const
 
 void mass_spring_jacobian(const Eigen::SparseMatrix<double>& dfdx, const Eigen::SparseMatrix<double>& dfdv, std::span<const double> mass,
                           Eigen::SparseMatrix<double>& dfdy) {
-  const Eigen::Index m = dfdx.rows();
+  const Eigen::Index m = dfdx.rows(), dimension = m / static_cast<Eigen::Index>(mass.size());
   std::vector<Eigen::Triplet<double>> entries;
   entries.reserve(static_cast<size_t>(m + dfdx.nonZeros() + dfdv.nonZeros()));
   for (Eigen::Index j = 0; j < m; ++j) entries.emplace_back(j, m + j, 1.0);
@@ -177,10 +187,46 @@ void mass_spring_jacobian(const Eigen::SparseMatrix<double>& dfdx, const Eigen::
     const Eigen::SparseMatrix<double>& block = part == 0 ? dfdx : dfdv;
     for (Eigen::Index j = 0; j < m; ++j)
       for (Eigen::SparseMatrix<double>::InnerIterator it(block, j); it; ++it)
-        entries.emplace_back(m + it.row(), part * m + j, it.value() / mass[it.row() / 3]);
+        entries.emplace_back(m + it.row(), part * m + j, it.value() / mass[static_cast<size_t>(it.row() / dimension)]);
   }
   dfdy.resize(2 * m, 2 * m);
   dfdy.setFromTriplets(entries.begin(), entries.end());
+}
+
+SpringNetwork::SpringNetwork(std::vector<double> mass, std::vector<Spring> springs, int dimension, double drag)
+    : view_{static_cast<int>(mass.size()), dimension, std::move(mass), std::move(springs)},
+      drag_(drag),
+      pattern_(view_.nodes, spring_pairs(view_.springs), dimension),
+      slots_(spring_slots(view_.springs, pattern_)),
+      by_node_(springs_by_node(view_.springs, view_.nodes)) {
+  const Eigen::Index n = Eigen::Index{dimension} * view_.nodes;
+  view_.force_jacobians = [this, n](double, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                                    Eigen::SparseMatrix<double>& dfdv) { force_jacobians(y.data(), y.data() + n, definite, dfdx, dfdv); };
+  view_.potential = [this](const Eigen::Ref<const Eigen::VectorXd>& x) { return spring_energy(view_.springs, x.data(), view_.dimension); };
+  // the elastic part: the springs at rest relative to each other (their Voigt damping zero)
+  view_.elastic_force = [this, n](const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) {
+    const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(n);
+    add_spring_forces(view_.springs, x.data(), at_rest.data(), f.data(), view_.dimension);
+  };
+  view_.elastic_jacobian = [this, n](const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx) {
+    const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(n);
+    Eigen::SparseMatrix<double> dfdv;
+    pattern_.zero(dfdx);
+    pattern_.zero(dfdv);
+    add_spring_force_jacobians(view_.springs, slots_, x.data(), at_rest.data(), definite, dfdx, dfdv, view_.dimension);
+  };
+  view_.vertex_elastic = [this](int node, const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, bool derivatives, VertexElastic& out) {
+    add_springs_at_node(view_.springs, by_node_[static_cast<size_t>(node)], node, x.data(), definite, derivatives, out, view_.dimension);
+  };
+}
+
+void SpringNetwork::force_jacobians(const double* x, const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx,
+                                    Eigen::SparseMatrix<double>& dfdv) const {
+  pattern_.zero(dfdx);
+  pattern_.zero(dfdv);
+  for (int i = 0; i < view_.nodes; ++i)
+    pattern_.add(dfdv, i, i, -view_.mass[static_cast<size_t>(i)] * drag_ * Eigen::Matrix3d::Identity());
+  add_spring_force_jacobians(view_.springs, slots_, x, v, definite, dfdx, dfdv, view_.dimension);
 }
 
 }  // namespace stepwise

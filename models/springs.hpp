@@ -27,27 +27,30 @@
 
 namespace stepwise {
 
-// f[3i..3i+3) += the springs' forces on node i; x, v, f hold 3 entries per node
-void add_spring_forces(std::span<const Spring> springs, const double* x, const double* v, double* f);
+// Each function below reads and writes `dimension` coordinates a node (3; 2 for a network in the plane x-y, whose springs
+// then have no z), and hands out 3-vectors and 3 x 3 blocks whose entries past `dimension` a caller ignores.
+
+// f[d i .. d i + d) += the springs' forces on node i; x, v, f hold d = dimension entries per node
+void add_spring_forces(std::span<const Spring> springs, const double* x, const double* v, double* f, int dimension = 3);
 
 // the springs' potential energy, sum c e^2 / 2
-double spring_energy(std::span<const Spring> springs, const double* x);
+double spring_energy(std::span<const Spring> springs, const double* x, int dimension = 3);
 // the springs `which` (indices into springs), each touching `node`, added to a per-vertex solver's view of it: their
 // energy and, with `derivatives`, their elastic force on the node and its derivative by the node's position (definite:
 // the semidefinite approximation of add_spring_force_jacobians)
 void add_springs_at_node(std::span<const Spring> springs, std::span<const int> which, int node, const double* x, bool definite, bool derivatives,
-                         VertexElastic& out);
+                         VertexElastic& out, int dimension = 3);
 // each node's springs (indices into springs), for add_springs_at_node
 std::vector<std::vector<int>> springs_by_node(std::span<const Spring> springs, int nodes);
 
-// the fixed sparsity of a network's 3n x 3n force Jacobians: a 3 x 3 block on the diagonal of every node
+// the fixed sparsity of a network's dn x dn force Jacobians (d = dimension): a d x d block on the diagonal of every node
 // and at (i, j) and (j, i) for every pair of nodes a force couples (a spring's ends, a triangle's corners).
 // Blocks are added straight into the matrix's values, so a Jacobian is refilled every step without
 // triplets or a change of pattern (what a Cholesky factor analysed once relies on)
 class BlockPattern {
  public:
-  BlockPattern(int nodes, std::span<const std::pair<int, int>> pairs);
-  // m becomes the 3n x 3n matrix with this pattern, every value zero (its storage reused when it has the
+  BlockPattern(int nodes, std::span<const std::pair<int, int>> pairs, int dimension = 3);
+  // m becomes the dn x dn matrix with this pattern, every value zero (its storage reused when it has the
   // pattern already)
   void zero(Eigen::SparseMatrix<double>& m) const;
   // where block (i, j) lies in the values: i == j, or i and j a pair given (throws std::out_of_range
@@ -55,18 +58,19 @@ class BlockPattern {
   struct Slot {
     Eigen::Index first = 0;   // value index of the block's (0, 0) entry
     Eigen::Index stride = 0;  // from one of its columns to the next
+    int dimension = 3;        // the block's rows and columns
   };
   Slot slot(int i, int j) const;
-  // m(3i..3i+3, 3j..3j+3) += b at a slot
+  // m(d i .. d i + d, d j .. d j + d) += b's leading d x d block at a slot
   static void add(Eigen::SparseMatrix<double>& m, Slot slot, const Eigen::Matrix3d& b) {
     double* v = m.valuePtr() + slot.first;
-    for (int c = 0; c < 3; ++c, v += slot.stride)
-      for (int r = 0; r < 3; ++r) v[r] += b(r, c);
+    for (int c = 0; c < slot.dimension; ++c, v += slot.stride)
+      for (int r = 0; r < slot.dimension; ++r) v[r] += b(r, c);
   }
   void add(Eigen::SparseMatrix<double>& m, int i, int j, const Eigen::Matrix3d& b) const { add(m, slot(i, j), b); }
 
  private:
-  int nodes_;
+  int nodes_, dimension_;
   std::vector<int> column_start_;  // block column j's block rows are rows_[column_start_[j] .. column_start_[j + 1])
   std::vector<int> rows_;          // sorted within a column
 };
@@ -80,11 +84,36 @@ std::vector<std::array<BlockPattern::Slot, 4>> spring_slots(std::span<const Spri
 // K += dF/dx and D += dF/dv summed over the springs (node forces by node positions and velocities), exact
 // or definite (above); K and D have the pattern the slots were found in
 void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const std::array<BlockPattern::Slot, 4>> slots, const double* x,
-                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv);
+                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv,
+                                int dimension = 3);
 
 // the Jacobian of y' = (v, M^-1 f) for y = (x, v) from the force Jacobians K = df/dx, D = df/dv and the
-// lumped node masses: [[0, I], [M^-1 K, M^-1 D]]
+// lumped node masses (each node's coordinates, dfdx.rows() / mass.size() of them, sharing its mass): [[0, I], [M^-1 K, M^-1 D]]
 void mass_spring_jacobian(const Eigen::SparseMatrix<double>& dfdx, const Eigen::SparseMatrix<double>& dfdv, std::span<const double> mass,
                           Eigen::SparseMatrix<double>& dfdy);
+
+// A network whose elastic forces are its springs alone, as a MassSpringView (and its SpringNetworkView): the springs'
+// potential, elastic force and Jacobian and per-node terms, and the force Jacobians of the springs (their damping
+// included) and of a linear drag (-m drag v on each node). A model whose other forces do not depend on the state
+// (gravity) offers view() and network() as they are: the hanging chain (in 3-D) and the compliant pendulum-cartesian
+// (one pinned spring in the plane)
+class SpringNetwork {
+ public:
+  SpringNetwork(std::vector<double> mass, std::vector<Spring> springs, int dimension = 3, double drag = 0);
+  SpringNetwork(const SpringNetwork&) = delete;  // its view's functions hold `this`
+  SpringNetwork& operator=(const SpringNetwork&) = delete;
+  const MassSpringView& view() const { return view_; }
+  const SpringNetworkView& network() const { return network_; }
+  // K = df/dx and D = df/dv at (x, v), exact or definite (above), on the network's pattern
+  void force_jacobians(const double* x, const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv) const;
+
+ private:
+  MassSpringView view_;
+  SpringNetworkView network_{&view_};
+  double drag_;
+  BlockPattern pattern_;
+  std::vector<std::array<BlockPattern::Slot, 4>> slots_;
+  std::vector<std::vector<int>> by_node_;
+};
 
 }  // namespace stepwise

@@ -24,6 +24,7 @@ import re
 import sys
 
 import figure_spec  # report/figure_spec.py, beside this script
+from timed_tables import tolerance  # report/timed_tables.py: verification/tolerances.hpp's constants
 
 MIN_PNG_BYTES = 5000  # a drawn figure with axes, labels and lines; an empty canvas at 100 dpi is ~3 kB
 MIN_GIF_BYTES = 1000  # an animation of a small particle on a plain ground is ~3 kB; one empty frame ~0.1 kB
@@ -83,6 +84,7 @@ TABLE_CONTRACTS = {
     "continuum_cloth_clamped.csv": ["model", "side", "nodes", "drop", "bottom_width", "middle_width"],
     "continuum_cloth_newton.csv": ["model", "nu", "dt", "status", "t_stop", "newton_iterations_mean", "line_search_halvings_mean",
                                    "cpu_per_simulated_second", "pixels_vs_converged"],
+    "constraints_compliant_rod.csv": ["compliance", "method", "iterations", "off_backward_euler", "off_true_motion", "cpu_seconds", "status"],
 }
 
 
@@ -114,6 +116,24 @@ def table_contracts(directory):
                               if r["model"] == model and r["method"] == method and abs(float(r["dt"]) - 1 / 60) < 1e-12)
                 if any(b[1] > a[1] + 1e-9 for a, b in zip(gaps, gaps[1:])):
                     problems.append(f"cloth_solvers.csv: {model}: {method}'s potential gap grows with its sweeps: {gaps}")
+    problems += compliant_rod(directory)
+    return problems
+
+
+def compliant_rod(directory):
+    """the pendulum on a compliant rod at 1/60 s frames: vbd and xpbd at 10 iterations a frame are backward Euler's
+    converged steps (within compliant_rod_converged), and symplectic Euler does not survive the stiff rod, whose
+    omega h = 17 is past its stability limit omega h = 2"""
+    path = os.path.join(directory, "constraints_compliant_rod.csv")
+    if not os.path.isfile(path):
+        return []
+    rows, problems, bound = list(csv.DictReader(open(path))), [], tolerance("compliant_rod_converged")
+    for r in rows:
+        if r["method"] in ("vbd", "xpbd") and r["iterations"] == "10" and not float(r["off_backward_euler"]) <= bound:
+            problems.append(f"constraints_compliant_rod.csv: {r['method']} at 10 iterations is {r['off_backward_euler']} m from backward Euler "
+                            f"(compliance {r['compliance']}), past {bound}")
+        if r["method"] == "symplectic-euler" and float(r["compliance"]) < 1e-5 and r["status"] == "ok":
+            problems.append("constraints_compliant_rod.csv: symplectic Euler ran the stiff rod past its stability limit")
     return problems
 
 

@@ -32,9 +32,14 @@ def kept_factor_row(name, header, row):
     return name in KEPT_FACTOR_FILES or (method is not None and row[method] in KEPT_FACTOR_METHODS)
 
 
-def kept_factor_tolerance(root=os.path.dirname(os.path.dirname(os.path.abspath(__file__)))):
+def tolerance(name, root=os.path.dirname(os.path.dirname(os.path.abspath(__file__)))):
+    """verification/tolerances.hpp's constant `name`"""
     text = open(os.path.join(root, "verification", "tolerances.hpp")).read()
-    return float(re.search(r"kept_factor_reproducibility\s*=\s*([0-9.eE+-]+)", text).group(1))
+    return float(re.search(name + r"\s*=\s*([0-9.eE+-]+)", text).group(1))
+
+
+def kept_factor_tolerance(root=os.path.dirname(os.path.dirname(os.path.abspath(__file__)))):
+    return tolerance("kept_factor_reproducibility", root)
 
 
 def numbers_agree(a, b, rel):

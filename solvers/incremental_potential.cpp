@@ -27,10 +27,8 @@ void step_matrix(const Eigen::VectorXd& mass, const Eigen::SparseMatrix<double>&
   a.makeCompressed();
 }
 
-IncrementalPotential::IncrementalPotential(const CountedSystem& system, const MassSpringView& view) : system_(system), view_(view) {
-  m_.resize(3 * Eigen::Index{view_.nodes});
-  for (int i = 0; i < view_.nodes; ++i) m_.segment<3>(3 * i).setConstant(view_.mass[i]);
-}
+IncrementalPotential::IncrementalPotential(const CountedSystem& system, const MassSpringView& view)
+    : system_(system), view_(view), m_(coordinate_masses(view)) {}
 
 void IncrementalPotential::start(double t0, const Eigen::VectorXd& y0, double h) {
   const Eigen::Index n = m_.size();
@@ -76,25 +74,32 @@ void IncrementalPotential::scaled_hessian(const Eigen::VectorXd& x, bool definit
 }
 
 IncrementalPotential::Vertex IncrementalPotential::vertex(int i, const Eigen::VectorXd& x, bool definite, bool derivatives) const {
-  const Eigen::Index at = 3 * Eigen::Index{i};
-  const Eigen::Vector3d e = x.segment<3>(at) - xb_.segment<3>(at);
+  // node i's coordinates as 3-vectors (in the plane, z zero: no gradient along it, the mass term its curvature)
+  const int dim = view_.dimension;
+  const Eigen::Index at = dim * Eigen::Index{i};
+  Eigen::Vector3d e = Eigen::Vector3d::Zero(), xi = Eigen::Vector3d::Zero(), f0i = Eigen::Vector3d::Zero();
+  e.head(dim) = x.segment(at, dim) - xb_.segment(at, dim);
+  xi.head(dim) = x.segment(at, dim);
+  f0i.head(dim) = f0_.segment(at, dim);
   // (D0 (x - xb))_i and D0's block (i, i), from D0's columns at node i (it is symmetric)
   Eigen::Vector3d d0e = Eigen::Vector3d::Zero();
   Eigen::Matrix3d d0ii = Eigen::Matrix3d::Zero();
-  for (int c = 0; c < 3; ++c)
+  for (int c = 0; c < dim; ++c)
     for (Eigen::SparseMatrix<double>::InnerIterator it(d0_, at + c); it; ++it) {
       d0e[c] += it.value() * (x[it.row()] - xb_[it.row()]);
-      if (it.row() >= at && it.row() < at + 3) d0ii(it.row() - at, c) = it.value();
+      if (it.row() >= at && it.row() < at + dim) d0ii(it.row() - at, c) = it.value();
     }
   VertexElastic elastic;
   view_.vertex_elastic(i, x, definite, derivatives, elastic);
   const double m = m_[at], hh = h_ * h_;
   // 1/2 d^T (M / h^2 - D0 / h) d's terms in e, the others' work, and node i's elastic terms
   Vertex out;
-  out.value = m * e.squaredNorm() / (2 * hh) - (e.dot(d0e) - e.dot(d0ii * e) / 2) / h_ - f0_.segment<3>(at).dot(x.segment<3>(at)) + elastic.energy;
+  out.value = m * e.squaredNorm() / (2 * hh) - (e.dot(d0e) - e.dot(d0ii * e) / 2) / h_ - f0i.dot(xi) + elastic.energy;
   if (!derivatives) return out;
-  out.gradient = m * e / hh - d0e / h_ - f0_.segment<3>(at) - elastic.force;
-  out.hessian = m / hh * Eigen::Matrix3d::Identity() - d0ii / h_ - elastic.jacobian;
+  out.gradient = m * e / hh - d0e / h_ - f0i;
+  out.gradient.head(dim) -= elastic.force.head(dim);
+  out.hessian = m / hh * Eigen::Matrix3d::Identity() - d0ii / h_;
+  out.hessian.topLeftCorner(dim, dim) -= elastic.jacobian.topLeftCorner(dim, dim);
   return out;
 }
 

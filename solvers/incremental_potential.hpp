@@ -34,7 +34,7 @@ class IncrementalPotential {
   IncrementalPotential(const CountedSystem& system, const MassSpringView& view);
   // the step from (t0, y0 = (x0, v0)) of length h: xb, f0 and D0 (one evaluation of f, one of its Jacobians)
   void start(double t0, const Eigen::VectorXd& y0, double h);
-  // G(x), and its gradient (3 nodes x 1)
+  // G(x), and its gradient (dimension nodes x 1)
   double value(const Eigen::VectorXd& x) const;
   // G(x + dx) - G(x), its quadratic and linear parts as differences (G's own terms are of order |f0| |x|, and their
   // round-off would hide the last Newton steps' decrease), the elastic part as Psi's difference
@@ -45,7 +45,8 @@ class IncrementalPotential {
   // everywhere. One evaluation of the elastic Jacobian
   void scaled_hessian(const Eigen::VectorXd& x, bool definite, Eigen::SparseMatrix<double>& a) const;
   // G as a function of node i's position alone, the others held (a per-vertex solver's view, vbd's): its value up to
-  // a constant that does not depend on x_i, and with `derivatives` its gradient and 3 x 3 Hessian there (h^-2 times
+  // a constant that does not depend on x_i, and with `derivatives` its gradient and 3 x 3 Hessian there (in the plane,
+  // z held at zero: the gradient's third entry zero, the Hessian's third row and column the mass term's) (h^-2 times
   // scaled_hessian's diagonal block; definite: each term's block made semidefinite). Touches only node i's terms:
   // its springs or elements, and the rows of D0 at node i
   struct Vertex {
@@ -55,6 +56,7 @@ class IncrementalPotential {
   };
   Vertex vertex(int i, const Eigen::VectorXd& x, bool definite, bool derivatives) const;
   double h() const { return h_; }
+  int dimension() const { return view_.dimension; }
   const Eigen::VectorXd& inertial() const { return xb_; }  // xb = x0 + h v0
   const Eigen::VectorXd& x0() const { return x0_; }
   const Eigen::VectorXd& mass() const { return m_; }  // each coordinate's lumped mass
@@ -63,7 +65,7 @@ class IncrementalPotential {
  private:
   const CountedSystem& system_;
   const MassSpringView& view_;
-  Eigen::VectorXd m_;                  // the lumped mass of each coordinate (3 nodes x 1)
+  Eigen::VectorXd m_;                  // the lumped mass of each coordinate (dimension nodes x 1)
   double t0_ = 0, h_ = 0;
   Eigen::VectorXd x0_, xb_, f0_;       // f0: the forces other than the elastic ones, at the step's start
   Eigen::SparseMatrix<double> d0_;     // df/dv at the step's start (definite)

@@ -24,10 +24,8 @@ const MassSpringView& mass_spring_of(const OdeSystem& system) {
 }  // namespace
 
 BaraffWitkinSystem::BaraffWitkinSystem(const CountedSystem& system, bool definite)
-    : system_(system), view_(mass_spring_of(system)), definite_(definite), f_(system.size() / 2), b_(system.size() / 2) {
-  m_.resize(3 * Eigen::Index{view_.nodes});
-  for (int i = 0; i < view_.nodes; ++i) m_.segment<3>(3 * i).setConstant(view_.mass[i]);
-}
+    : system_(system), view_(mass_spring_of(system)), definite_(definite), m_(coordinate_masses(view_)), f_(system.size() / 2),
+      b_(system.size() / 2) {}
 
 void BaraffWitkinSystem::assemble_matrix(double t, const Eigen::VectorXd& y, double h) {
   force_jacobians(system_, view_, t, y, definite_, k_, d_);

@@ -82,5 +82,6 @@ std::unique_ptr<FixedStepper> make_mass_spring_implicit(const CountedSystem& sys
 // fast-mass-spring (solvers/methods/), for the benches that step them one at a time
 std::unique_ptr<FixedStepper> make_implicit_euler(const CountedSystem& system);
 std::unique_ptr<FixedStepper> make_fast_mass_spring(const CountedSystem& system);
+constexpr int fast_mass_spring_iterations = 10;  // its local/global iterations a step (Liu et al. 2013, section 4: ten a frame)
 
 }  // namespace stepwise

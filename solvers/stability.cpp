@@ -65,8 +65,7 @@ StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::Vecto
   Eigen::SparseMatrix<double> k, d;
   view->force_jacobians(t, y, false, k, d);
   const Eigen::Index n = k.rows();
-  Eigen::VectorXd root_mass(n);
-  for (int i = 0; i < view->nodes; ++i) root_mass.segment<3>(3 * i).setConstant(std::sqrt(view->mass[i]));
+  const Eigen::VectorXd root_mass = coordinate_masses(*view).cwiseSqrt();
   const Eigen::VectorXd inverse = root_mass.cwiseInverse();
   // S = M^-1/2 (-K) M^-1/2, symmetric for the springs' K (the wind's position part, not symmetric, is taken
   // symmetrised)

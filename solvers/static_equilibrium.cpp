@@ -29,8 +29,7 @@ struct Problem {
   Eigen::VectorXd force(const Eigen::VectorXd& at) const {
     Eigen::VectorXd a(n);
     second.acceleration(0, at, a);
-    for (int i = 0; i < view.nodes; ++i) a.segment<3>(3 * i) *= view.mass[static_cast<size_t>(i)];
-    return a;
+    return a.cwiseProduct(coordinate_masses(view));
   }
   Eigen::VectorXd free_part(const Eigen::VectorXd& f) const { return S * f; }
 };
@@ -83,7 +82,7 @@ StaticEquilibrium static_equilibrium(const OdeSystem& system, Eigen::VectorXd y,
   const auto* view = system.as<MassSpringView>();
   const auto* second = system.as<SecondOrderView>();
   if (!view || !second) throw std::invalid_argument("static_equilibrium: the system is no mass-spring or continuum system");
-  const Eigen::Index n = 3 * Eigen::Index{view->nodes};
+  const Eigen::Index n = Eigen::Index{view->dimension} * view->nodes;
   if (y.size() != 2 * n || static_cast<Eigen::Index>(held.size()) != n) throw std::invalid_argument("static_equilibrium: sizes differ");
   y.tail(n).setZero();
 

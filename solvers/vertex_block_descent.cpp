@@ -17,31 +17,34 @@ double move(const IncrementalPotential& potential, int i, Eigen::VectorXd& x) {
   const IncrementalPotential::Vertex here = potential.vertex(i, x, true, true);
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(here.hessian);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) return 0;
-  const Eigen::Vector3d step = -ldlt.solve(here.gradient);
+  const Eigen::Vector3d step = -ldlt.solve(here.gradient);  // in the plane, its z zero (the gradient's is)
   const double slope = here.gradient.dot(step);
   if (!(slope < 0)) return 0;
-  const Eigen::Vector3d from = x.segment<3>(3 * i);
+  const int dim = potential.dimension();
+  auto node = x.segment(Eigen::Index{dim} * i, dim);
+  Eigen::Vector3d from = Eigen::Vector3d::Zero();
+  from.head(dim) = node;
   for (int halving = 0; halving <= max_halvings; ++halving) {
     const double alpha = std::ldexp(1.0, -halving);
-    x.segment<3>(3 * i) = from + alpha * step;
+    node = (from + alpha * step).head(dim);
     const double change = potential.vertex(i, x, true, false).value - here.value;
     if (change <= armijo * alpha * slope) return -change;
   }
-  x.segment<3>(3 * i) = from;
+  node = from.head(dim);
   return 0;
 }
 
 }  // namespace
 
-std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pattern) {
-  const Eigen::Index nodes = pattern.cols() / 3;
+std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pattern, int dimension) {
+  const Eigen::Index nodes = pattern.cols() / dimension;
   std::vector<int> colour(static_cast<size_t>(nodes), -1);
   std::vector<char> taken;
   std::vector<std::vector<int>> by_colour;
   for (Eigen::Index i = 0; i < nodes; ++i) {
     taken.assign(by_colour.size() + 1, 0);
-    for (Eigen::SparseMatrix<double>::InnerIterator it(pattern, 3 * i); it; ++it)
-      if (const int c = colour[static_cast<size_t>(it.row() / 3)]; c >= 0) taken[static_cast<size_t>(c)] = 1;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(pattern, dimension * i); it; ++it)
+      if (const int c = colour[static_cast<size_t>(it.row() / dimension)]; c >= 0) taken[static_cast<size_t>(c)] = 1;
     const auto c = static_cast<int>(std::find(taken.begin(), taken.end(), 0) - taken.begin());
     colour[static_cast<size_t>(i)] = c;
     if (static_cast<size_t>(c) == by_colour.size()) by_colour.emplace_back();
@@ -52,7 +55,7 @@ std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pa
 
 double vbd_sweep(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, int threads,
                  Eigen::VectorXd& decrease) {
-  decrease.setZero(x.size() / 3);
+  decrease.setZero(x.size() / potential.dimension());
   for (const std::vector<int>& colour : colours) {
     const auto count = static_cast<std::ptrdiff_t>(colour.size());
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)

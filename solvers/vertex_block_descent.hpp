@@ -19,9 +19,9 @@
 
 namespace stepwise {
 
-// greedy colours of the nodes of a 3 x 3 block pattern (symmetric): each node the smallest colour none of its
-// neighbours has, in node order; the nodes of each colour
-std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pattern);
+// greedy colours of the nodes of a d x d block pattern (symmetric, d = dimension): each node the smallest colour none
+// of its neighbours has, in node order; the nodes of each colour
+std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pattern, int dimension = 3);
 
 // one sweep over the colours, x moved in place on `threads` threads; G's decrease over it (J). `decrease` is scratch
 // (each node's part, summed in node order: the same bits for any thread count)

@@ -535,6 +535,11 @@ inline double coverage_px(double outline_px) { return outline_px; }
 // quick report's cloth tables). The ranks test (mpi_ranks.py reads this line) asks the residual itself.
 inline constexpr double kept_factor_reproducibility = 1e-8;
 
+// two solvers of one backward Euler step on the constraints study's compliant rod (vbd's sweeps, xpbd's iterations,
+// implicit-euler-newton), each converged: apart by at most Newton's velocity tolerance (1e-5 m/s a step,
+// solvers/incremental_potential.hpp) times the run's 2 s, in the bob's position (m). report/check_report.py reads this
+inline constexpr double compliant_rod_converged = 2e-5;
+
 // the equations model against a hand-written twin (the built-in pendulum, a hand-coded f): the same formula with
 // its operations in another order or grouping (g/L once, or g times 1/L each call) differs by a few ulps a call,
 // 4 eps |f| bounding it; over a run of N steps those differences add, at most linearly on a non-chaotic orbit:

@@ -1,5 +1,5 @@
 // Capability: a mass-spring network, y = (x, v) of `nodes` points in 3-D (x = y[0..3 nodes), node-major,
-// then v), each with a lumped mass, so that M dv/dt = f(t, x, v) with M diagonal: the structure Baraff &
+// then v), or in the plane (dimension 2: x = y[0..2 nodes)), each with a lumped mass, so that M dv/dt = f(t, x, v) with M diagonal: the structure Baraff &
 // Witkin's linearised implicit Euler on a sparse Cholesky factor (implicit-euler, implicit-euler-newton),
 // and the prefactored local/global method of Liu et al. 2013 (fast-mass-spring), need.
 #pragma once
@@ -25,7 +25,8 @@ struct Spring {
 };
 
 // the elastic potential around one node, for a per-vertex solver (vbd): the energy of the terms (springs, elements,
-// stencils) that touch it, their force on it, and that force's derivative by the node's own position
+// stencils) that touch it, their force on it, and that force's derivative by the node's own position (in the plane,
+// their first two entries and leading 2 x 2 block; a solver ignores the rest)
 struct VertexElastic {
   double energy = 0;                                   // J
   Eigen::Vector3d force = Eigen::Vector3d::Zero();     // N
@@ -34,17 +35,19 @@ struct VertexElastic {
 
 struct MassSpringView {
   int nodes = 0;
+  int dimension = 3;            // each node's coordinates in x: 3, or 2 for a system in the plane x-y. The callbacks
+                                // below take and give x, f and Jacobians of `dimension` entries a node
   std::vector<double> mass;     // kg per node
   std::vector<Spring> springs;  // the elastic springs f holds, which the prefactored method treats implicitly
                                 // (every other force, their damping included, it holds at the step's start)
-  // the force Jacobians K = df/dx and D = df/dv at (t, y) (f = M dv/dt, 3 nodes x 3 nodes, CSC, the same
+  // the force Jacobians K = df/dx and D = df/dv at (t, y) (f = M dv/dt, d nodes x d nodes (d = dimension), CSC, the same
   // pattern at every call); definite: K replaced by a symmetric negative semidefinite approximation and D
   // by its symmetric part (the model says which), so that M - h D - h^2 K is symmetric positive definite for
   // a Cholesky factor; exact otherwise. A method counts each call (run_support.hpp's force_jacobians)
   std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool definite, Eigen::SparseMatrix<double>& dfdx,
                      Eigen::SparseMatrix<double>& dfdv)>
       force_jacobians;
-  // the elastic potential Psi(x) (J) and its force f_e(x) = -grad Psi added into f (N, 3 nodes x 1): the part of
+  // the elastic potential Psi(x) (J) and its force f_e(x) = -grad Psi added into f (N, d nodes x 1): the part of
   // f that backward Euler as a minimisation holds implicitly (solvers/incremental_potential.hpp); the rest of f
   // (damping, drag, wind, gravity, a pick) it takes at the step's start. The definite K above is -grad^2 Psi
   // with each spring's or element's Hessian made semidefinite
@@ -59,7 +62,15 @@ struct MassSpringView {
   std::function<void(int node, const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, bool derivatives, VertexElastic& out)> vertex_elastic;
 };
 
-inline const Requirement needs_mass_spring = needs<MassSpringView>("a mass-spring system (a cloth or chain scene)");
+// each coordinate's lumped mass (dimension nodes x 1): the diagonal of M
+inline Eigen::VectorXd coordinate_masses(const MassSpringView& view) {
+  Eigen::VectorXd m(Eigen::Index{view.dimension} * view.nodes);
+  for (int i = 0; i < view.nodes; ++i) m.segment(Eigen::Index{view.dimension} * i, view.dimension).setConstant(view.mass[static_cast<size_t>(i)]);
+  return m;
+}
+
+inline const Requirement needs_mass_spring =
+    needs<MassSpringView>("a mass-spring system (a cloth or chain scene, or pendulum-cartesian with a compliant rod)");
 
 // Capability: a mass-spring system whose elastic forces are its MassSpringView's springs alone, as the
 // prefactored local/global method needs (a spring cloth, a chain; not the continuum cloth, whose elastic

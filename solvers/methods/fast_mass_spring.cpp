@@ -8,12 +8,13 @@
 //   global: (M + h^2 L) x = M y + h^2 (J d + f_ext)                  (one sparse system)
 // where L is the springs' Laplacian (c_s on the ends' diagonals, -c_s between them; a pinned spring adds c_s
 // to its node and c_s times its anchor to the right-hand side). M + h^2 L is constant: factored once
-// (CHOLMOD) as one scalar n x n matrix, and the global step solves it for the three coordinates as three
-// right-hand sides. Every force that is not an elastic spring (gravity, drag, wind, the springs' Voigt
+// (CHOLMOD) as one scalar n x n matrix, and the global step solves it for the three coordinates (two in the plane)
+// as as many right-hand sides. Every force that is not an elastic spring (gravity, drag, wind, the springs' Voigt
 // damping, a picked node's pull) is f_ext, held at the step's start: explicit, which bounds how much
 // damping a step can take. A fixed number of iterations (the paper's 10) per step; then v1 = (x1 - x0) / h.
 #include "solvers/fixed_step.hpp"
 #include "solvers/run_support.hpp"
+#include "solvers/mass_spring_implicit.hpp"
 #include "solvers/sparse_cholesky.hpp"
 
 #include <fmt/format.h>
@@ -24,13 +25,12 @@
 namespace stepwise {
 namespace {
 
-constexpr int local_global_iterations = 10;  // Liu et al. 2013, section 4: ten iterations per frame
-
-using Nodes = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;  // one row per node, as y stores them
+using Nodes = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;  // a row per node, as y stores them
+using Row = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, 3>;             // one node's, on the stack
 
 class FastMassSpring final : public FixedStepper {
  public:
-  explicit FastMassSpring(const CountedSystem& s) : system_(s), view_(*s.as<MassSpringView>()), second_order_(*s.as<SecondOrderView>()), n_(view_.nodes) {
+  explicit FastMassSpring(const CountedSystem& s) : system_(s), view_(*s.as<MassSpringView>()), second_order_(*s.as<SecondOrderView>()), n_(view_.nodes), d_(view_.dimension) {
     std::vector<Eigen::Triplet<double>> entries;
     for (const Spring& s : view_.springs) {
       entries.emplace_back(s.b, s.b, s.stiffness);
@@ -43,33 +43,33 @@ class FastMassSpring final : public FixedStepper {
     laplacian_.resize(n_, n_);
     laplacian_.setFromTriplets(entries.begin(), entries.end());
     mass_ = Eigen::Map<const Eigen::VectorXd>(view_.mass.data(), n_);
-    a_ = Eigen::VectorXd(3 * Eigen::Index{n_});
+    a_ = Eigen::VectorXd(Eigen::Index{d_} * n_);
   }
 
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
     if (h != factored_h_ && !factor(h, t, failure)) return false;
-    const Eigen::Index m = 3 * Eigen::Index{n_};
-    const Eigen::Map<const Nodes> x0(y.data(), n_, 3), v0(y.data() + m, n_, 3);
+    const Eigen::Index m = Eigen::Index{d_} * n_;
+    const Eigen::Map<const Nodes> x0(y.data(), n_, d_), v0(y.data() + m, n_, d_);
     // every force but the elastic springs', at the step's start: M a - f_elastic(x0)
     second_order_acceleration(system_, second_order_, t, y, a_, f_);
-    const Eigen::Map<const Nodes> a0(a_.data(), n_, 3);
+    const Eigen::Map<const Nodes> a0(a_.data(), n_, d_);
     elastic(x0, directions(x0), f_el_);
     external_ = mass_.asDiagonal() * a0 - f_el_;
     inertia_ = mass_.asDiagonal() * (x0 + h * v0);
 
     x_ = x0 + h * v0;
-    for (int iteration = 0; iteration < local_global_iterations; ++iteration) {
+    for (int iteration = 0; iteration < fast_mass_spring_iterations; ++iteration) {
       rhs_ = inertia_ + h * h * (spring_pull(directions(x_)) + external_);
       if (auto e = cholesky_.solve(rhs_, solution_); !e.empty()) {
         failure = fmt::format("fast-mass-spring: {} at t = {:.9g}", e, t);
         return false;
       }
       x_ = solution_;
-      system_.stats().linear_solves += 3;
+      system_.stats().linear_solves += d_;
     }
     y_next.resize(y.size());
-    Eigen::Map<Nodes>(y_next.data(), n_, 3) = x_;
-    Eigen::Map<Nodes>(y_next.data() + m, n_, 3) = (x_ - x0) / h;
+    Eigen::Map<Nodes>(y_next.data(), n_, d_) = x_;
+    Eigen::Map<Nodes>(y_next.data() + m, n_, d_) = (x_ - x0) / h;
     return true;
   }
 
@@ -92,24 +92,24 @@ class FastMassSpring final : public FixedStepper {
 
   // the local step: each spring's direction scaled to its rest length (one row per spring)
   const Nodes& directions(const Nodes& x) {
-    d_.resize(static_cast<Eigen::Index>(view_.springs.size()), 3);
+    directions_.resize(static_cast<Eigen::Index>(view_.springs.size()), d_);
     for (size_t k = 0; k < view_.springs.size(); ++k) {
       const Spring& s = view_.springs[k];
-      const Eigen::RowVector3d r = x.row(s.b) - (s.a < 0 ? Eigen::RowVector3d(s.anchor.transpose()) : Eigen::RowVector3d(x.row(s.a)));
-      d_.row(static_cast<Eigen::Index>(k)) = s.rest * r / r.norm();
+      const Row r = x.row(s.b) - (s.a < 0 ? Row(s.anchor.head(d_).transpose()) : Row(x.row(s.a)));
+      directions_.row(static_cast<Eigen::Index>(k)) = s.rest * r / r.norm();
     }
-    return d_;
+    return directions_;
   }
 
   // J d plus the anchors' pull: the part of the springs' forces that does not depend on x through L
   const Nodes& spring_pull(const Nodes& d) {
-    pull_.setZero(n_, 3);
+    pull_.setZero(n_, d_);
     for (size_t k = 0; k < view_.springs.size(); ++k) {
       const Spring& s = view_.springs[k];
-      const Eigen::RowVector3d cd = s.stiffness * d.row(static_cast<Eigen::Index>(k));
+      const Row cd = s.stiffness * d.row(static_cast<Eigen::Index>(k));
       pull_.row(s.b) += cd;
       if (s.a < 0)
-        pull_.row(s.b) += s.stiffness * s.anchor.transpose();
+        pull_.row(s.b) += s.stiffness * s.anchor.head(d_).transpose();
       else
         pull_.row(s.a) -= cd;
     }
@@ -122,13 +122,13 @@ class FastMassSpring final : public FixedStepper {
   const CountedSystem& system_;
   const MassSpringView& view_;
   const SecondOrderView& second_order_;
-  int n_;
+  int n_, d_;  // nodes, and each node's coordinates
   Eigen::SparseMatrix<double> laplacian_;
   Eigen::VectorXd mass_, a_, f_;  // f_: f where the model has no acceleration of its own
   SparseCholesky cholesky_;
   bool analysed_ = false;
   double factored_h_ = 0;
-  Nodes d_, pull_, f_el_, external_, inertia_, x_, rhs_;
+  Nodes directions_, pull_, f_el_, external_, inertia_, x_, rhs_;
   Eigen::MatrixXd solution_;
 };
 

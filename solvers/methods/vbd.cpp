@@ -15,6 +15,8 @@
 namespace stepwise {
 namespace {
 
+using Coordinates = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;  // a node's, on the stack
+
 class VertexBlockDescent final : public FixedStepper {
  public:
   VertexBlockDescent(const CountedSystem& s, const StepControl& control, bool chebyshev)
@@ -25,7 +27,7 @@ class VertexBlockDescent final : public FixedStepper {
     if (colours_.empty()) {
       Eigen::SparseMatrix<double> k, d;
       force_jacobians(system_, view_, t, y, true, k, d);
-      colours_ = colour_nodes(k);
+      colours_ = colour_nodes(k, view_.dimension);
       system_.stats().colours = static_cast<long>(colours_.size());
     }
     const double hs = h / substeps_;
@@ -48,13 +50,15 @@ class VertexBlockDescent final : public FixedStepper {
     x_ = potential_.inertial();
     // the adaptive start: along each node's other forces' acceleration a (gravity, wind, ...), the last step's
     // acceleration's component, clamped to [0, |a|]
+    const int dim = view_.dimension;
     for (int i = 0; i < view_.nodes; ++i) {
-      const Eigen::Vector3d a = potential_.other_forces().segment<3>(3 * i) / m[3 * i];
+      const Eigen::Index at = Eigen::Index{dim} * i;
+      const Coordinates a = potential_.other_forces().segment(at, dim) / m[at];
       const double size = a.norm();
       if (!(size > 0)) continue;
-      const Eigen::Vector3d along = a / size;
-      const double last = previous_v_.size() ? std::clamp((y.segment<3>(n_ + 3 * i) - previous_v_.segment<3>(3 * i)).dot(along) / previous_h_, 0.0, size) : size;
-      x_.segment<3>(3 * i) += h * h * last * along;
+      const Coordinates along = a / size;
+      const double last = previous_v_.size() ? std::clamp((y.segment(n_ + at, dim) - previous_v_.segment(at, dim)).dot(along) / previous_h_, 0.0, size) : size;
+      x_.segment(at, dim) += h * h * last * along;
     }
     system_.stats().potential_decrease += vbd_iterate(potential_, colours_, x_, sweeps_, decrease_);
     previous_v_ = y.tail(n_);

@@ -1,5 +1,6 @@
 // Mass-spring systems (the cloth issue's first pieces): Voigt springs' internal forces keep momentum, their
 // analytic sparse Jacobian against central differences (springs stretched and compressed), and the
+// springs in the plane the same as in space with z zero, the
 // hanging chain settling into its exact static equilibrium under implicit Euler and CVODE BDF with KLU.
 #include "models/hanging_chain.hpp"
 #include "models/model.hpp"
@@ -74,6 +75,58 @@ TEST(Springs, TheChainsSparseJacobianMatchesCentralDifferences) {
     Eigen::MatrixXd fd(y.size(), y.size());
     for (Eigen::Index j = 0; j < y.size(); ++j) fd.col(j) = (4 * column(j, tolerance::richardson_step / 2) - column(j, tolerance::richardson_step)) / 3;
     EXPECT_LT((analytic - fd).lpNorm<Eigen::Infinity>(), tolerance::jacobian_richardson * (1 + analytic.lpNorm<Eigen::Infinity>())) << spread;
+  }
+}
+
+TEST(Springs, InThePlaneTheyAreTheSpaceSpringsWithZeroZ) {
+  // 12 nodes in the plane z = 0 joined by 30 random springs (and 3 pinned to anchors), moving in the plane: the
+  // network of dimension 2 (pendulum-cartesian's) gives the energy, forces, Jacobians and per-node terms the network
+  // of dimension 3 gives on the same nodes with z = 0, each read at the node's x and y
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const int nodes = 12;
+  std::vector<Spring> springs;
+  for (int s = 0; s < 30; ++s) {
+    const int a = static_cast<int>(rng() % nodes), b = (a + 1 + static_cast<int>(rng() % (nodes - 1))) % nodes;
+    springs.push_back(Spring{a, b, 1 + u(rng) * 0.5, 100 * (1.5 + u(rng)), 1.5 + u(rng)});
+  }
+  for (int s = 0; s < 3; ++s) springs.push_back(Spring{-1, s, 0.5, 80, 1, Eigen::Vector3d(u(rng), u(rng), 0)});
+  std::vector<double> mass(nodes);
+  for (double& m : mass) m = 1.5 + u(rng);
+  const SpringNetwork plane(mass, springs, 2, 0.3), space(mass, springs, 3, 0.3);
+  Eigen::VectorXd y2(4 * nodes), y3 = Eigen::VectorXd::Zero(6 * nodes);
+  for (Eigen::Index i = 0; i < y2.size(); ++i) y2[i] = u(rng);
+  for (int part = 0; part < 2; ++part)  // x, then v: node k's two coordinates into 3 a node
+    for (Eigen::Index i = 0; i < 2 * nodes; ++i) y3[part * 3 * nodes + 3 * (i / 2) + i % 2] = y2[part * 2 * nodes + i];
+  const Eigen::VectorXd x2 = y2.head(2 * nodes), x3 = y3.head(3 * nodes);
+  std::vector<Eigen::Index> in_plane;  // x's coordinates of 3-D's that are the plane's
+  for (Eigen::Index i = 0; i < 3 * nodes; ++i)
+    if (i % 3 != 2) in_plane.push_back(i);
+  const Eigen::VectorXi kept = Eigen::Map<const Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1>>(in_plane.data(), 2 * nodes).cast<int>();
+
+  const double energy = space.view().potential(x3);
+  EXPECT_NEAR(plane.view().potential(x2), energy, tolerance::element_roundoff * energy);
+  Eigen::VectorXd f2 = Eigen::VectorXd::Zero(2 * nodes), f3 = Eigen::VectorXd::Zero(3 * nodes);
+  plane.view().elastic_force(x2, f2);
+  space.view().elastic_force(x3, f3);
+  const double f_scale = f3.lpNorm<Eigen::Infinity>();
+  EXPECT_LT((f2 - f3(kept)).lpNorm<Eigen::Infinity>(), tolerance::element_roundoff * f_scale);
+  for (const bool definite : {false, true}) {
+    Eigen::SparseMatrix<double> k2, d2, k3, d3;
+    plane.view().force_jacobians(0, y2, definite, k2, d2);
+    space.view().force_jacobians(0, y3, definite, k3, d3);
+    const Eigen::MatrixXd K3 = Eigen::MatrixXd(k3)(kept, kept), D3 = Eigen::MatrixXd(d3)(kept, kept);
+    EXPECT_LT((Eigen::MatrixXd(k2) - K3).lpNorm<Eigen::Infinity>(), tolerance::element_roundoff * K3.lpNorm<Eigen::Infinity>()) << definite;
+    EXPECT_LT((Eigen::MatrixXd(d2) - D3).lpNorm<Eigen::Infinity>(), tolerance::element_roundoff * D3.lpNorm<Eigen::Infinity>()) << definite;
+    for (int node = 0; node < nodes; ++node) {
+      VertexElastic at2, at3;
+      plane.view().vertex_elastic(node, x2, definite, true, at2);
+      space.view().vertex_elastic(node, x3, definite, true, at3);
+      EXPECT_NEAR(at2.energy, at3.energy, tolerance::element_roundoff * energy) << node;
+      EXPECT_LT((at2.force - at3.force).head<2>().lpNorm<Eigen::Infinity>(), tolerance::element_roundoff * f_scale) << node;
+      const Eigen::Matrix2d jacobian_gap = (at2.jacobian - at3.jacobian).topLeftCorner<2, 2>();
+      EXPECT_LT(jacobian_gap.lpNorm<Eigen::Infinity>(), tolerance::element_roundoff * K3.lpNorm<Eigen::Infinity>()) << node;
+    }
   }
 }
 
