@@ -7,7 +7,7 @@ code) and verification/tests/mpi_ranks.py (a report on ranks against one process
 - KEPT_FACTOR_FILES and KEPT_FACTOR_METHODS: tables, and rows of methods, whose results move by the solver's
   round-off because a factor is kept across steps while measured time says it pays (implicit Euler on the cloth,
   fast mass-spring; backward Euler's Newton starts from the linearised step, and the cloth solvers' rows are
-  measured against that Newton's runs); KEPT_FACTOR_COUNTS: their counts of work, which the reuse changes;
+  measured against that Newton's runs, as are the constraints study's compliant rod's); KEPT_FACTOR_COUNTS: their counts of work, which the reuse changes;
 - kept_factor_tolerance(): how far such a result may move, verification/tolerances.hpp's kept_factor_reproducibility.
 """
 import os
@@ -20,7 +20,8 @@ CHOSEN_BY_TIME = {
     "side_by_side_frames.csv", "scaling_crossover.csv", "scaling_model.csv", "scaling_cell.csv",
     "continuum_cloth_equal_cpu.csv",
 }
-KEPT_FACTOR_FILES = {"cloth_families.csv", "cloth_momentum.csv", "cloth_realtime.csv", "continuum_cloth_newton.csv", "cloth_solvers.csv"}
+KEPT_FACTOR_FILES = {"cloth_families.csv", "cloth_momentum.csv", "cloth_realtime.csv", "continuum_cloth_newton.csv", "cloth_solvers.csv",
+                     "constraints_compliant_rod.csv"}
 KEPT_FACTOR_METHODS = {"implicit-euler", "implicit-euler-newton", "fast-mass-spring"}
 KEPT_FACTOR_COUNTS = {"rhs_evals", "jac_evals", "linear_solves", "factorizations", "newton_iterations", "newton_iterations_mean",
                       "line_search_halvings_mean"}

@@ -582,7 +582,7 @@ std::vector<std::string> findings_of(const Measurements& t, bool quick) {
                                  "on a rod of 1e-6 m/N (omega h = 17 at 1/60 s) ends 2 s {} m from converged backward Euler under xpbd at 1 iteration "
                                  "a frame, {} m under vbd at 1 sweep and {} m at 2; the linearised implicit Euler (one Newton step) ends {} m off and "
                                  "fast-mass-spring ({} local/global iterations) {} m; symplectic Euler {}. Converged backward Euler is itself {} m off "
-                                 "the rod's true motion, and on a softer rod (1e-3 m/N, omega h = 0.53) symplectic Euler, stable there, ends {} m off "
+                                 "the rod's true motion, and on a softer rod (1e-3 m/N, omega h about 1/2) symplectic Euler, stable there, ends {} m off "
                                  "it where backward Euler ends {} m: at a frame step the error is backward Euler's damping, not its solver's.",
                                  sci(rod_at(1, "xpbd", 1, "off_backward_euler")), sci(rod_at(1, "vbd", 1, "off_backward_euler")),
                                  sci(rod_at(1, "vbd", 2, "off_backward_euler")), sci(rod_at(1, "implicit-euler", 1, "off_backward_euler")),
