@@ -83,7 +83,7 @@ StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::Vecto
     lambda = mode.dot(s * mode);
   }
   const Eigen::VectorXd v = inverse.cwiseProduct(mode);  // the mode in coordinates: M^-1/2 times S's eigenvector
-  const double a = -v.dot(d * v) / (2 * v.dot(root_mass.cwiseAbs2().cwiseProduct(v)));
+  const double a = 0.0 - v.dot(d * v) / (2 * v.dot(root_mass.cwiseAbs2().cwiseProduct(v)));  // 0.0 - : no "-0" where D is zero
   return {std::sqrt(std::max(lambda, 0.0)), a};
 }
 
