@@ -66,8 +66,7 @@ class PendulumCartesian final : public Model {
     dydt << v, a;
   }
   std::optional<double> energy(const Eigen::VectorXd& y) const override {
-    const double stretch = y.head<2>().norm() - length_;
-    return 0.5 * mass_ * y.tail<2>().squaredNorm() + mass_ * g_ * y[1] + (compliance_ > 0 ? 0.5 * stretch * stretch / compliance_ : 0.0);
+    return 0.5 * mass_ * y.tail<2>().squaredNorm() + mass_ * g_ * y[1] + (rod_ ? rod_->view().potential(y.head<2>()) : 0.0);
   }
   bool has_exact() const override { return compliance_ == 0 && reduced_->has_exact(); }
   Eigen::VectorXd exact(double t) const override {
