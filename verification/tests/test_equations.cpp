@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -429,8 +430,10 @@ TEST(Rosenbrock, DenseOutputFollowsTheSolutionBetweenSteps) {
 namespace stepwise {
 namespace {
 
-// the advice's pick on a shipped scene against a full sweep at every third of a decade of the advised method: its
-// setting is the coarsest on that grid meeting the error (settings, not timings: a test asserts no speed)
+// the advice's pick on a shipped scene against a full sweep at every third of a decade of the advised method: the
+// advice's search ran the coarsest setting on that grid meeting the error, and its pick meets the error (settings,
+// not timings: the pick is the cheapest point measured, and where two settings cost within the CPU clock's noise
+// of each other, as verner98's rtol 4.64e-4 and 1e-4 do on the damped oscillator at 16 and 18 steps, either may be it)
 TEST(Advice, FindsTheAdvisedMethodsCoarsestSettingMeetingTheError) {
   const TemporaryCache cache;
   for (const char* scene_name : {"van-der-pol", "damped-oscillator"}) {
@@ -449,7 +452,10 @@ TEST(Advice, FindsTheAdvisedMethodsCoarsestSettingMeetingTheError) {
     ASSERT_FALSE(full.empty());
     const AdvisePoint& first = full.back();  // the sweep stops at the first setting meeting the target
     ASSERT_TRUE(first.error && *first.error <= target) << scene_name;
-    EXPECT_EQ(first.setting(), advised.setting()) << scene_name << ": " << advised.method;
+    EXPECT_TRUE(advised.error && *advised.error <= target) << scene_name;
+    const bool searched = std::any_of(advice.points.begin(), advice.points.end(),
+                                      [&](const AdvisePoint& p) { return p.method == advised.method && p.setting() == first.setting(); });
+    EXPECT_TRUE(searched) << scene_name << ": " << advised.method << "'s search never ran " << first.setting() << " (advised: " << advised.setting() << ")";
     EXPECT_FALSE(advice.stiff) << scene_name;
   }
 }
