@@ -266,7 +266,10 @@ Table stiffness_table(const StudyContext& ctx) {
 // frame, the answer vbd, xpbd and fast-mass-spring iterate towards) and against the rod's true motion (verner98 at rtol
 // 1e-10): per-node Newton (vbd) and per-constraint projection (xpbd) at each iteration count, the linearised implicit
 // Euler (one Newton step), the prefactored local/global method, and symplectic Euler (explicit: stable for omega h < 2)
-constexpr std::array rod_compliances{1e-3, 1e-6};  // m/N: omega h = 0.53 and 17 at 1/60 s for a 1 kg bob
+constexpr std::array rod_compliances{1e-3, 1e-6};  // m/N
+constexpr double rod_mass = 1.0;                    // kg: the pendulum's default bob
+// the rod's omega h at a frame: h / sqrt(m alpha) (0.53 and 17 for the compliances above)
+double rod_omega_h(double alpha) { return frame / std::sqrt(rod_mass * alpha); }
 constexpr double rod_t_end = 2.0;                   // s
 
 struct RodOutcome {
@@ -278,7 +281,7 @@ struct RodOutcome {
 // the table (backward Euler's rows: its Newton iterations a frame, rounded up, and its distance from the true motion),
 // and in `backward_euler_off` that distance at each compliance (m)
 Table compliant_rod_table(const StudyContext& ctx, std::vector<double>& backward_euler_off) {
-  const auto rod = [](double alpha) { return make_model("pendulum-cartesian", {{"theta0", 1.0}, {"compliance", alpha}}); };
+  const auto rod = [](double alpha) { return make_model("pendulum-cartesian", {{"theta0", 1.0}, {"mass", rod_mass}, {"compliance", alpha}}); };
   std::vector<Eigen::Vector2d> backward_euler, reference;
   std::vector<Stats> newton;
   for (const double alpha : rod_compliances)
@@ -507,11 +510,12 @@ std::string section(const Measurements& t, bool quick, std::vector<Figure>& figu
   md += markdown_table(t.stiffness, {{"method", "method"}, {"iterations", "iterations"}, {"stretch", "stretch (m)", shown_as("{:.4g}")}});
   md += fmt::format("\nThe pendulum (theta0 = 1 rad, 1 kg) on a compliant rod, {} s of 1/60 s frames: each method's bob at the end, its distance from "
                     "backward Euler's converged step at the same frame (implicit-euler-newton: the answer vbd, xpbd and fast-mass-spring iterate towards) "
-                    "and from the rod's true motion (verner98 at rtol 1e-10). A rod of 1e-6 m/N is stiff at a frame (omega h = h / sqrt(m alpha) = 17; "
-                    "1e-3 m/N: 0.53). "
+                    "and from the rod's true motion (verner98 at rtol 1e-10). A rod of {:.0e} m/N is stiff at a frame (omega h = h / sqrt(m alpha) = {:.2g}; "
+                    "{:.0e} m/N: {:.2g}). "
                     "vbd and xpbd take the iterations a frame shown; implicit-euler is one Newton step, fast-mass-spring {} local/global iterations, "
                     "implicit-euler-newton as many as it needs (its rows: the mean a frame, rounded up):\n\n",
-                    rod_t_end, fast_mass_spring_iterations);
+                    rod_t_end, rod_compliances[1], rod_omega_h(rod_compliances[1]), rod_compliances[0], rod_omega_h(rod_compliances[0]),
+                    fast_mass_spring_iterations);
   md += markdown_table(t.rod, {{"compliance", "compliance (m/N)", shown_as("{:.0e}")}, {"method", "method"}, {"iterations", "iterations"},
                                {"off_backward_euler", "off backward Euler (m)", shown_as("sci")}, {"off_true_motion", "off the true motion (m)", shown_as("sci")},
                                {"cpu_seconds", "CPU (s)", shown_as("sci")}, {"status", "run"}});
@@ -579,16 +583,17 @@ std::vector<std::string> findings_of(const Measurements& t, bool quick) {
   const auto* explicit_row = row_where(t.rod, {{"compliance", rod_compliances[1]}, {"method", std::string("symplectic-euler")}});
   const bool explicit_survived = explicit_row && text(t.rod, *explicit_row, "status") == "ok";
   findings.push_back(fmt::format("**On a stiff compliant rod at a frame step, one XPBD iteration is backward Euler's step; VBD needs two**: the pendulum "
-                                 "on a rod of 1e-6 m/N (omega h = 17 at 1/60 s) ends 2 s {} m from converged backward Euler under xpbd at 1 iteration "
+                                 "on a rod of {:.0e} m/N (omega h = {:.0f} at 1/60 s) ends {} s {} m from converged backward Euler under xpbd at 1 iteration "
                                  "a frame, {} m under vbd at 1 sweep and {} m at 2; the linearised implicit Euler (one Newton step) ends {} m off and "
                                  "fast-mass-spring ({} local/global iterations) {} m; symplectic Euler {}. Converged backward Euler is itself {} m off "
-                                 "the rod's true motion, and on a softer rod (1e-3 m/N, omega h about 1/2) symplectic Euler, stable there, ends {} m off "
+                                 "the rod's true motion, and on a softer rod ({:.0e} m/N, omega h under 1) symplectic Euler, stable there, ends {} m off "
                                  "it where backward Euler ends {} m: at a frame step the error is backward Euler's damping, not its solver's.",
+                                 rod_compliances[1], rod_omega_h(rod_compliances[1]), rod_t_end,
                                  sci(rod_at(1, "xpbd", 1, "off_backward_euler")), sci(rod_at(1, "vbd", 1, "off_backward_euler")),
                                  sci(rod_at(1, "vbd", 2, "off_backward_euler")), sci(rod_at(1, "implicit-euler", 1, "off_backward_euler")),
                                  fast_mass_spring_iterations, sci(rod_at(1, "fast-mass-spring", fast_mass_spring_iterations, "off_backward_euler")),
                                  explicit_survived ? "survives it" : "diverges (past its limit omega h = 2)", sci(t.rod_backward_euler_off[1]),
-                                 sci(rod_at(0, "symplectic-euler", 1, "off_true_motion")), sci(t.rod_backward_euler_off[0])));
+                                 rod_compliances[0], sci(rod_at(0, "symplectic-euler", 1, "off_true_motion")), sci(t.rod_backward_euler_off[0])));
   return findings;
 }
 
