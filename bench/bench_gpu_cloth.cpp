@@ -8,9 +8,16 @@
 //    in float32 (the shader's reference).
 // The model itself stops at 1024 a side (its sparse Jacobians' pattern), so the view is built here from the
 // model's defaults, the grid scaled. Ratios: the pass's time over the CPU step's at each size.
+//
+// And vbd's sweeps (the flag of springs at 32, 64 and 128 a side, a 1/60 s step from its start, 10 sweeps from the
+// inertial point): gpu-vbd-compute's pass (the step's upload, the sweeps, the read-back, finished) against vbd's
+// sweeps on one CPU core, each after the same host part (the potential's start, not timed). Ratio: pass over CPU.
 #include "models/model.hpp"
 #include "solvers/cloth_grid.hpp"
 #include "solvers/gpu/gpu_cloth.hpp"
+#include "solvers/gpu/gpu_vbd.hpp"
+#include "solvers/run_support.hpp"
+#include "solvers/vertex_block_descent.hpp"
 
 #include "ratio_reporter.hpp"
 
@@ -104,10 +111,43 @@ void BM_gpu_cloth(benchmark::State& state) {
   state.SetLabel(fmt::format("{}, {}", pass == stepwise::gpu::Pass::fragment ? "fragment" : "compute", context->description()));
 }
 
+// 10 sweeps of one 1/60 s step of the n x n flag of springs from its start: range(1) 0 vbd's on one core, 1 the pass
+void BM_vbd_sweeps(benchmark::State& state) {
+  static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
+  const int n = static_cast<int>(state.range(0));
+  const auto model = stepwise::make_model("cloth", {{"rows", n}, {"columns", n}});
+  stepwise::Stats stats;
+  const stepwise::CountedSystem system(*model, stats);
+  const auto& view = *system.as<stepwise::MassSpringView>();
+  const Eigen::VectorXd y = model->initial_state();
+  stepwise::IncrementalPotential potential(system, view);
+  potential.start(0, y, 1.0 / 60);
+  Eigen::SparseMatrix<double> k, d;
+  stepwise::force_jacobians(system, view, 0, y, true, k, d);
+  const auto colours = stepwise::colour_nodes(k, view.dimension);
+  const bool device = state.range(1) == 1;
+  std::unique_ptr<stepwise::gpu::GpuVbd> gpu = device ? std::make_unique<stepwise::gpu::GpuVbd>(*context, view, colours, potential.damping()) : nullptr;
+  Eigen::VectorXd x, decrease;
+  for (auto _ : state) {
+    x = potential.inertial();
+    if (device) {
+      gpu->start(potential, x);
+      gpu->sweep(10);
+      gpu->download(potential, x);
+    } else {
+      stepwise::vbd_iterate(potential, colours, x, {.sweeps = 10}, decrease);
+    }
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * view.nodes);
+  state.SetLabel(device ? fmt::format("gpu-vbd-compute, {}", context->description()) : "vbd, one core");
+}
+
 #define SIZES ->Arg(128)->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime()
 BENCHMARK(BM_cloth_grid_cpu<double>) SIZES;
 BENCHMARK(BM_cloth_grid_cpu<float>) SIZES;
 BENCHMARK(BM_gpu_cloth)->ArgsProduct({{128, 256, 1024, 2048, 4096}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_vbd_sweeps)->ArgsProduct({{32, 64, 128}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_cloth_transfer)->ArgsProduct({{128, 256, 1024}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
@@ -118,5 +158,6 @@ int main(int argc, char** argv) {
     pairs.emplace_back(fmt::format("BM_gpu_cloth/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
     pairs.emplace_back(fmt::format("BM_cloth_grid_cpu<float>/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
   }
+  for (const char* n : {"32", "64", "128"}) pairs.emplace_back(fmt::format("BM_vbd_sweeps/{}/1/real_time", n), fmt::format("BM_vbd_sweeps/{}/0/real_time", n));
   return stepwise::bench::run_with_ratios(argc, argv, pairs);
 }

@@ -61,6 +61,7 @@ class IncrementalPotential {
   const Eigen::VectorXd& x0() const { return x0_; }
   const Eigen::VectorXd& mass() const { return m_; }  // each coordinate's lumped mass
   const Eigen::VectorXd& other_forces() const { return f0_; }  // f0
+  const Eigen::SparseMatrix<double>& damping() const { return d0_; }  // D0 (definite), on the view's force Jacobian pattern
 
  private:
   const CountedSystem& system_;

@@ -84,9 +84,9 @@ struct Method {
   // "" or why this system cannot be run on the method's device (a GPU method's grid past the largest texture),
   // asked before a run starts; empty for a method with no device of its own
   std::function<std::string(const OdeSystem& system)> device_problem;
-  // the method whose numbers this one computes to the bit by other means (a compute pass beside its fragment
-  // twin: the tests hold them equal): left out of the report's sweeps, which would only repeat the twin's
-  // points, and timed beside it in the benches; empty for most
+  // the method whose numbers this one computes by other means: to the bit (a compute pass beside its fragment
+  // twin: the tests hold them equal), or to float32's round-off (gpu-vbd-compute beside vbd); left out of the
+  // report's sweeps, which would only repeat the twin's points, and timed beside it in the benches; empty for most
   std::string_view twin;
 
   bool fixed_step() const { return stepping != Stepping::adaptive; }

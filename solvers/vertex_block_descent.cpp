@@ -1,6 +1,9 @@
 #include "vertex_block_descent.hpp"
 
+#include "solvers/run_support.hpp"
+
 #include <Eigen/Cholesky>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,9 +11,6 @@
 namespace stepwise {
 
 namespace {
-
-constexpr double armijo = 1e-4;  // the fraction of the predicted decrease a node's move must deliver
-constexpr int max_halvings = 8;  // the shortest move tried: 2^-8 of the node's Newton step (else it stays)
 
 // node i's Newton step on G, halved until G falls; G's decrease (0 where it stays)
 double move(const IncrementalPotential& potential, int i, Eigen::VectorXd& x) {
@@ -24,11 +24,11 @@ double move(const IncrementalPotential& potential, int i, Eigen::VectorXd& x) {
   auto node = x.segment(Eigen::Index{dim} * i, dim);
   Eigen::Vector3d from = Eigen::Vector3d::Zero();
   from.head(dim) = node;
-  for (int halving = 0; halving <= max_halvings; ++halving) {
+  for (int halving = 0; halving <= vbd_max_halvings; ++halving) {
     const double alpha = std::ldexp(1.0, -halving);
     node = (from + alpha * step).head(dim);
     const double change = potential.vertex(i, x, true, false).value - here.value;
-    if (change <= armijo * alpha * slope) return -change;
+    if (change <= vbd_armijo * alpha * slope) return -change;
   }
   node = from.head(dim);
   return 0;
@@ -90,6 +90,63 @@ double vbd_iterate(const IncrementalPotential& potential, const std::vector<std:
     old = x;
   }
   return total;
+}
+
+namespace {
+using Coordinates = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;  // a node's, on the stack
+}  // namespace
+
+VbdStepper::VbdStepper(const CountedSystem& s, const StepControl& control, double rho, std::string_view name)
+    : system_(s), view_(*s.as<MassSpringView>()), potential_(s, view_), substeps_(control.substeps),
+      sweeps_{control.iterations, std::max(control.threads, 1), rho}, name_(name), n_(s.size() / 2) {}
+
+bool VbdStepper::step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) {
+  if (colours_.empty()) {
+    Eigen::SparseMatrix<double> k, d;
+    force_jacobians(system_, view_, t, y, true, k, d);
+    colours_ = colour_nodes(k, view_.dimension);
+    system_.stats().colours = static_cast<long>(colours_.size());
+  }
+  const double hs = h / substeps_;
+  y_next = y;
+  for (int s = 0; s < substeps_; ++s) {
+    if (!substep(t + s * hs, hs, y_next, failure)) return false;
+    if (!y_next.allFinite()) {
+      failure = fmt::format("{}: the state is not finite after substep {} of the step at t = {:.9g} (h = {:.3g})", name_, s, t, h);
+      return false;
+    }
+  }
+  return true;
+}
+
+bool VbdStepper::iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, double& decrease,
+                         std::string& /*failure*/) {
+  decrease += vbd_iterate(potential, colours, x, sweeps_, decrease_);
+  return true;
+}
+
+bool VbdStepper::substep(double t, double h, Eigen::VectorXd& y, std::string& failure) {
+  potential_.start(t, y, h);
+  const Eigen::VectorXd& m = potential_.mass();
+  x_ = potential_.inertial();
+  // the adaptive start: along each node's other forces' acceleration a (gravity, wind, ...), the last step's
+  // acceleration's component, clamped to [0, |a|]
+  const int dim = view_.dimension;
+  for (int i = 0; i < view_.nodes; ++i) {
+    const Eigen::Index at = Eigen::Index{dim} * i;
+    const Coordinates a = potential_.other_forces().segment(at, dim) / m[at];
+    const double size = a.norm();
+    if (!(size > 0)) continue;
+    const Coordinates along = a / size;
+    const double last = previous_v_.size() ? std::clamp((y.segment(n_ + at, dim) - previous_v_.segment(at, dim)).dot(along) / previous_h_, 0.0, size) : size;
+    x_.segment(at, dim) += h * h * last * along;
+  }
+  if (!iterate(potential_, colours_, x_, system_.stats().potential_decrease, failure)) return false;
+  previous_v_ = y.tail(n_);
+  previous_h_ = h;
+  y.tail(n_) = (x_ - y.head(n_)) / h;
+  y.head(n_) = x_;
+  return true;
 }
 
 }  // namespace stepwise

@@ -11,13 +11,21 @@
 // once, on OpenMP's threads, each reading only nodes of other colours: the answer does not depend on the thread count.
 #pragma once
 
+#include <stepwise/solvers/fixed_step.hpp>
 #include <stepwise/solvers/incremental_potential.hpp>
 
 #include <Eigen/SparseCore>
 
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace stepwise {
+
+// a node's move: accepted where G falls by this fraction of what the Newton step predicts, halved at most this many
+// times (the shortest move tried is 2^-8 of the step; else the node stays). A device's sweep (gpu-vbd-compute) takes these
+inline constexpr double vbd_armijo = 1e-4;
+inline constexpr int vbd_max_halvings = 8;
 
 // greedy colours of the nodes of a d x d block pattern (symmetric, d = dimension): each node the smallest colour none
 // of its neighbours has, in node order; the nodes of each colour
@@ -41,5 +49,39 @@ struct VbdSweeps {
 };
 double vbd_iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, const VbdSweeps& how,
                    Eigen::VectorXd& decrease);
+
+// The vbd method's step (and gpu-vbd-compute's) on a mass-spring system: each (sub)step is backward Euler's incremental
+// potential minimised by `control.iterations` coloured sweeps, from the paper's adaptive start (the inertial position
+// plus the part of the last step's acceleration along the other forces', clamped between none and all of it; all of
+// it at the first step). The nodes are coloured at the first step; summary.json's colours and G's decrease are counted
+class VbdStepper : public FixedStepper {
+ public:
+  // rho: Chebyshev's rate (0: plain sweeps); `name` for a failure's message
+  VbdStepper(const CountedSystem& system, const StepControl& control, double rho, std::string_view name);
+  bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override;
+
+ protected:
+  // the sweeps of one (sub)step from x, in place: vbd_iterate here; G's decrease over them added to `decrease` (J).
+  // false, with `failure` naming the call, where they cannot be swept
+  virtual bool iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, double& decrease,
+                       std::string& failure);
+  const VbdSweeps& sweeps() const { return sweeps_; }
+  const MassSpringView& view() const { return view_; }
+
+ private:
+  // one backward Euler step of length h from y (x, v), in place
+  bool substep(double t, double h, Eigen::VectorXd& y, std::string& failure);
+
+  const CountedSystem& system_;
+  const MassSpringView& view_;
+  IncrementalPotential potential_;
+  int substeps_;
+  VbdSweeps sweeps_;
+  std::string_view name_;
+  Eigen::Index n_;
+  std::vector<std::vector<int>> colours_;
+  Eigen::VectorXd x_, decrease_, previous_v_;
+  double previous_h_ = 0;
+};
 
 }  // namespace stepwise

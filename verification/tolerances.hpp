@@ -287,6 +287,18 @@ inline double float32_wave_bound(long steps, double sin_theta_min, double coeffi
   return carried_roundoff(steps, sin_theta_min, cells, float32_wave_roundings * float32_unit_roundoff * coefficient_sum * max_abs_z);
 }
 
+// gpu-vbd-compute's converged step against backward Euler's (Newton on the same G to round-off). Its sweeps stop where
+// each node's gradient, as float32 computes it, moves the node by less than the line search can tell: where
+// |g_i| is within a few roundings of S_i, the sum of the magnitudes of the gradient's terms (the inertia's m / h^2 |e_i|,
+// D0's |D0_ij| |e_j| / h, |f0_i|, and each spring's c (|L - l| + |r| + |x_i| + |x_j|): its length formed from float32
+// positions, then L - l cancelled). A node's terms are at most 3 + 12 springs, each some 8 roundings from float32 inputs,
+// summed with one more each: 32 roundings bound them. G's Hessian is at least M / h^2, so x - x* = H^-1 (g - 0) is at
+// most h^2 / m_min |g|_2 (m)
+inline constexpr double vbd_float32_roundings = 32;
+inline double vbd_float32_step(double h, double least_mass, double gradient_scale) {
+  return h * h / least_mass * vbd_float32_roundings * float32_unit_roundoff * gradient_scale;
+}
+
 // the second seed's symplectic Euler in float32 (GPU pass against the CPU loop): eliminating v, its z obeys
 // the three-level recurrence above (undamped), fed each step by the rounding of z1 = z + h v1 (2
 // roundings of at most u (Z + h V)) and h times that of v1 = v + h c2 (sum - 4 z) (6 of at most

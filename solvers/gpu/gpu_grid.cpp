@@ -3,6 +3,7 @@
 #include "solvers/method.hpp"
 
 #include "gpu_cloth.hpp"
+#include "gpu_vbd.hpp"
 #include "gpu_wave.hpp"
 
 #include <fmt/format.h>
@@ -253,6 +254,7 @@ void add_shader_methods(MethodTable& table, const ShaderMethod& m) {
 void register_gpu_methods(MethodTable& table) {
   register_wave_methods(table);
   register_cloth_methods(table);
+  register_vbd_compute_method(table);
 }
 
 }  // namespace stepwise::gpu

@@ -4,12 +4,19 @@
 // costs, and against the exactly evolved DST modes; the cloth's pass against its float32 CPU step, that step
 // in float64 against the model's own symplectic Euler, and gpu-cloth as `run` takes it. Every pass twice: the
 // seeds' fragment pass and its compute twin (OpenGL 4.3 storage buffers; the wave's with a shared-memory tile),
-// which on llvmpipe give the float32 CPU loops' bits.
+// which on llvmpipe give the float32 CPU loops' bits. And vbd's sweeps as a compute pass (gpu-vbd-compute): with enough
+// sweeps its step is backward Euler's to float32's round-off, on the spring flag, the hanging chain and the compliant
+// pendulum in the plane, and as `run` takes it.
 #include "models/height_field.hpp"
 #include "models/model.hpp"
+#include "run/measure.hpp"
 #include "solvers/gpu/gpu_cloth.hpp"
+#include "solvers/gpu/gpu_vbd.hpp"
 #include "solvers/gpu/gpu_wave.hpp"
+#include "solvers/incremental_potential.hpp"
 #include "solvers/method_table.hpp"
+#include "solvers/run_support.hpp"
+#include "solvers/vertex_block_descent.hpp"
 #include "verification/gpu_references.hpp"
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
@@ -366,6 +373,147 @@ TEST(GpuShader, GpuClothMethodFollowsSymplecticEulerToFloat32RoundOff) {
   EXPECT_FALSE(method_applies(*find_method("gpu-cloth"), *water));
   EXPECT_FALSE(method_applies(*find_method("gpu-cloth-compute"), *water));
   EXPECT_NE(method_requirement(*find_method("gpu-cloth"), *water).find("cloth"), std::string::npos);
+}
+
+// a mass-spring scene in motion for one backward Euler step: the flag of springs (8 x 8, six frames from its flat
+// start), the hanging chain from its start, the pendulum on a stiff rod (1e-4 m/N, omega h = 1.7) at 0.5 rad, 2 rad/s.
+// (A stiffer rod tells the pass from vbd less: the float32 bound grows with the stiffness, c eps_f |x| h^2 / m)
+struct SpringScene {
+  const char* name;
+  std::unique_ptr<Model> model;
+  Eigen::VectorXd y;
+};
+std::vector<SpringScene> spring_scenes() {
+  std::vector<SpringScene> scenes;
+  scenes.push_back({"flag", make_model("cloth", {{"rows", 8}, {"columns", 8}}), {}});
+  scenes.push_back({"hanging chain", make_model("hanging-chain", {}), {}});
+  scenes.push_back({"compliant pendulum", make_model("pendulum-cartesian", {{"compliance", 1e-4}, {"theta0", 0.5}, {"omega0", 2.0}}), {}});
+  for (auto& scene : scenes) scene.y = scene.model->initial_state();
+  const Measured m = run_and_measure(*scenes[0].model, "implicit-euler-newton", StepControl::fixed(1.0 / 60), 0.1, 0.1);
+  EXPECT_EQ(m.result.status, Status::ok) << m.result.message;
+  scenes[0].y = m.result.y_stop;
+  return scenes;
+}
+
+// |S|_2 over the nodes at x: S_i the magnitudes of node i's gradient terms (tolerances.hpp's vbd_float32_step)
+double gradient_scale(const IncrementalPotential& G, const MassSpringView& view, const Eigen::VectorXd& x) {
+  const int d = view.dimension;
+  const Eigen::VectorXd e = x - G.inertial();
+  Eigen::VectorXd s = (e.cwiseAbs().cwiseProduct(G.mass()) / (G.h() * G.h()) + G.damping().cwiseAbs() * e.cwiseAbs() / G.h() + G.other_forces().cwiseAbs())
+                          .reshaped(d, view.nodes)
+                          .colwise()
+                          .sum()
+                          .transpose();
+  const auto at = [&](int node, const Eigen::Vector3d& anchor) {
+    Eigen::Vector3d p = anchor;
+    if (node >= 0) p.head(d) = x.segment(Eigen::Index{d} * node, d);
+    return p;
+  };
+  for (const Spring& spring : view.springs) {
+    const Eigen::Vector3d a = at(spring.a, spring.anchor), b = at(spring.b, spring.anchor);
+    const double term = spring.stiffness * (std::abs((b - a).norm() - spring.rest) + (b - a).norm() + a.norm() + b.norm());
+    for (const int node : {spring.a, spring.b})
+      if (node >= 0) s[node] += term;
+  }
+  return s.norm();
+}
+
+// one 1/60 s backward Euler step of a scene: its potential G, vbd's colours, and the float32 bound at x
+struct SpringStep {
+  static constexpr double h = 1.0 / 60;
+  Stats stats;
+  CountedSystem system;
+  const MassSpringView& view;
+  IncrementalPotential G;
+  std::vector<std::vector<int>> colours;
+  explicit SpringStep(const SpringScene& scene) : system(*scene.model, stats), view(*system.as<MassSpringView>()), G(system, view) {
+    G.start(0, scene.y, h);
+    Eigen::SparseMatrix<double> k, d;
+    force_jacobians(system, view, 0, scene.y, true, k, d);
+    colours = colour_nodes(k, view.dimension);
+  }
+  double bound(const Eigen::VectorXd& x) const {
+    return tolerance::vbd_float32_step(h, *std::min_element(view.mass.begin(), view.mass.end()), gradient_scale(G, view, x));
+  }
+};
+
+TEST(GpuVbd, WithEnoughSweepsItsStepIsBackwardEulersToFloat32RoundOff) {
+  // one 1/60 s step: the pass's sweeps from the inertial point, 64 at a time until they leave the nodes where they
+  // were (or 4096), against Newton on the same G to 1e-9 m/s: within the float32 bound, and closer than the start was
+  for (const SpringScene& scene : spring_scenes()) {
+    SpringStep step(scene);
+    const IncrementalPotential& G = step.G;
+    Eigen::VectorXd newton_x = G.inertial();
+    PotentialNewton newton(NewtonOnPotential{.velocity_tolerance = 1e-9});
+    ASSERT_EQ(newton.minimise(G, newton_x, step.stats), "") << scene.name;
+    gpu::GpuVbd gpu(context(), step.view, step.colours, G.damping());
+    Eigen::VectorXd x = G.inertial(), last;
+    gpu.start(G, x);
+    int sweeps = 0;
+    do {
+      last = x;
+      gpu.sweep(64);
+      sweeps += 64;
+      gpu.download(G, x);
+    } while (x != last && sweeps < 4096);
+    const double bound = step.bound(newton_x) + 1e-9 * SpringStep::h * std::sqrt(double(x.size()));
+    const double gap = (x - newton_x).norm(), start = (G.inertial() - newton_x).norm();
+    std::cout << scene.name << ": " << sweeps << " sweeps, |x - x*| = " << gap << " m (bound " << bound << ", from the inertial point " << start << ")\n";
+    EXPECT_LE(gap, bound) << scene.name;
+    EXPECT_LT(gap, start) << scene.name;
+  }
+}
+
+TEST(GpuVbd, EachSweepIsVbdsToFloat32RoundOff) {
+  // 1, 2 and 5 sweeps from the inertial point, the pass's against vbd's in float64: each sweep moves each node as
+  // vbd's does, its float32 round-off within vbd_float32_step of the node's (a Gauss-Seidel sweep of G does not
+  // amplify a perturbation in G's Hessian norm), so after k sweeps within k times it
+  for (const SpringScene& scene : spring_scenes()) {
+    const SpringStep step(scene);
+    const IncrementalPotential& G = step.G;
+    gpu::GpuVbd gpu(context(), step.view, step.colours, G.damping());
+    for (const int sweeps : {1, 2, 5}) {
+      Eigen::VectorXd cpu = G.inertial(), gpu_x = G.inertial(), decrease;
+      vbd_iterate(G, step.colours, cpu, {.sweeps = sweeps}, decrease);
+      gpu.start(G, gpu_x);
+      gpu.sweep(sweeps);
+      gpu.download(G, gpu_x);
+      const double bound = sweeps * std::max(step.bound(G.inertial()), step.bound(cpu));
+      const double gap = (gpu_x - cpu).norm();
+      std::cout << scene.name << ", " << sweeps << " sweeps: |pass - vbd| = " << gap << " m (bound " << bound << ", the sweeps moved the nodes "
+                << (cpu - G.inertial()).norm() << ")\n";
+      EXPECT_LE(gap, bound) << scene.name << ", " << sweeps << " sweeps";
+    }
+  }
+}
+
+TEST(GpuVbd, TheMethodsConvergedStepIsImplicitEulerNewtonsToFloat32RoundOff) {
+  // gpu-vbd-compute as `run` takes it (the adaptive start, the sweeps, the velocity from the positions), 1000 sweeps a
+  // step, one 1/60 s step, against implicit-euler-newton's; and what it counts (the colours, G's decrease)
+  for (const SpringScene& scene : spring_scenes()) {
+    const double h = 1.0 / 60;
+    StepControl control = StepControl::fixed(h);
+    control.iterations = 1000;
+    const auto step = [&](const char* method) { return make_integrator(method, control)->integrate(*scene.model, 0, scene.y, std::vector<double>{h}); };
+    const RunResult gpu = step("gpu-vbd-compute"), newton = step("implicit-euler-newton"), cpu = step("vbd");
+    ASSERT_EQ(gpu.status, Status::ok) << scene.name << ": " << gpu.message;
+    ASSERT_EQ(newton.status, Status::ok) << newton.message;
+    const SpringStep at(scene);
+    const Eigen::Index n = scene.y.size() / 2;
+    // Newton's own tolerance (1e-5 m/s) on each side of the comparison
+    const double bound = at.bound(newton.y_stop.head(n)) + 2 * NewtonOnPotential{}.velocity_tolerance * h * std::sqrt(double(n));
+    const double gap = (gpu.y_stop.head(n) - newton.y_stop.head(n)).norm();
+    std::cout << scene.name << ": gpu-vbd-compute " << gap << " m from implicit-euler-newton's step (bound " << bound << "), G's decrease "
+              << gpu.stats.potential_decrease << " J (vbd's " << cpu.stats.potential_decrease << ")\n";
+    EXPECT_LE(gap, bound) << scene.name;
+    EXPECT_LE((gpu.y_stop.tail(n) - newton.y_stop.tail(n)).norm(), bound / h) << scene.name << ": the velocity, (x1 - x0) / h";
+    EXPECT_EQ(gpu.stats.colours, cpu.stats.colours) << scene.name;
+    EXPECT_GT(gpu.stats.potential_decrease, 0) << scene.name;
+  }
+  // and only on a network of springs: the continuum cloth's elements are not in the pass
+  const auto continuum = make_model("cloth", {{"continuum", 1.0}, {"rows", 4}, {"columns", 4}});
+  EXPECT_FALSE(method_applies(*find_method("gpu-vbd-compute"), *continuum));
+  EXPECT_NE(method_requirement(*find_method("gpu-vbd-compute"), *continuum).find("springs alone"), std::string::npos);
 }
 
 }  // namespace
