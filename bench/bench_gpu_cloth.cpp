@@ -9,7 +9,7 @@
 // The model itself stops at 1024 a side (its sparse Jacobians' pattern), so the view is built here from the
 // model's defaults, the grid scaled. Ratios: the pass's time over the CPU step's at each size.
 //
-// And vbd's sweeps (the flag of springs at 32, 64 and 128 a side, a 1/60 s step from its start, 10 sweeps from the
+// And vbd's sweeps (the flag of springs at 32, 64, 128 and 256 a side, a 1/60 s step from its start, 10 sweeps from the
 // inertial point): gpu-vbd-compute's pass (the step's upload, the sweeps, the read-back, finished) against vbd's
 // sweeps on one CPU core, each after the same host part (the potential's start, not timed). Ratio: pass over CPU.
 #include "models/model.hpp"
@@ -147,7 +147,7 @@ void BM_vbd_sweeps(benchmark::State& state) {
 BENCHMARK(BM_cloth_grid_cpu<double>) SIZES;
 BENCHMARK(BM_cloth_grid_cpu<float>) SIZES;
 BENCHMARK(BM_gpu_cloth)->ArgsProduct({{128, 256, 1024, 2048, 4096}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_vbd_sweeps)->ArgsProduct({{32, 64, 128}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_vbd_sweeps)->ArgsProduct({{32, 64, 128, 256}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_cloth_transfer)->ArgsProduct({{128, 256, 1024}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
@@ -158,6 +158,6 @@ int main(int argc, char** argv) {
     pairs.emplace_back(fmt::format("BM_gpu_cloth/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
     pairs.emplace_back(fmt::format("BM_cloth_grid_cpu<float>/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
   }
-  for (const char* n : {"32", "64", "128"}) pairs.emplace_back(fmt::format("BM_vbd_sweeps/{}/1/real_time", n), fmt::format("BM_vbd_sweeps/{}/0/real_time", n));
+  for (const char* n : {"32", "64", "128", "256"}) pairs.emplace_back(fmt::format("BM_vbd_sweeps/{}/1/real_time", n), fmt::format("BM_vbd_sweeps/{}/0/real_time", n));
   return stepwise::bench::run_with_ratios(argc, argv, pairs);
 }
