@@ -37,6 +37,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <thread>
 #include <tuple>
 
 namespace {
@@ -282,6 +283,9 @@ void frame_by(benchmark::State& state, const char* method, int threads, bool con
 }
 void BM_frame_vbd(benchmark::State& state) { frame_by(state, "vbd", 1, false); }
 void BM_frame_vbd_2_threads(benchmark::State& state) { frame_by(state, "vbd", 2, false); }
+// on 4, 8, ... threads, up to the machine's cores (none on two; a lent device's 16): range(1) the threads
+void BM_frame_vbd_on(benchmark::State& state) { frame_by(state, "vbd", static_cast<int>(state.range(1)), false); }
+int cores() { return static_cast<int>(std::thread::hardware_concurrency()); }
 void BM_frame_vbd_chebyshev(benchmark::State& state) { frame_by(state, "vbd-chebyshev", 1, false); }
 void BM_frame_xpbd(benchmark::State& state) { frame_by(state, "xpbd", 1, false); }
 void BM_continuum_frame_vbd(benchmark::State& state) { frame_by(state, "vbd", 1, true); }
@@ -351,6 +355,14 @@ int main(int argc, char** argv) {
   Dl_info blas{};
   if (void* dgemm = dlsym(RTLD_DEFAULT, "dgemm_"); dgemm && dladdr(dgemm, &blas))
     std::printf("BLAS (dgemm_ from): %s\n", std::filesystem::weakly_canonical(blas.dli_fname).c_str());
+  if (cores() >= 4)
+    benchmark::RegisterBenchmark("BM_frame_vbd_on", BM_frame_vbd_on)
+        ->Apply([](benchmark::internal::Benchmark* b) {
+          for (const int n : {32, 64})
+            for (int threads = 4; threads <= cores(); threads *= 2) b->Args({n, threads});
+        })
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
   std::vector<std::pair<std::string, std::string>> pairs;
   for (const char* n : {"32", "64", "128"}) {
     const std::string arg = std::string("/") + n;
@@ -380,6 +392,7 @@ int main(int argc, char** argv) {
     pairs.emplace_back("BM_frame_vbd" + real, "BM_frame_newton" + arg);
     pairs.emplace_back("BM_continuum_frame_vbd" + real, "BM_continuum_frame_newton" + arg);
     pairs.emplace_back("BM_frame_vbd" + real, "BM_frame_vbd_2_threads" + real);
+    for (int threads = 4; threads <= cores(); threads *= 2) pairs.emplace_back("BM_frame_vbd" + real, "BM_frame_vbd_on" + arg + "/" + std::to_string(threads) + "/real_time");
     pairs.emplace_back("BM_continuum_frame_vbd" + real, "BM_continuum_frame_vbd_2_threads" + real);
   }
   return stepwise::bench::run_with_ratios(argc, argv, pairs);
