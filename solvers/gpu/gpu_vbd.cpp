@@ -124,7 +124,7 @@ std::string sweep_program() {
 }
 
 // the network's springs seen from each node (two vec4s a spring end), and each node's range of them
-std::vector<float> springs_by_node(const MassSpringView& view, std::vector<int>& first) {
+std::vector<float> node_springs(const MassSpringView& view, std::vector<int>& first) {
   std::vector<std::vector<float>> at(static_cast<size_t>(view.nodes));
   for (const Spring& s : view.springs)
     for (const auto& [node, other] : {std::pair{s.b, s.a}, std::pair{s.a, s.b}}) {
@@ -158,7 +158,7 @@ GpuVbd::GpuVbd(const Context& context, const MassSpringView& network, const std:
   context.make_current();
   if (std::string problem = gl::compute_problem(gl_); !problem.empty()) throw GlError(problem);
   std::vector<int> spring_first;
-  const std::vector<float> by_node = springs_by_node(network, spring_first);
+  const std::vector<float> by_node = node_springs(network, spring_first);
   std::vector<int> node_order;
   for (const auto& colour : colours_) {
     colour_first_.push_back(static_cast<int>(node_order.size()));
@@ -194,9 +194,9 @@ GpuVbd::GpuVbd(const Context& context, const MassSpringView& network, const std:
   if (!by_node.empty()) gl_.NamedBufferSubData(buffers_[springs], 0, static_cast<GLsizeiptr>(by_node.size() * sizeof(float)), by_node.data());
   gl_.NamedBufferSubData(buffers_[order], 0, static_cast<GLsizeiptr>(node_order.size() * sizeof(int)), node_order.data());
   program_ = gl::link_compute_program(gl_, sweep_program().c_str(), "vbd sweep");
-  first_ = gl_.GetUniformLocation(program_, "first");
-  count_ = gl_.GetUniformLocation(program_, "count");
-  h_ = gl_.GetUniformLocation(program_, "h");
+  first_at_ = gl_.GetUniformLocation(program_, "first");
+  count_at_ = gl_.GetUniformLocation(program_, "count");
+  h_at_ = gl_.GetUniformLocation(program_, "h");
   check_gl(gl_, "the vbd sweep's buffers and program");
 }
 
@@ -240,7 +240,7 @@ void GpuVbd::start(const IncrementalPotential& potential, const Eigen::VectorXd&
   upload(displacements, e_);
   if (!blocks_.empty()) upload(blocks, blocks_);
   gl_.UseProgram(program_);
-  gl_.Uniform1f(h_, static_cast<float>(potential.h()));
+  gl_.Uniform1f(h_at_, static_cast<float>(potential.h()));
   check_gl(gl_, "the vbd sweep's step (glNamedBufferSubData)");
 }
 
@@ -251,8 +251,8 @@ void GpuVbd::sweep(int count) {
   for (int s = 0; s < count; ++s)
     for (size_t c = 0; c < colours_.size(); ++c) {
       const auto nodes = static_cast<GLint>(colours_[c].size());
-      gl_.Uniform1i(first_, colour_first_[c]);
-      gl_.Uniform1i(count_, nodes);
+      gl_.Uniform1i(first_at_, colour_first_[c]);
+      gl_.Uniform1i(count_at_, nodes);
       gl_.DispatchCompute(static_cast<GLuint>((nodes + group - 1) / group), 1, 1);
       // the next colour reads what this one moved
       gl_.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);

@@ -55,7 +55,7 @@ class GpuVbd {
   std::vector<float> blocks_, xb_, f0_, e_;     // the per-step uploads
   unsigned buffers_[7] = {0, 0, 0, 0, 0, 0, 0};  // e, xb, f0, ranges, springs, blocks, order
   unsigned program_ = 0;
-  int first_ = -1, count_ = -1, h_ = -1;        // uniform locations
+  int first_at_ = -1, count_at_ = -1, h_at_ = -1;  // the uniforms' locations
 };
 
 // "" or why `system` cannot be swept by gpu-vbd-compute on the GPU methods' device: no spring network, no compute
