@@ -13,7 +13,7 @@ bool solves_newton_systems(const Method& method);
 // nanoseconds of one run of `method` with `control` over t_end on a state of n entries: steps (t_end / dt,
 // or for an order-p method at rtol about 10 rtol^(-1/(p+1)) per time scale) times a step's cost (a fixed part,
 // and ~10 ns per entry and stage, the stages ~ the order; five times that for an implicit method's Newton
-// iterations; ~10 us more for a GPU pass's round trip through OpenGL)
+// iterations; ~15 ns more for SUNDIALS' vector operations; ~10 us more for a GPU pass's round trip through OpenGL)
 double expected_run_ns(const Method& method, const StepControl& control, double t_end, double time_scale, double n);
 
 // how much slower this machine runs the cost model's work than the one its seconds per unit were measured on
