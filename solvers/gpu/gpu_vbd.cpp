@@ -176,7 +176,9 @@ GpuVbd::GpuVbd(const Context& context, const MassSpringView& network, const std:
         block_node_.push_back(j);
     block_first_.push_back(static_cast<int>(block_node_.size()));
   }
+  // each block's column node in its c0.w, once; its values each step (fill_damping_blocks)
   blocks_.assign(12 * block_node_.size(), 0.0f);
+  for (size_t slot = 0; slot < block_node_.size(); ++slot) std::memcpy(&blocks_[12 * slot + 3], &block_node_[slot], sizeof(float));
   std::vector<int> range(4 * n);
   for (size_t i = 0; i < n; ++i) range[4 * i] = spring_first[i], range[4 * i + 1] = spring_first[i + 1], range[4 * i + 2] = block_first_[i], range[4 * i + 3] = block_first_[i + 1];
 
@@ -207,7 +209,7 @@ GpuVbd::~GpuVbd() {
 }
 
 void GpuVbd::fill_damping_blocks(const Eigen::SparseMatrix<double>& d0) {
-  std::fill(blocks_.begin(), blocks_.end(), 0.0f);
+  // D0's pattern is fixed, so each step writes the same entries (in the plane, the z row and column stay zero)
   for (int i = 0; i < nodes_; ++i) {
     const auto from = block_node_.begin() + block_first_[static_cast<size_t>(i)], to = block_node_.begin() + block_first_[static_cast<size_t>(i) + 1];
     for (int c = 0; c < dimension_; ++c)
@@ -219,7 +221,6 @@ void GpuVbd::fill_damping_blocks(const Eigen::SparseMatrix<double>& d0) {
         blocks_[12 * slot + 4 * static_cast<size_t>(r) + static_cast<size_t>(c)] = static_cast<float>(it.value());
       }
   }
-  for (size_t slot = 0; slot < block_node_.size(); ++slot) std::memcpy(&blocks_[12 * slot + 3], &block_node_[slot], sizeof(float));
 }
 
 void GpuVbd::start(const IncrementalPotential& potential, const Eigen::VectorXd& x) {

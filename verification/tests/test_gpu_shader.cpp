@@ -444,7 +444,8 @@ TEST(GpuVbd, WithEnoughSweepsItsStepIsBackwardEulersToFloat32RoundOff) {
     SpringStep step(scene);
     const IncrementalPotential& G = step.G;
     Eigen::VectorXd newton_x = G.inertial();
-    PotentialNewton newton(NewtonOnPotential{.velocity_tolerance = 1e-9});
+    const NewtonOnPotential converged{.velocity_tolerance = 1e-9};
+    PotentialNewton newton(converged);
     ASSERT_EQ(newton.minimise(G, newton_x, step.stats), "") << scene.name;
     gpu::GpuVbd gpu(context(), step.view, step.colours, G.damping());
     Eigen::VectorXd x = G.inertial(), last;
@@ -456,7 +457,7 @@ TEST(GpuVbd, WithEnoughSweepsItsStepIsBackwardEulersToFloat32RoundOff) {
       sweeps += 64;
       gpu.download(G, x);
     } while (x != last && sweeps < 4096);
-    const double bound = step.bound(newton_x) + 1e-9 * SpringStep::h * std::sqrt(double(x.size()));
+    const double bound = step.bound(newton_x) + converged.velocity_tolerance * SpringStep::h * std::sqrt(double(x.size()));
     const double gap = (x - newton_x).norm(), start = (G.inertial() - newton_x).norm();
     std::cout << scene.name << ": " << sweeps << " sweeps, |x - x*| = " << gap << " m (bound " << bound << ", from the inertial point " << start << ")\n";
     EXPECT_LE(gap, bound) << scene.name;
