@@ -61,6 +61,18 @@ int list_scenes() {
                  fmt::join(scene.equations->variables, ", "));
       continue;
     }
+    if (scene.pde) {
+      // a user's PDE: its equations as written, its grid, and the names --set takes
+      std::string system;
+      for (const auto& f : scene.pde->equations) system += fmt::format("{}{}_t = {}", system.empty() ? "" : ", ", f.name, f.text);
+      if (system.size() > 100) system = system.substr(0, 97) + "...";
+      std::vector<std::string> parameters;
+      for (const auto& [key, value] : scene.pde->parameters) parameters.push_back(key);
+      parameters.insert(parameters.end(), {"points", "order"});
+      fmt::print("{:<24} {:<22} a PDE written in the scene: {}\n", file.filename().string(), scene.model, system);
+      fmt::print("{:<24} parameters: {}\n", "", fmt::join(parameters, ", "));
+      continue;
+    }
     const auto* model = stepwise::find_model(scene.model);
     std::string keys;
     if (model)

@@ -1,6 +1,7 @@
 #include "run_command.hpp"
 
 #include "models/equations.hpp"
+#include "models/pde.hpp"
 #include "run/atomic_write.hpp"
 #include "run/distributed_run.hpp"
 #include "run/interrupt.hpp"
@@ -49,6 +50,10 @@ int run_command(const RunOptions& options) {
       check_writable_directory(options.out);
       check_output_fits(options.out, p);
       for (const char* name : {"trajectory.csv", "summary.json"}) check_replaceable_file(std::filesystem::path(options.out) / name);
+      if (const PdeGrid* grid = pde_grid(*p.model)) {
+        check_replaceable_file(std::filesystem::path(options.out) / "grid.csv");
+        for (const auto& field : grid->fields) check_replaceable_file(std::filesystem::path(options.out) / fmt::format("field_{}.csv", field));
+      }
       ensure_writable_directory(options.out);
       interrupt::remove_stale(options.out);
       outputs = std::make_unique<RunOutputs>(options.out, p);
@@ -81,6 +86,7 @@ int run_command(const RunOptions& options) {
   } else {
     // the rows go to the trajectory's file as they come
     p.control.sink = [&outputs](double t, const Eigen::VectorXd& sample) { return outputs->sample(t, sample); };
+    if (outputs->whole_states()) p.control.observe = [](const Eigen::VectorXd& y) { return y; };
     m = run_and_measure(*p.model, p.method, p.control, p.t_end, p.output_dt);
   }
   try {

@@ -546,13 +546,21 @@ py::dict run(const std::string& scene, const std::optional<std::string>& method,
   std::vector<std::vector<Cell>> table;
   std::string ignored;
   table.push_back(rows.row(0.0, p.model->summary(p.model->initial_state()), ignored));
+  // a PDE's fields, whole at every output time (its rows are their summary)
+  const PdeGrid* grid = pde_grid(*p.model);
+  std::vector<Eigen::VectorXd> states;
+  if (grid) {
+    states.push_back(p.model->initial_state());
+    p.control.observe = [](const Eigen::VectorXd& y) { return y; };
+  }
   Measured m;
   {
     py::gil_scoped_release released;
     p.control.sink = [&, check = SignalCheck()](double t, const Eigen::VectorXd& sample) mutable {
       check();
       std::string problem;
-      table.push_back(rows.row(t, sample, problem));
+      if (grid) states.push_back(sample);
+      table.push_back(rows.row(t, grid ? p.model->summary(sample) : sample, problem));
       return problem;
     };
     m = run_and_measure(*p.model, p.method, p.control, p.t_end, p.output_dt);
@@ -567,6 +575,22 @@ py::dict run(const std::string& scene, const std::optional<std::string>& method,
   d["columns"] = rows.columns();
   d["values"] = values;
   d["summary"] = to_python(summary_json(p, m, rows.constraint_drift()));
+  if (grid) {
+    // each field as (time x nodes), or (time x ny x nx) in 2-D; the nodes' coordinates beside
+    py::dict fields;
+    const auto times = static_cast<py::ssize_t>(states.size());
+    const py::ssize_t nx = grid->nx, ny = grid->ny;
+    for (size_t f = 0; f < grid->fields.size(); ++f) {
+      py::array_t<double> field(ny > 1 ? std::vector<py::ssize_t>{times, ny, nx} : std::vector<py::ssize_t>{times, nx});
+      double* out = field.mutable_data();
+      for (py::ssize_t k = 0; k < times; ++k)
+        std::copy_n(states[static_cast<size_t>(k)].data() + static_cast<Eigen::Index>(f) * grid->nodes(), grid->nodes(), out + k * grid->nodes());
+      fields[py::str(grid->fields[f])] = field;
+    }
+    d["fields"] = fields;
+    d["x"] = vector_array(grid->x);
+    d["y"] = vector_array(grid->y);
+  }
   return d;
 }
 
@@ -614,7 +638,7 @@ py::dict advise_scene(const std::string& scene, double error, double budget, con
 // the studies that take a scene of the user's (`stepwise study NAME --scene FILE`)
 py::dict study_scene(const std::string& name, const std::string& scene, const std::map<std::string, double>& sets, bool quick, int threads) {
   const Study* study = find_study(name);
-  if (!study) throw py::value_error(fmt::format("study: unknown study '{}' (one of {})", name, study_names()));
+  if (!study) throw py::value_error(fmt::format("study: unknown study '{}' (the studies: `stepwise study --list`)", name));
   const RunOptions o = run_options(scene, sets);
   StudyOutput out;
   {

@@ -222,7 +222,7 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
   const Section drawn = drawn_section(name);
   const bool pictures = drawn != nullptr;
   if (!study && !pictures) {
-    if (writer) print_error("study", fmt::format("unknown study '{}' (one of {})", name, study_names()));
+    if (writer) print_error("study", fmt::format("unknown study '{}' (the studies: `stepwise study --list`)", name));
     return 2;
   }
   // the user's scene, checked as `stepwise run` checks it, before anything runs

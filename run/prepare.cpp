@@ -16,6 +16,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <tuple>
@@ -108,7 +109,7 @@ std::string where_dt(const RunOptions& o, const Scene& s) { return o.dt ? "--dt"
 
 // the options' values on their own: each number in range, the names known, the step control a named method takes,
 // and the budgets of steps and output rows. All before a model is made (a user's large system takes seconds to)
-void check_options(const RunOptions& o, PreparedRun& p) {
+void check_options(const RunOptions& o, PreparedRun& p, std::exception_ptr& step_refused) {
   const Scene& s = p.scene;
   if (o.dt && (o.rtol || o.atol)) throw InputError("--dt: give either --dt or --rtol/--atol, not both");
   require_positive(o.dt, "--dt");
@@ -169,8 +170,17 @@ void check_options(const RunOptions& o, PreparedRun& p) {
     if (p.method != "vbd-chebyshev") throw InputError(fmt::format("--rho: {} has no Chebyshev acceleration (vbd-chebyshev has)", method_named));
     p.control.chebyshev_rho = *o.rho;
   }
-  // the step: the method's control, told now wherever the method is (a method chosen later is adaptive)
-  if (!p.method.empty()) p.control = step_control(o, s, *find_method(p.method), p.control);
+  // the step: the method's control, told now wherever the method is (a method chosen later is adaptive). A
+  // method that needs a capability of the model (vbd: a mass-spring system) may not apply to it at all: that
+  // reason comes first, so a step it lacks is said once the model is made (choose_method)
+  if (!p.method.empty()) {
+    try {
+      p.control = step_control(o, s, *method, p.control);
+    } catch (const InputError&) {
+      if (!method->needs.type) throw;
+      step_refused = std::current_exception();
+    }
+  }
   const double dt = p.control.dt.value_or(0);
   if (dt > p.t_end) throw InputError(fmt::format("{}: dt = {} is larger than t_end = {}", where_dt(o, s), dt, p.t_end));
   const auto where_t_end = [&] { return o.t_end ? std::string("--t-end") : s.t_end ? s.where("run.t_end") : std::string("t_end"); };
@@ -209,7 +219,7 @@ void check_output_before_model(const RunOptions& o, const PreparedRun& p, const 
 // the model, from the scene's equations or the table of built-in models, with the values applied
 void make_model(const RunOptions& o, PreparedRun& p, Values v) {
   const Scene& s = p.scene;
-  const ModelInfo* info = s.equations ? nullptr : find_model(s.model);
+  const ModelInfo* info = s.equations || s.pde ? nullptr : find_model(s.model);
   // --constraint baumgarte: the constrained models' own flag (models/pendulum_cartesian.hpp, models/chain.hpp)
   if (o.constraint == "baumgarte") {
     if (!info || std::none_of(info->params.begin(), info->params.end(), [](const ParamSpec& q) { return q.key == "baumgarte"; }))
@@ -217,12 +227,17 @@ void make_model(const RunOptions& o, PreparedRun& p, Values v) {
     v.values["baumgarte"] = 1;
     v.set_origin["baumgarte"] = "--constraint baumgarte";
   }
-  if (!info && !s.equations) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
+  if (!info && !s.equations && !s.pde) throw InputError(fmt::format("{}: unknown model '{}' (see `stepwise scenes`)", s.where("model"), s.model));
   if (s.mesh && (!info || !info->make_with_mesh)) throw InputError(fmt::format("{}: model {} takes no mesh", s.where("mesh"), s.model));
   if (s.pins && (!info || !info->make_with_pins)) throw InputError(fmt::format("{}: model {} takes no pins", s.where("pins"), s.model));
   if (info) check_output_before_model(o, p, *info, v.values);
   try {
-    if (s.equations) {
+    if (s.pde) {
+      // the user's PDE: its parameters by name, and the grid's points and order, --set on any
+      p.model = make_pde(*s.pde, v.values);
+      p.params = s.pde->parameters;
+      for (const auto& [key, value] : v.values) p.params[key] = value;
+    } else if (s.equations) {
       // the user's equations: parameters and initial values by name, --set on either (models/equations.hpp)
       p.model = make_equations(*s.equations, v.values);
       p.params = s.equations->parameters;
@@ -265,7 +280,7 @@ void check_initial_state(const PreparedRun& p, const Values& v) {
 
 // the method (named, or chosen for the model: default_method) and its step control: the command line wins over
 // the scene. Then what the method asks of the model: memory, time, what it applies to, its device
-void choose_method(const RunOptions& o, PreparedRun& p) {
+void choose_method(const RunOptions& o, PreparedRun& p, const std::exception_ptr& step_refused) {
   const Scene& s = p.scene;
   if (p.method.empty()) {
     std::tie(p.method, p.method_choice) = default_method(p.model.get(), p.t_end, false);
@@ -285,6 +300,7 @@ void choose_method(const RunOptions& o, PreparedRun& p) {
                                  2.0 / 3.0 * n * n * n, sparse_hint));
   if (!method_applies(*method, *p.model))
     throw InputError(fmt::format("{}: {} (model {})", where_method(o, s), method_requirement(*method, *p.model), s.model));
+  if (step_refused) std::rethrow_exception(step_refused);
   // a method with a device of its own (a GPU method: its grid must be a texture the device renders to) is asked
   if (method->device_problem)
     if (const std::string problem = method->device_problem(*p.model); !problem.empty())
@@ -317,11 +333,12 @@ void warn_past_stability(const RunOptions& o, const PreparedRun& p) {
 PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   PreparedRun p;
   p.scene = std::move(scene);
-  check_options(o, p);
+  std::exception_ptr step_refused;
+  check_options(o, p, step_refused);
   const Values values = overridden(o, p.scene);
   make_model(o, p, values);
   check_initial_state(p, values);
-  choose_method(o, p);
+  choose_method(o, p, step_refused);
   if (o.constraint) {
     // an ODE method kept on a constrained scene's constraints; the constrained methods keep them themselves
     if (const auto* c = p.model->as<DistanceConstraints>(); !c || c->rigid().constraints.empty())
@@ -335,7 +352,8 @@ PreparedRun prepare_run(const RunOptions& o, Scene scene) {
   warn_past_stability(o, p);
   // the trajectory: the output step on the step grid of a fixed-step run (check_options), rows times columns
   if (p.control.dt) p.output_dt = std::max(1.0, std::round(p.output_dt / *p.control.dt)) * *p.control.dt;
-  const double columns = static_cast<double>(p.model->summary_names().empty() ? p.model->state_names().size() : p.model->summary_names().size());
+  double columns = static_cast<double>(p.model->summary_names().empty() ? p.model->state_names().size() : p.model->summary_names().size());
+  if (const PdeGrid* grid = pde_grid(*p.model)) columns += static_cast<double>(grid->nodes()) * static_cast<double>(grid->fields.size());  // field_NAME.csv
   p.output_bytes = trajectory_bytes(std::floor(p.t_end / p.output_dt), columns);
   return p;
 }

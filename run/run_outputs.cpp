@@ -2,6 +2,7 @@
 
 #include "run/csv.hpp"
 #include "models/equations.hpp"
+#include "models/pde.hpp"
 #include "solvers/capabilities/distance_constraints.hpp"
 #include "solvers/method_table.hpp"
 
@@ -63,6 +64,15 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
   j["final_state"] = nlohmann::json::object();
   for (size_t i = 0; i < names.size(); ++i) j["final_state"][names[i]] = final_sample[static_cast<Eigen::Index>(i)];
   j["error"] = m.error ? nlohmann::json(*m.error) : nlohmann::json(nullptr);
+  // a PDE against its [exact]: each field's max and root-mean-square error over the grid
+  if (const PdeGrid* grid = pde_grid(*p.model); grid && p.model->has_exact() && r.y_stop.allFinite()) {
+    const Eigen::VectorXd error = r.y_stop - p.model->exact(r.t_stop);
+    for (size_t f = 0; f < grid->fields.size(); ++f) {
+      const auto e = error.segment(static_cast<Eigen::Index>(f) * grid->nodes(), grid->nodes());
+      j["error_max"][grid->fields[f]] = e.cwiseAbs().maxCoeff();
+      j["error_l2"][grid->fields[f]] = std::sqrt(e.squaredNorm() / grid->nodes());
+    }
+  }
   if (const auto e0 = p.model->energy(p.model->initial_state())) {
     j["energy_initial"] = *e0;
     j["energy_final"] = *p.model->energy(r.y_stop);
@@ -148,12 +158,31 @@ RunOutputs::RunOutputs(const std::filesystem::path& out, const PreparedRun& p) :
   std::vector<Cell> header;
   for (const auto& name : rows_.columns()) header.emplace_back(name);
   trajectory_.write(csv_row(header));
-  sample(0.0, p.model->summary(p.model->initial_state()));
+  if (const PdeGrid* grid = pde_grid(*p.model)) {
+    std::vector<Cell> nodes{std::string("t")};
+    for (int n = 0; n < grid->nodes(); ++n) nodes.emplace_back(fmt::format("node{}", n));
+    for (const auto& field : grid->fields) {
+      fields_.push_back(std::make_unique<AtomicFile>(out / fmt::format("field_{}.csv", field)));
+      fields_.back()->write(csv_row(nodes));
+    }
+  }
+  const Eigen::VectorXd y0 = p.model->initial_state();
+  sample(0.0, whole_states() ? y0 : p.model->summary(y0));
 }
 
 std::string RunOutputs::sample(double t, const Eigen::VectorXd& sample) {
   std::string problem;
-  trajectory_.write(csv_row(rows_.row(t, sample, problem)));
+  if (whole_states()) {
+    const auto nodes = static_cast<Eigen::Index>(sample.size() / static_cast<Eigen::Index>(fields_.size()));
+    for (size_t f = 0; f < fields_.size(); ++f) {
+      std::vector<Cell> row{t};
+      for (const double value : sample.segment(static_cast<Eigen::Index>(f) * nodes, nodes)) row.emplace_back(value);
+      fields_[f]->write(csv_row(row));
+    }
+    trajectory_.write(csv_row(rows_.row(t, p_.model->summary(sample), problem)));
+  } else {
+    trajectory_.write(csv_row(rows_.row(t, sample, problem)));
+  }
   last_t_ = t;
   return problem;
 }
@@ -161,13 +190,19 @@ std::string RunOutputs::sample(double t, const Eigen::VectorXd& sample) {
 void RunOutputs::finish(const Measured& m) {
   // the states before and after the events after the last output (a terminal event's)
   for (size_t k = m.result.events_written; k < m.result.events.size(); ++k)
-    if (const EventRecord& e = m.result.events[k]; e.before.size() > 0)
+    if (const EventRecord& e = m.result.events[k]; opens_instant(m.result.events, k))
       for (const Eigen::VectorXd* state : {&e.before, &e.after}) (void)sample(e.t, p_.model->summary(*state));
   // a run that stopped between output times ends its trajectory where it stopped
   if (const auto last = rows_.stop_row(m, last_t_)) trajectory_.write(csv_row(*last));
   std::error_code ignored;
   std::filesystem::remove(out_ / "summary.json", ignored);  // the manifest goes first and comes back last
   trajectory_.commit();
+  for (const auto& field : fields_) field->commit();
+  if (const PdeGrid* grid = pde_grid(*p_.model)) {
+    std::string nodes = csv_row({std::string("x"), std::string("y")});
+    for (int n = 0; n < grid->nodes(); ++n) nodes += csv_row({grid->x[static_cast<size_t>(n)], grid->y[static_cast<size_t>(n)]});
+    write_file_atomic(out_ / "grid.csv", nodes);
+  }
   std::optional<double> drift = rows_.constraint_drift();
   if (const auto* c = p_.model->as<DistanceConstraints>(); drift && m.result.y_stop.allFinite()) drift = std::max(*drift, c->drift(m.result.y_stop.data()));
   write_file_atomic(out_ / "summary.json", summary_text(p_, m, drift));

@@ -15,6 +15,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -54,9 +55,13 @@ std::string summary_text(const PreparedRun& p, const Measured& m, std::optional<
 
 class RunOutputs {
  public:
-  // the trajectory's temporary file opened in `out`, its header and first row written; std::runtime_error
-  // naming the file when it cannot be
+  // the trajectory's temporary file opened in `out`, its header and first row written (for a PDE, its fields' files
+  // too: field_NAME.csv, a row per output time of t and the field at every node, row-major; grid.csv, each node's
+  // x and y, written at the end); std::runtime_error naming the file when it cannot be
   RunOutputs(const std::filesystem::path& out, const PreparedRun& p);
+  // whether the sink takes the whole state (a PDE's fields are written whole), not the model's summary of it: the
+  // step control's observe is then the identity
+  bool whole_states() const { return !fields_.empty(); }
   // a step control's sink: one row; non-empty (the run ends diverged) when a value in it is not finite
   std::string sample(double t, const Eigen::VectorXd& sample);
   // the last row of a run that stopped early, then the trajectory and the summary put in place
@@ -67,6 +72,7 @@ class RunOutputs {
   const PreparedRun& p_;
   AtomicFile trajectory_;
   TrajectoryRows rows_;
+  std::vector<std::unique_ptr<AtomicFile>> fields_;  // a PDE's field_NAME.csv, one a field
   double last_t_ = 0;  // the last row's time
 };
 

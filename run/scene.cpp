@@ -1,5 +1,7 @@
 #include "scene.hpp"
 
+#include "scene_toml.hpp"
+
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
@@ -19,15 +21,6 @@
 
 namespace stepwise {
 
-std::string Scene::where(const std::string& key) const {
-  const auto it = lines.find(key);
-  return it == lines.end() ? fmt::format("{}: {}", file, key) : fmt::format("{}:{}: {}", file, it->second, key);
-}
-
-namespace {
-
-constexpr std::uintmax_t max_scene_bytes = 16u << 20;  // a large mesh fits in a few MiB of TOML
-
 int line_of(const toml::node& node) { return static_cast<int>(node.source().begin.line); }
 
 double number(const toml::node& node, const Scene& scene, const std::string& key) {
@@ -38,6 +31,23 @@ double number(const toml::node& node, const Scene& scene, const std::string& key
   if (!std::isfinite(*value)) throw InputError(fmt::format("{}:{}: {}: not a finite number ({})", scene.file, line_of(node), key, *value));
   return *value;
 }
+
+// the text after the opening quote or quotes
+Formula formula_of(const toml::node& node, const Scene& scene, const std::string& key, const std::string& name) {
+  const auto* text = node.as_string();
+  if (!text) throw InputError(fmt::format("{}:{}: {}: expected a formula in quotes", scene.file, line_of(node), key));
+  return Formula{name, text->get(), scene.file, key, line_of(node), static_cast<int>(node.source().begin.column) + 1};
+}
+
+std::string Scene::where(const std::string& key) const {
+  const auto it = lines.find(key);
+  return it == lines.end() ? fmt::format("{}: {}", file, key) : fmt::format("{}:{}: {}", file, it->second, key);
+}
+
+namespace {
+
+constexpr std::uintmax_t max_scene_bytes = 16u << 20;  // a large mesh fits in a few MiB of TOML
+
 
 // an array of rows of N: finite numbers, or (T integral) non-negative whole numbers (`what` they are), each
 // error naming the row and its line
@@ -172,12 +182,6 @@ bool equations_key(std::string_view key) {
   return std::find(equations_keys.begin(), equations_keys.end(), top) != equations_keys.end();
 }
 
-// a string value: its text, line and the file column of its first character (after the opening quote or quotes)
-Formula formula_of(const toml::node& node, const Scene& scene, const std::string& key, const std::string& name) {
-  const auto* text = node.as_string();
-  if (!text) throw InputError(fmt::format("{}:{}: {}: expected a formula in quotes", scene.file, line_of(node), key));
-  return Formula{name, text->get(), scene.file, key, line_of(node), static_cast<int>(node.source().begin.column) + 1};
-}
 
 // an [events.NAME] table: InputError naming the file, line and key for an unknown key, a direction not one of
 // the three, a missing `when`, a value of the wrong kind
@@ -330,9 +334,14 @@ Scene load_scene_text(std::string_view text, const std::string& file) {
     throw InputError(fmt::format("{}:{}:{}: malformed TOML: {}", file, e.source().begin.line, e.source().begin.column, e.description()));
   }
 
+  // a PDE scene's [initial], [equations] and [exact] hold formulas of its fields: which model it is, first
+  const auto* model = root.get("model");
+  const bool pde = model && model->as_string() && model->as_string()->get() == "pde";
   for (auto&& [k, node] : root) {
     const std::string key(k.str());
-    if (key == "model") {
+    if (pde && pde_key(key)) {
+      pde_entry(key, node, scene);
+    } else if (key == "model") {
       const auto* s = node.as_string();
       if (!s) throw InputError(fmt::format("{}:{}: model: expected a string", file, line_of(node)));
       scene.model = s->get();
@@ -371,11 +380,14 @@ Scene load_scene_text(std::string_view text, const std::string& file) {
       equations_entry(key, node, scene);
     } else {
       throw InputError(fmt::format("{}:{}: {}: unknown key (a scene has model, [parameters], [run], [mesh], [pins], [render]; an equations "
-                                   "scene variables, [initial], [equations], [exact], energy)", file, line_of(node), key));
+                                   "scene variables, [initial], [equations], [exact], energy; a pde scene fields, [grid], [boundary.FIELD], "
+                                   "[initial], [equations], [exact])", file, line_of(node), key));
     }
   }
   if (scene.model.empty()) throw InputError(fmt::format("{}: model: missing", file));
-  if (scene.model == "equations") {
+  if (pde) {
+    finish_pde(scene);
+  } else if (scene.model == "equations") {
     if (!scene.equations || scene.equations->variables_where.empty())
       throw InputError(fmt::format("{}: variables: missing (an equations scene names its state: variables = [\"x\", \"v\"])", file));
     scene.equations->parameters = scene.parameters;

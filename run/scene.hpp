@@ -13,10 +13,12 @@
 //   [render]       # how `stepwise render` sees it: eye, target, up ([x, y, z], m), fov (degrees), light
 //   eye = [0, -3, 2]   # (a direction towards it), color and background ([r, g, b] in 0-1), pool_depth (m)
 //   variables = ["x", "v"]  [initial]  [equations]  [exact]  energy = "..."   # model = "equations" only
+//   fields = ["u"]  [grid]  [boundary.u]  [initial]  [equations]  [exact]      # model = "pde" only (run/pde_scene.cpp)
 #pragma once
 
 #include <stepwise/models/equations.hpp>
 #include <stepwise/models/model.hpp>
+#include <stepwise/models/pde.hpp>
 #include <stepwise/models/triangle_mesh.hpp>
 #include <stepwise/render/camera.hpp>
 
@@ -47,6 +49,9 @@ struct Scene {
   // model = "equations": variables, [initial], [equations], [exact], energy (models/equations.hpp), with
   // [parameters] as spec.parameters too
   std::optional<EquationsSpec> equations;
+  // model = "pde": fields, [grid], [boundary.FIELD], [initial], [equations], [exact] (models/pde.hpp), with
+  // [parameters] as spec.parameters too
+  std::optional<PdeSpec> pde;
 
   // "file:line: key" where the key was written, "file: key" otherwise
   std::string where(const std::string& key) const;

@@ -56,33 +56,44 @@ std::optional<SurfaceCrossing> first_surface_crossing(std::span<const Event> eve
   return first;
 }
 
+// where a root search ends: anywhere within its tolerance of the root (`near`), or on the side the function came
+// from, f_lo's sign or zero (`left`: a left root, DifferentialEquations.jl's default LeftRootFind), so that the state
+// there has not crossed yet and the crossing an event's action starts from is never a new one
+enum class RootSide { near, left };
+
 // the root in [s_lo, s_hi] of a function of the step's fraction whose values at the ends differ in sign, by
 // the Illinois variant of regula falsi, each value on the re-stepped state; a re-step that fails ends the
-// search. Ends with y at the root. (Newton steps on an event's rate along the solution were tried: about
-// 6 values a root instead of 8, but each with the rate evaluated too, so no fewer instructions on the ball)
+// search. Ends with y at the root (on its side, `side`). (Newton steps on an event's rate along the solution were
+// tried: about 6 values a root instead of 8, but each with the rate evaluated too, so no fewer instructions on
+// the ball)
 double refine(double s_lo, double s_hi, double f_lo, double f_hi, Eigen::VectorXd& y, const Restep& restep,
-              const std::function<double(double s, const Eigen::VectorXd& y)>& value, double s_tolerance) {
+              const std::function<double(double s, const Eigen::VectorXd& y)>& value, double s_tolerance, RootSide side = RootSide::near) {
   double s = s_hi;
-  int side = 0;  // which end was kept last time, to halve its value (Illinois)
+  int kept = 0;  // which end was kept last time, to halve its value (Illinois)
+  bool crossed = false;  // the last value is past the root (the far side of zero)
   const double scale = std::max(std::abs(f_lo), std::abs(f_hi));
   for (int iteration = 0; iteration < 100; ++iteration) {
     s = f_hi == f_lo ? 0.5 * (s_lo + s_hi) : (s_lo * f_hi - s_hi * f_lo) / (f_hi - f_lo);
     if (!(s >= s_lo && s <= s_hi)) s = 0.5 * (s_lo + s_hi);  // a non-finite value: bisect
-    if (!restep(s, y)) break;
+    if (!restep(s, y)) return s;
     const double f = value(s, y);
-    if (std::abs(f) <= 4 * std::numeric_limits<double>::epsilon() * scale || s_hi - s_lo <= s_tolerance) break;
-    if ((f > 0) == (f_lo > 0)) {
+    crossed = f != 0 && (f > 0) != (f_lo > 0);
+    const bool close = std::abs(f) <= 4 * std::numeric_limits<double>::epsilon() * scale && !(side == RootSide::left && crossed);
+    if (close || s_hi - s_lo <= s_tolerance) break;
+    if (!crossed) {
       s_lo = s;
       f_lo = f;
-      if (side == -1) f_hi /= 2;
-      side = -1;
+      if (kept == -1) f_hi /= 2;
+      kept = -1;
     } else {
       s_hi = s;
       f_hi = f;
-      if (side == 1) f_lo /= 2;
-      side = 1;
+      if (kept == 1) f_lo /= 2;
+      kept = 1;
     }
   }
+  // a left root: back to the bracket's near end, within the tolerance of the root, where the value has not crossed
+  if (side == RootSide::left && crossed && restep(s_lo, y)) return s_lo;
   return s;
 }
 
@@ -190,7 +201,8 @@ std::vector<Located> locate_events(std::span<const Event> events, const EventWat
     if (!bracket) continue;
     Eigen::VectorXd ys = y;
     const double s = refine(bracket->s_lo, bracket->s_hi, bracket->g_lo, bracket->g_hi, ys, restep,
-                            [&](double f, const Eigen::VectorXd& state) { return events[i].g(t + f * h, state) - zero; }, 1e-15);
+                            [&](double f, const Eigen::VectorXd& state) { return events[i].g(t + f * h, state) - zero; }, 1e-15,
+                            RootSide::left);
     found.push_back({i, t + s * h, std::move(ys), std::max(std::abs(bracket->g_lo), std::abs(bracket->g_hi))});
   }
   return found;
@@ -260,10 +272,19 @@ std::string not_finite_event(const Event& event, double g, double t) {
 
 bool handle_events(RunResult& result, std::span<const Event> events, std::span<const size_t> indices, double t, Eigen::VectorXd& y) {
   bool go_on = true;
+  const size_t first = result.events.size();
+  const Eigen::VectorXd before = indices.size() > 1 ? y : Eigen::VectorXd();
   for (const size_t index : indices) {
     go_on = handle_event(result, events, index, t, y) && go_on;
     if (result.status != Status::ok) return false;
   }
+  // each kept record of the instant: the state before it and after all of its handlers
+  if (indices.size() > 1)
+    for (size_t k = first; k < result.events.size(); ++k)
+      if (result.events[k].before.size() > 0) {
+        result.events[k].before = before;
+        result.events[k].after = y;
+      }
   if (result.terminated) result.y_stop = y;
   return go_on;
 }

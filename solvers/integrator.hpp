@@ -106,9 +106,20 @@ struct EventRecord {
   size_t event = 0;  // which of the system's events; none of them (by_method) for what the method handled
                      // itself (a contact method's impacts)
   static constexpr size_t by_method = static_cast<size_t>(-1);
-  Eigen::VectorXd before, after;  // the state just before and after the handler, for an event that keeps them
+  // for an event that keeps them, the state just before its instant and just after all of the instant's handlers
+  // (the same for every event firing at that instant: a state between two handlers is none the system was in)
+  Eigen::VectorXd before, after;
   static auto fields(auto& s) { return std::tie(s.t, s.kind, s.event, s.before, s.after); }
 };
+
+// whether events[k] keeps its states and is the first to do so at its instant: the one whose states a trajectory
+// shows (the others of the instant hold the same two)
+inline bool opens_instant(const std::vector<EventRecord>& events, size_t k) {
+  if (events[k].before.size() == 0) return false;
+  for (size_t j = k; j-- > 0 && events[j].t == events[k].t;)
+    if (events[j].before.size() > 0) return !(events[j].before == events[k].before);
+  return true;
+}
 
 struct RunResult {
   Status status = Status::ok;

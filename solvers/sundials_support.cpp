@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <limits>
 
 namespace stepwise::sundials {
 
@@ -115,7 +116,8 @@ int roots(sunrealtype t, N_Vector y, sunrealtype* gout, void* user_data) {
   const Eigen::VectorXd state = view(y);
   const auto events = events_of(*c.system);
   for (size_t i = 0; i < events.size(); ++i) {
-    gout[i] = events[i].g(t, state);
+    const auto k = static_cast<Eigen::Index>(i);
+    gout[i] = events[i].g(t, state) - (k < c.event_levels.size() ? c.event_levels[k] : 0.0);
     if (!std::isfinite(gout[i])) {
       c.event_error = not_finite_event(events[i], gout[i], t);
       c.event_error_t = t;
@@ -139,11 +141,56 @@ SUNMatrix sparse_matrix(const Callbacks& c, SUNContext context) {
   return SUNSparseMatrix(n, n, std::max<sunindextype>(1, c.sparse_jac.nonZeros()), CSC_MAT, context);
 }
 
+namespace {
+
+// SUNDIALS returns a root where g has reached zero or just crossed it (its rootfinder's right end, within its
+// tolerance of 100 eps (|t| + |h|)): a ball a hair below the floor. An action that turns the motion back then
+// starts from the far side, and the crossing back is found as a new root (a bounce reversed again, 27 times). So
+// the state is carried back, on the solver's interpolant, to the left root: the latest time before the returned
+// one at which every fired event's g is still on the side it came from, or zero (DifferentialEquations.jl's
+// LeftRootFind). `found`: SUNDIALS' rootsfound, +1 where g was rising (it came from below), -1 falling.
+// (Each g less its level, as SUNDIALS sees it: Callbacks::event_levels)
+void left_root(const Driver& driver, const Callbacks& callbacks, std::span<const Event> events, std::span<const int> found, double& t, N_Vector y) {
+  if (!driver.state_at) return;
+  const auto crossed_at = [&](double time) {
+    const Eigen::VectorXd state = view(y);  // the events read a state of the system's size or more (IDA's unknowns go on)
+    for (size_t i = 0; i < events.size(); ++i)
+      if (found[i] != 0 && (events[i].g(time, state) - callbacks.event_levels[static_cast<Eigen::Index>(i)]) * found[i] > 0) return true;
+    return false;
+  };
+  if (!crossed_at(t)) return;
+  // back from the root by doubling until no fired event has crossed (a failing interpolation: outside the last
+  // step, so the root stays where SUNDIALS put it), then bisect between
+  const double eps = std::numeric_limits<double>::epsilon();
+  double right = t, left = t, back = 4 * eps * std::max(1.0, std::abs(t));
+  for (int k = 0;; ++k, back *= 2) {
+    left = t - back;
+    if (k == 60 || driver.state_at(left, y) != 0) {
+      (void)driver.state_at(t, y);
+      return;
+    }
+    if (!crossed_at(left)) break;
+    right = left;
+  }
+  while (true) {
+    const double middle = 0.5 * (left + right);
+    if (middle <= left || middle >= right) break;
+    if (driver.state_at(middle, y) != 0) break;
+    (crossed_at(middle) ? right : left) = middle;
+  }
+  (void)driver.state_at(left, y);
+  t = left;
+}
+
+}  // namespace
+
 void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double t0, std::span<const double> t_out,
                  const StepControl& control, RunResult& result) {
   const auto events = events_of(*callbacks.system);
   std::vector<int> found(events.size());
   std::vector<size_t> fired;
+  Eigen::VectorXd g_before;  // the events' g at a root, before its handlers
+  callbacks.event_levels = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(events.size()));
   const auto n = static_cast<Eigen::Index>(callbacks.system->size());  // the state, leading y (IDA's unknowns go on)
   Eigen::Map<Eigen::VectorXd> ym(N_VGetArrayPointer(y), n);
   const double bound = divergence_bound(control, ym);
@@ -163,19 +210,32 @@ void output_loop(const Driver& driver, Callbacks& callbacks, N_Vector y, double 
       // every event SUNDIALS found at this root (its rootsfound: all whose g vanishes within its root tolerance),
       // handled in the order the system declares them
       driver.root_info(found.data());
+      left_root(driver, callbacks, events, found, t, y);
       fired.clear();
       for (size_t i = 0; i < found.size(); ++i)
         if (found[i] != 0) fired.push_back(i);
       Eigen::VectorXd y_event = ym;
+      event_values(events, t, y_event, g_before);
       stop = !handle_events(result, events, fired, t, y_event);
       ym = y_event;
       if (stop) break;
+      // the next crossing of an event whose handlers left its g where the root put it (a bounce that turns the
+      // velocity alone; an event that only counts) is measured from there: a left root a hair short of zero is
+      // then no crossing still to come. Where they moved it (onto the zero, or away), from zero
+      for (const size_t i : fired) {
+        const auto k = static_cast<Eigen::Index>(i);
+        const double g_after = events[i].g(t, y_event);
+        callbacks.event_levels[k] = g_after == g_before[k] ? g_after : 0.0;
+      }
       driver.add_counters();
       if (const int re = driver.reinit(t, y)) {
         code = re;
         break;
       }
-      if (t >= target) break;
+      if (t >= target || same_instant(t, target)) {
+        t = std::max(t, target);
+        break;
+      }
       if (control.record_steps && !record_output(result, control, t, ym)) break;
     }
     if (stop) {

@@ -56,6 +56,10 @@ struct Callbacks {
   Eigen::MatrixXd jac;               // dense df/dy scratch (n x n), sized by the first dense Jacobian call
   Eigen::SparseMatrix<double> sparse_jac;  // sparse df/dy scratch, fixed pattern
   Eigen::VectorXd projected;         // projection scratch
+  // the level each event's next crossing is measured from (roots() gives g - level): 0, but for an event whose
+  // handler left its g where the root put it, a hair from zero, that value, so that the crossing the state starts
+  // from is not found again (output_loop); one entry an event, sized by output_loop
+  Eigen::VectorXd event_levels;
 };
 
 // f, and the two parts of an IMEX split (each call of a part counted as one call of f)
@@ -67,7 +71,7 @@ int serial_state(const Eigen::VectorXd& y0, ContextPtr& context, VectorPtr& y);
 // df/dy (df_I/dy for an IMEX run) into a dense or a sparse SUNMatrix; one Jacobian evaluation each
 int dense_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user_data, N_Vector, N_Vector, N_Vector);
 int sparse_jacobian(sunrealtype t, N_Vector y, N_Vector, SUNMatrix J, void* user_data, N_Vector, N_Vector, N_Vector);
-// the events' g
+// the events' g, each less its level (Callbacks::event_levels)
 int roots(sunrealtype t, N_Vector y, sunrealtype* gout, void* user_data);
 void error_handler(int, const char* module, const char* function, char* msg, void* user_data);
 
@@ -87,6 +91,8 @@ struct Driver {
   std::function<int(double target, N_Vector y, double& t, bool one_step)> evolve;
   std::function<void(int* found)> root_info;
   std::function<int(double t, N_Vector y)> reinit;  // restart at (t, y) after an event changed y
+  // the solution at t inside the last step, from the solver's interpolant (*GetDky), into y (and IDA's y')
+  std::function<int(double t, N_Vector y)> state_at;
   std::function<void()> add_counters;               // the solver's counters into the result (before a reinit resets them)
   std::function<std::string(long code)> flag_name;
 };

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace stepwise::tolerance {
 
@@ -614,6 +615,11 @@ inline constexpr double event_time_per_rtol = 1e3;
 inline constexpr double event_time_exact_steps = 1e-12;
 // a root refined to round-off in the step's fraction s (1e-15) of a step h: where the event's time is exact
 inline double event_time_located(double h) { return 1e-13 + 1e-14 * h; }
+// uniform motion (x' = v constant) is stepped exactly by every method, to round-off; each event of it is located to
+// SUNDIALS' root tolerance, 100 eps (|t| + |h|) with the step h at most t, the widest of the methods' (the
+// hand-written pass: 1e-15 of the step); an event's time carries the location errors of the up to t + 1 events
+// before it (test_event_actions.cpp: the ball between two walls)
+inline double event_time_linear_motion(double t) { return 200 * std::numeric_limits<double>::epsilon() * (1 + t) * (1 + t); }
 
 // Newton on the incremental potential with its exact Hessian near the minimiser: the error e_{k+1} <= C e_k^2, so the
 // steps' sizes contract at order 2 (log(m_{k+1} / m_k) / log(m_k / m_{k-1}) -> 2); 1.5 leaves room for the constant C

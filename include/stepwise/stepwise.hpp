@@ -12,6 +12,7 @@
 //                                                        Integrator::integrate, RunResult, Stats, Status
 //   the built-in models                                 models/model.hpp: make_model(name, params), models()
 //   equations written as text                           models/equations.hpp: make_equations(spec, values)
+//   a PDE written as text, on a grid                     models/pde.hpp: make_pde(spec, values), pde_grid
 //   scene files and running them measured               run/scene.hpp: load_scene; run/prepare.hpp:
 //                                                        prepare_run; run/measure.hpp: run_and_measure;
 //                                                        run/run_outputs.hpp: a run's rows and summary.json
@@ -23,6 +24,7 @@
 
 #include <stepwise/models/equations.hpp>
 #include <stepwise/models/model.hpp>
+#include <stepwise/models/pde.hpp>
 #include <stepwise/report/advise.hpp>
 #include <stepwise/report/report.hpp>
 #include <stepwise/report/studies.hpp>

@@ -28,7 +28,7 @@ int column_of(const std::string& text, const std::string& word, size_t before) {
 }
 
 
-GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, bool allow_time) {
+GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, bool allow_time, const GiNaC::prototype_table& functions) {
   const std::string& text = f.text;
   if (text.size() > max_formula_chars)
     throw BadEquations(fmt::format("{}: the formula is {} characters long, more than the {} a formula may hold", f.where(), text.size(), max_formula_chars));
@@ -44,11 +44,12 @@ GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, 
       throw BadEquations(fmt::format("{}: nested more than {} deep", f.where(static_cast<int>(i) + 1), max_formula_depth));
   }
   GiNaC::symtab table;
+  table["pi"] = GiNaC::Pi;  // a variable or parameter of that name takes its place
   if (allow_variables)
     for (size_t i = 0; i < symbols.variables.size(); ++i) table[symbols.variable_names[i]] = symbols.variables[i];
   for (size_t i = 0; i < symbols.parameters.size(); ++i) table[symbols.parameter_names[i]] = symbols.parameters[i];
   if (allow_time) table["t"] = symbols.t;
-  GiNaC::parser reader(table, true);
+  GiNaC::parser reader(table, true, functions);
   std::istringstream in(text);
   try {
     return reader(in);

@@ -37,8 +37,10 @@ struct Symbols {
 int column_of(const std::string& text, const std::string& word, size_t before = std::string::npos);
 
 // the formula's text parsed against the symbols (the variables only where allowed, t only where allowed); a
-// BadEquations naming the file, line and column of what is wrong
-GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, bool allow_time);
+// BadEquations naming the file, line and column of what is wrong. `functions`: GiNaC's own, or a table with more
+// (the PDE model's operators, read into expressions of the stencil's values)
+GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, bool allow_time,
+                const GiNaC::prototype_table& functions = GiNaC::get_default_reader());
 
 // derivatives in the variables, differentiating only the parts that hold the variable. GiNaC's diff walks every
 // operand of a sum or product, and differentiates a function (sin, exp, ...) by first trying an explicit

@@ -28,9 +28,13 @@ def methods():
 
 class RunResult:
     """A scene's run: ``t`` (N,), ``y`` (n, N) of the columns ``names`` (the state's, or a large model's
-    summary), ``energy`` (N,) where the model has one, and ``summary`` (summary.json's fields, a dict)."""
+    summary), ``energy`` (N,) where the model has one, and ``summary`` (summary.json's fields, a dict). A PDE
+    scene's also ``fields`` ({name: (N, nodes), or (N, ny, nx) in 2-D}) and its nodes' ``x`` and ``y_nodes``
+    (nodes,), row-major; else None."""
 
-    def __init__(self, columns, values, summary):
+    def __init__(self, columns, values, summary, fields=None, x=None, y=None):
+        self.fields = fields
+        self.x, self.y_nodes = x, y
         self.columns = list(columns)
         self.t = values[0]
         names = self.columns[1:]
@@ -88,7 +92,7 @@ def run(scene, method=None, dt=None, rtol=None, atol=None, t_end=None, output_dt
         ``set`` not a dict.
     """
     out = _stepwise.run(str(scene), method, dt, rtol, atol, t_end, output_dt, _sets(set), max_steps)
-    return RunResult(out["columns"], out["values"], out["summary"])
+    return RunResult(out["columns"], out["values"], out["summary"], out.get("fields"), out.get("x"), out.get("y"))
 
 
 def advise(scene, error, budget=10.0, set=None, threads=0):

@@ -70,7 +70,8 @@ inline Eigen::VectorXd coordinate_masses(const MassSpringView& view) {
 }
 
 inline const Requirement needs_mass_spring =
-    needs<MassSpringView>("a mass-spring system (a cloth or chain scene, or pendulum-cartesian with a compliant rod)");
+    needs<MassSpringView>("a mass-spring system: the scenes flag, flag-on-pole, hanging-cloth, cloth-on-sphere and hanging-chain, or "
+                          "pendulum-cartesian with a compliant rod (--set compliance=1e-6)");
 
 // Capability: a mass-spring system whose elastic forces are its MassSpringView's springs alone, as the
 // prefactored local/global method needs (a spring cloth, a chain; not the continuum cloth, whose elastic
@@ -78,6 +79,9 @@ inline const Requirement needs_mass_spring =
 struct SpringNetworkView {
   const MassSpringView* network = nullptr;
 };
-inline const Requirement needs_spring_network = needs<SpringNetworkView>("a mass-spring system of springs alone (a spring cloth or chain scene; not the continuum cloth)");
+inline const Requirement needs_spring_network =
+    needs<SpringNetworkView>("a mass-spring system of springs alone: the scenes flag, flag-on-pole, hanging-cloth, cloth-on-sphere and "
+                             "hanging-chain (not the continuum cloth, --set continuum=1), or pendulum-cartesian with a compliant rod "
+                             "(--set compliance=1e-6)");
 
 }  // namespace stepwise

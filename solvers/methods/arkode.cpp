@@ -208,6 +208,7 @@ class ArkodeIntegrator final : public Integrator {
         },
         .root_info = [&](int* found) { ARKStepGetRootInfo(m, found); },
         .reinit = [&](double t, N_Vector v) { return ARKStepReInit(m, fe, fi, t, v); },
+        .state_at = [&](double t, N_Vector v) { return ARKStepGetDky(m, t, 0, v); },
         .add_counters = add_counters,
         .flag_name = flag_name,
     };

@@ -149,6 +149,7 @@ class CvodeIntegrator final : public Integrator {
         },
         .root_info = [&](int* found) { CVodeGetRootInfo(mem.get(), found); },
         .reinit = [&](double t, N_Vector v) { return CVodeReInit(mem.get(), t, v); },
+        .state_at = [&](double t, N_Vector v) { return CVodeGetDky(mem.get(), t, 0, v); },
         .add_counters = add_counters,
         .flag_name = flag_name,
     };

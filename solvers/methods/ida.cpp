@@ -214,6 +214,10 @@ class IdaIntegrator final : public Integrator {
         },
         .root_info = [&](int* found) { IDAGetRootInfo(mem.get(), found); },
         .reinit = [&](double t, N_Vector v) { return IDAReInit(mem.get(), t, v, yp.get()); },
+        .state_at = [&](double t, N_Vector v) {
+          const int code = IDAGetDky(mem.get(), t, 0, v);
+          return code != 0 ? code : IDAGetDky(mem.get(), t, 1, yp.get());
+        },
         .add_counters = add_counters,
         .flag_name = flag_name,
     };

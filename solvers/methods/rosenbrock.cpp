@@ -305,7 +305,14 @@ class RosenbrockAdaptive final : public AdaptiveStepper {
       if (!controller_.retry_after_rejected(err, dt, t, h, stages_.name(), failure)) return false;
     }
   }
+  // within the last accepted step from its start: the interpolant (a step taken anew would overwrite the stages
+  // the interpolant reads, and the outputs inside the step that an event's location re-stepped would be read off a
+  // step of another length)
   bool restep(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_out) override {
+    if (t == last_t_ && h <= last_h_ && y == y1_) {
+      stages_.interpolate(h / last_h_, y1_, end_, y_out);
+      return true;
+    }
     std::string failure;
     return stages_.step(t, h, y, y_out, failure);
   }

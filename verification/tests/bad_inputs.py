@@ -66,8 +66,8 @@ def check(binary, scenes, case):
         stray = [l for l in lines if not l.startswith("stepwise") and not l.startswith("--") and ": warning:" not in l]
         if case["exit"] == 2 and (len(lines) != 1 or stray):
             problems.append(f"{len(lines)} lines of stderr, expected one: {r.stderr[:300]!r}")
-        if len(last) > 1000:
-            problems.append(f"a message of {len(last)} characters")
+        if len(last) > case.get("max_length", 1000):
+            problems.append(f"a message of {len(last)} characters, more than {case.get('max_length', 1000)}")
         for p in case.get("present", []):
             if not os.path.exists(os.path.join(d, p)):
                 problems.append(f"{p} is missing")
