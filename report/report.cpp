@@ -209,6 +209,8 @@ StudyScene study_scene_of(const std::string& name, const RunOptions& scene) {
   StudyScene s = user_study_scene(scene);
   if (const auto model = scene_model(s); name == "energy" && !model->energy(model->initial_state()))
     throw InputError(fmt::format("--scene: {} has no energy formula (energy = \"...\" above its first table) for the energy study", scene.scene_file));
+  else if (name == "spatial-convergence" && !s.on_grid)
+    throw InputError(fmt::format("--scene: {} is no PDE scene (model = \"pde\"): the spatial-convergence study refines a grid", scene.scene_file));
   else if (name == "event-times" && events_of(*model).empty())
     throw InputError(fmt::format("--scene: {} has no events ([events.NAME] when = \"...\") for the event-times study", scene.scene_file));
   return s;

@@ -34,7 +34,7 @@ void draw_figures(const std::vector<Figure>& figures, const std::filesystem::pat
 int threads_or_default(int requested);
 
 // the studies that take --scene
-inline constexpr std::string_view scene_studies = "work-precision, convergence, stability-regions, energy, event-times";
+inline constexpr std::string_view scene_studies = "work-precision, convergence, spatial-convergence, stability-regions, energy, event-times";
 
 // the study of that name, or null
 struct Study;

@@ -108,6 +108,7 @@ const std::vector<Study>& studies();
 // each study, from its own file in report/studies/ (one per study, named after it)
 Study work_precision_study();
 Study convergence_study();
+Study spatial_convergence_study();
 Study stability_regions_study();
 Study energy_study();
 Study adequacy_study();

@@ -2,6 +2,9 @@
 
 #include "verification/stability.hpp"
 
+#include <fmt/format.h>
+
+#include <algorithm>
 #include <cmath>
 
 namespace stepwise {
@@ -26,6 +29,17 @@ StudyScene user_study_scene(const RunOptions& options, PreparedRun* prepared) {
   // the frame: twice the state's largest entry at the start (a length scale for the animation target)
   scene.frame_extent = 2 * std::max(1.0, p.model->initial_state().cwiseAbs().maxCoeff());
   scene.factory = [options, file = p.scene] { return prepare_run(options, file).model; };
+  if (const auto& pde = p.scene.pde) {
+    scene.on_grid = [options, file = p.scene](int points, int order) {
+      RunOptions refined = options;
+      if (points > 0) refined.sets.push_back(fmt::format("points={}", points));
+      refined.sets.push_back(fmt::format("order={}", order));
+      return prepare_run(refined, file).model;
+    };
+    scene.periodic = std::all_of(pde->boundary.begin(), pde->boundary.end(), [&](const auto& b) {
+      return b.second.periodic[0] && (pde->dimension == 1 || b.second.periodic[1]);
+    });
+  }
   if (prepared) *prepared = std::move(p);
   return scene;
 }

@@ -200,6 +200,10 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
   }
 
   void build(const PdeSpec& spec, const Params& values, bool compile);
+  void make_grid(const PdeSpec& s);
+  PdeSymbols make_symbols(const PdeSpec& s);
+  void make_field_tapes(const PdeSpec& s, PdeSymbols& ps, Derived& derived);
+  void make_coordinate_tapes(const PdeSpec& s, const Symbols& sym, Derived& derived);
   void make_boundaries(const PdeSpec& spec, const Symbols& coordinates, Derived& derived);
   void make_pattern();
   void start_native(bool compile);
@@ -243,8 +247,8 @@ std::vector<const Formula*> by_field(const std::vector<Formula>& formulas, const
   return out;
 }
 
-void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
-  // the values: the parameters, and the grid's points and order
+// the spec with `values` applied: the parameters, and the grid's points and order
+PdeSpec with_values(const PdeSpec& spec, const Params& values) {
   PdeSpec s = spec;
   for (const auto& [key, value] : values) {
     if (key == "points") {
@@ -262,7 +266,34 @@ void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
       throw BadParameter(key, fmt::format("unknown parameter '{}' (the scene's parameters, points and order)", key));
     }
   }
-  // the grid
+  return s;
+}
+
+void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
+  const PdeSpec s = with_values(spec, values);
+  make_grid(s);
+  PdeSymbols ps = make_symbols(s);
+  Derived derived;
+  derived.first_slot = static_cast<int>(p_.size());
+  make_field_tapes(s, ps, derived);
+  make_coordinate_tapes(s, ps.symbols, derived);
+  // the derived slots' values, and the tapes' deepest stack
+  for (const Tape& t : derived.tapes) depth_ = std::max(depth_, t.depth);
+  for (const Tape& t : derived.tapes) p_.push_back(run(t, 0, nullptr, p_.data(), TapeStack(depth_).get()));
+  for (const auto* tapes : {&rhs_, &initial_, &exact_, &upwinds_})
+    for (const Tape& t : *tapes) depth_ = std::max(depth_, t.depth);
+  for (const Entry& e : entries_) depth_ = std::max(depth_, e.tape.depth);
+  for (const auto& field : sides_)
+    for (const SideTapes& side : field)
+      for (const auto* tape : {&side.formula, &side.rate})
+        if (*tape) depth_ = std::max(depth_, (*tape)->depth);
+  make_pattern();
+  start_native(compile);
+}
+
+
+// the nodes, the stencil and the grid's coordinates: a PDE's axis is periodic where every field's is
+void Pde::make_grid(const PdeSpec& s) {
   info_.fields = s.fields;
   std::array<bool, 2> periodic{true, true};
   for (const auto& [field, boundary] : s.boundary)
@@ -283,7 +314,10 @@ void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
       info_.y.push_back(grid_.origin[1] + j * grid_.h[1]);
     }
 
-  // the symbols: each field's stencil values, x, y, the switches; the parameters, hx, hy
+}
+
+// the symbols: each field's stencil values, x, y, the switches; the parameters, hx, hy (their values into p_)
+PdeSymbols Pde::make_symbols(const PdeSpec& s) {
   PdeSymbols ps;
   ps.fields = fields();
   ps.slots = stencil_.size();
@@ -320,9 +354,13 @@ void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
                             sym.parameter_names.size() > 2 ? "; parameters " : "",
                             fmt::join(std::vector(sym.parameter_names.begin(), sym.parameter_names.end() - 2), ", "));
 
-  // the formulas: f's, its Jacobian's entries, the upwind coefficients
-  Derived derived;
-  derived.first_slot = static_cast<int>(p_.size());
+  return ps;
+}
+
+// the pointwise formulas' tapes: f's, its Jacobian's entries (each formula by each stencil value), the upwind
+// coefficients
+void Pde::make_field_tapes(const PdeSpec& s, PdeSymbols& ps, Derived& derived) {
+  Symbols& sym = ps.symbols;
   const auto equations = by_field(s.equations, s.fields, s.file, "equations", true);
   std::vector<GiNaC::ex> f;
   for (size_t i = 0; i < s.fields.size(); ++i) {
@@ -341,7 +379,10 @@ void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
                           build_tape(sym, derived, fmt::format("{} (its derivative in {})", equations[static_cast<size_t>(row)]->where(), sym.variable_names[static_cast<size_t>(c)]), nullptr, d)});
     }
 
-  // the formulas of x, y and t: initial values, [exact], the boundaries
+}
+
+// the formulas of x, y and t: initial values, [exact], the boundaries
+void Pde::make_coordinate_tapes(const PdeSpec& s, const Symbols& sym, Derived& derived) {
   Symbols coordinates;
   for (const char* name : {"x", s.dimension == 2 ? "y" : "grid.y"}) {
     coordinates.index[name] = {true, static_cast<int>(coordinates.variables.size())};
@@ -359,18 +400,6 @@ void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
       exact_.push_back(build_tape(coordinates, derived, formula->where(), formula, parse(*formula, coordinates, true, true)));
   make_boundaries(s, coordinates, derived);
 
-  // the derived slots' values, and the tapes' deepest stack
-  for (const Tape& t : derived.tapes) depth_ = std::max(depth_, t.depth);
-  for (const Tape& t : derived.tapes) p_.push_back(run(t, 0, nullptr, p_.data(), TapeStack(depth_).get()));
-  for (const auto* tapes : {&rhs_, &initial_, &exact_, &upwinds_})
-    for (const Tape& t : *tapes) depth_ = std::max(depth_, t.depth);
-  for (const Entry& e : entries_) depth_ = std::max(depth_, e.tape.depth);
-  for (const auto& field : sides_)
-    for (const SideTapes& side : field)
-      for (const auto* tape : {&side.formula, &side.rate})
-        if (*tape) depth_ = std::max(depth_, (*tape)->depth);
-  make_pattern();
-  start_native(compile);
 }
 
 // each field's boundary on the grid, and its sides' formulas (a value's time derivative beside it)

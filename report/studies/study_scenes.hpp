@@ -39,6 +39,10 @@ struct StudyScene {
                             // puts a first-order method's (time_scale / 256: the point of them is larger steps)
   // a scene of the user's (`stepwise study NAME --scene FILE`): how its model is made (model and params unused)
   std::function<std::unique_ptr<Model>()> factory = nullptr;
+  // a PDE scene of the user's: its model on a grid of `points` an axis (0: the scene's) with stencils of `order`, and
+  // whether its every axis is periodic (where order 4 applies); null for any other scene
+  std::function<std::unique_ptr<Model>(int points, int order)> on_grid = nullptr;
+  bool periodic = false;
 };
 
 // the scene's model: the user's factory, or the built-in model with the scene's parameters
