@@ -24,6 +24,33 @@ using namespace equations;
 using namespace pde;
 
 using NativeFn = void (*)(double t, const double* y, const double* p, double* out);
+// the pointwise f over a list of nodes (pde_loop below): f at node nodes[m] from the state entries index[m * width ..]
+using NativeGridFn = void (*)(double t, const double* y, const double* p, double* out, const int* index, const int* nodes, int count, int total,
+                              const double* x, const double* y_coordinate);
+
+// f over the nodes whose every stencil value is a node of the state (no side's value or ghost, no upwind switch), in
+// C beside the pointwise f it calls, so that the compiler inlines that into the loop: a node's cost is its formula's
+// and its gathered values', not a call through a pointer (bench_pde). Its sizes are the formula's, never the grid's
+std::string pde_loop(int width, int fields) {
+  return fmt::format(
+      // a local alias: a call through it binds here, and is inlined (one through the exported name goes through the
+      // PLT, which another object could interpose)
+      "static void stepwise_point(double t, const double* y, const double* p, double* out) __attribute__((alias(\"stepwise_rhs\")));\n"
+      "void stepwise_grid_rhs(double t, const double* y, const double* p, double* out, const int* index, const int* nodes, int count,\n"
+      "                       int total, const double* x, const double* y_coordinate) {{\n"
+      "  double local[{0} + 2 + {2}], o[{1}];\n"
+      "  for (int m = 0; m < count; ++m) {{\n"
+      "    const int n = nodes[m];\n"
+      "    const int* at = index + (long)m * {0};\n"
+      "    for (int k = 0; k < {0}; ++k) local[k] = y[at[k]];\n"
+      "    local[{0}] = x[n];\n"
+      "    local[{0} + 1] = y_coordinate[n];\n"
+      "    stepwise_point(t, local, p, o);\n"
+      "    for (int f = 0; f < {1}; ++f) out[(long)f * total + n] = o[f];\n"
+      "  }}\n"
+      "}}\n",
+      width, fields, PdeSymbols::max_upwinds);
+}
 
 // a Jacobian entry of the pointwise formulas: d f_row / d (field's value at slot)
 struct Entry {
@@ -83,13 +110,20 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
   Eigen::VectorXd exact(double t) const override { return exact_.empty() ? Model::exact(t) : on_grid(exact_, t); }
 
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
+    // the plain nodes in the compiled loop, the others (by a side, or upwinded) one by one below
+    if (native_grid_)
+      native_grid_(t, y.data(), p_.data(), dydt.data(), plain_index_.data(), plain_nodes_.data(), static_cast<int>(plain_nodes_.size()), grid_.nodes(),
+                   info_.x.data(), info_.y.data());
+    if (native_grid_ && other_nodes_.empty()) return;
     const SideValues sides = side_values(t);
     thread_local std::vector<double> local, out;
     local.resize(static_cast<size_t>(locals_));
     out.resize(static_cast<size_t>(fields()));
     TapeStack stack(depth_);
     const NativeFn native = native_rhs_;
-    for (int n = 0; n < grid_.nodes(); ++n) {
+    const int count = native_grid_ ? static_cast<int>(other_nodes_.size()) : grid_.nodes();
+    for (int m = 0; m < count; ++m) {
+      const int n = native_grid_ ? other_nodes_[static_cast<size_t>(m)] : m;
       gather(t, y, sides, n, local.data(), stack.get());
       if (native) native(t, local.data(), p_.data(), out.data());
       else
@@ -222,6 +256,9 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
   std::vector<int> positions_;  // node-major: positions_[n * entries + e], the entry's place among the values, or -1
   std::shared_ptr<const NativeCode> native_;
   NativeFn native_rhs_ = nullptr, native_jacobian_ = nullptr;
+  NativeGridFn native_grid_ = nullptr;  // null: every node one by one
+  std::vector<int> plain_nodes_, other_nodes_;  // the compiled loop's nodes, and the rest
+  std::vector<int> plain_index_;               // the loop's gathered state entries, fields x slots a node
 };
 
 // a formula's text parsed with the operators, and expanded; the operator misapplied named at its column
@@ -473,13 +510,34 @@ void Pde::start_native(bool compile) {
   if (!compile) return;
   std::vector<Tape> jacobian;
   for (const Entry& e : entries_) jacobian.push_back(e.tape);
-  const NativeSource source = c_source(rhs_, jacobian, 64 << 10, 1 << 20);
+  NativeSource source = c_source(rhs_, jacobian, 64 << 10, 1 << 20);
+  const int width = fields() * stencil_.size();
+  source.units.front() += pde_loop(width, fields());
   std::string why;
   native_ = load_native(source, CompileLimits{}, why);
   if (!native_) return;
   native_rhs_ = reinterpret_cast<NativeFn>(native_->symbol("stepwise_rhs"));
   native_jacobian_ = reinterpret_cast<NativeFn>(native_->symbol("stepwise_jacobian"));
-  if (!native_rhs_ || !native_jacobian_) native_rhs_ = native_jacobian_ = nullptr;
+  if (!native_rhs_ || !native_jacobian_) {
+    native_rhs_ = native_jacobian_ = nullptr;
+    return;
+  }
+  // an upwinded formula reads its switches, which the loop does not set: every node one by one
+  if (!upwinds_.empty()) return;
+  native_grid_ = reinterpret_cast<NativeGridFn>(native_->symbol("stepwise_grid_rhs"));
+  for (int n = 0; n < grid_.nodes(); ++n) {
+    bool plain = true;
+    for (int f = 0; f < fields() && plain; ++f) {
+      const FieldBoundary& b = boundaries_[static_cast<size_t>(f)];
+      plain = b.dirichlet_side[static_cast<size_t>(n)] < 0;
+      for (int k = 0; k < stencil_.size() && plain; ++k) plain = b.sources[static_cast<size_t>(n * stencil_.size() + k)].kind == Source::Kind::node;
+    }
+    (plain ? plain_nodes_ : other_nodes_).push_back(n);
+    if (!plain) continue;
+    for (int f = 0; f < fields(); ++f)
+      for (int k = 0; k < stencil_.size(); ++k)
+        plain_index_.push_back(static_cast<int>(index(f, boundaries_[static_cast<size_t>(f)].sources[static_cast<size_t>(n * stencil_.size() + k)].node)));
+  }
 }
 
 }  // namespace
