@@ -114,11 +114,14 @@ class TapeBuilder {
   };
 
   // a part on the parameters alone, longer than one instruction, as a derived slot; else as it is
+  // (its key stays its content's: a slot's number follows the order the parts are met in, which is GiNaC's, and
+  // GiNaC orders a sum's terms by hashes seeded from the addresses of type names, so a key naming the slot would
+  // sort a sum's terms differently from run to run: D u(x+1)/h^2 + ... rounded two ways, seen on the PDE model)
   Emitted folded(Emitted e, Tape& part) {
     if (e.varying || part.code.size() <= 1) return e;
     const int slot = derived_.slot(e.key, std::move(part));
     part = Tape{{{Op::parameter, slot, 0}}, 1};
-    return {fmt::format("p{}", slot), false};
+    return {"d" + e.key, false};
   }
 
   // appends e's postfix to the tape. GiNaC orders a sum's or product's operands by hash, which follows the

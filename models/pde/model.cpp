@@ -264,7 +264,10 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
 // a formula's text parsed with the operators, and expanded; the operator misapplied named at its column
 GiNaC::ex parse_field_formula(const Formula& f, PdeSymbols& symbols, const Stencil& stencil, int order, int dimension) {
   try {
-    return expand(parse(f, symbols.symbols, true, true, operator_table()), symbols, stencil, order, dimension);
+    // expanded: GiNaC keeps a sum that is a factor of a product with its sign made canonical by its terms' hash order,
+    // and its hashes follow the addresses of type names (ASLR): (u(x+1) - 2u + u(x-1)) D/h^2 came out as that or as
+    // (2u - u(x+1) - u(x-1)) (-D/h^2) from run to run, rounding differently. A sum of products has one form
+    return expand(parse(f, symbols.symbols, true, true, operator_table()), symbols, stencil, order, dimension).expand();
   } catch (const OperatorError& e) {
     throw BadEquations(fmt::format("{}: {}", f.where(std::max(1, column_of(f.text, e.name))), e.what()));
   }

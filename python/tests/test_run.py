@@ -99,3 +99,19 @@ def test_the_python_example_draws_its_diagram(tmp_path):
     subprocess.run([sys.executable, os.path.join(SOURCE, "examples", "python", "work_precision.py"), str(out)], check=True,
                    capture_output=True, timeout=120)
     assert out.stat().st_size > 10000
+
+
+@pytest.mark.parametrize("name, shape", [("heat-1d", (65,)), ("heat-2d", (33, 33))])
+def test_a_pde_scenes_fields_are_arrays_equal_to_the_command_lines_files(tmp_path, name, shape):
+    # each field (time x nodes, or time x ny x nx), its nodes' coordinates, and the same numbers as field_u.csv and
+    # grid.csv of `stepwise run` (both written with 17 significant digits: read back exactly)
+    r = stepwise.run(scene(name), output_dt=0.25)
+    assert r.fields["u"].shape == (len(r.t),) + shape
+    subprocess.run([BINARY, "run", scene(name), "--output-dt", "0.25", "--out", str(tmp_path)], check=True, capture_output=True)
+    field = np.loadtxt(tmp_path / "field_u.csv", delimiter=",", skiprows=1)
+    grid = np.loadtxt(tmp_path / "grid.csv", delimiter=",", skiprows=1)
+    assert np.array_equal(field[:, 0], r.t)
+    assert np.array_equal(field[:, 1:], r.fields["u"].reshape(len(r.t), -1))
+    assert np.array_equal(grid[:, 0], r.x) and np.array_equal(grid[:, 1], r.y_nodes)
+    # the trajectory's columns are the fields' summary: u.max is the field's largest value at each time
+    assert np.array_equal(r.y[r.names.index("u.max")], r.fields["u"].reshape(len(r.t), -1).max(axis=1))
