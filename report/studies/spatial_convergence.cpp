@@ -97,11 +97,12 @@ StudyOutput spatial_convergence(const StudyContext& ctx) {
     while (last < plan.size() && plan[last].scene == plan[first].scene && plan[last].order == plan[first].order) ++last;
     const StudyScene& scene = *plan[first].scene;
     const bool exact = std::isfinite(runs[first].exact_error);
-    const auto finest_model = scene.on_grid(plan[last - 1].points, plan[first].order);
+    // without [exact]: each coarser grid against the finest, at the nodes they share
+    const auto finest_model = exact ? nullptr : scene.on_grid(plan[last - 1].points, plan[first].order);
     std::vector<double> h, error;
     for (size_t i = first; i < last; ++i) {
       double e = runs[i].exact_error;
-      if (!exact && i + 1 < last && runs[i].status == "ok" && runs[last - 1].status == "ok") {
+      if (finest_model && i + 1 < last && runs[i].status == "ok" && runs[last - 1].status == "ok") {
         const auto model = scene.on_grid(plan[i].points, plan[i].order);
         e = richardson_error(runs[i].y, runs[last - 1].y, *pde_grid(*model), *pde_grid(*finest_model));
       }
