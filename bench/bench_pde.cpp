@@ -2,10 +2,16 @@
 // every node in one loop, models/pde.hpp) against the same right-hand side hand-written in C++ as a stencil loop
 // over the periodic grid, at 256 x 256 nodes; and the interpreter beside both. The target: the compiled text within
 // 1.2x the hand-written loop. Ratios printed after the table: text / hand-written, interpreted / hand-written; and
-// the exact sparse Jacobian's cost in calls of f.
+// the exact sparse Jacobian's cost in calls of f. Then the Newton matrix I - J of the same scene at 2 x 64^2 and
+// 2 x 128^2 unknowns, one numeric factorisation by each sparse LU at hand, its pattern analysed before: KLU's
+// refactorisation (what SUNDIALS' KLU solver repeats), UMFPACK's and Eigen's SparseLU, as ratios to UMFPACK's.
 #include "models/pde.hpp"
 #include "ratio_reporter.hpp"
 #include "run/scene.hpp"
+
+#include <Eigen/SparseLU>
+#include <Eigen/UmfPackSupport>
+#include <klu.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -15,9 +21,9 @@ namespace {
 
 constexpr int n = 256;
 
-std::unique_ptr<stepwise::Model> gray_scott(bool compile) {
+std::unique_ptr<stepwise::Model> gray_scott(bool compile, int points = n) {
   const auto scene = stepwise::load_scene(std::string(STEPWISE_SOURCE_DIR) + "/scenes/gray-scott.toml");
-  return stepwise::make_pde(*scene.pde, {{"points", n}}, compile);
+  return stepwise::make_pde(*scene.pde, {{"points", points}}, compile);
 }
 
 // the same f by hand: u' = Du lap(u) - u v^2 + F (1 - u), v' = Dv lap(v) + u v^2 - (F + k) v on the periodic grid
@@ -42,7 +48,7 @@ void rhs(benchmark::State& state, int which) {
   const auto model = gray_scott(which != 2);
   const Eigen::VectorXd y = model->initial_state();
   Eigen::VectorXd dydt(y.size());
-  const double h = 2.5 / n;
+  const double h = 0.5 / n;  // the scene's square is 0.5 wide
   for (auto _ : state) {
     if (which == 0) hand_written(y, dydt, h);
     else model->rhs(0, y, dydt);
@@ -62,6 +68,44 @@ void jacobian(benchmark::State& state) {
   state.counters["nonzeros"] = static_cast<double>(J.nonZeros());
 }
 
+// I - J at the initial state (gamma h = 1: Gray-Scott's implicit steps at its patterns' pace, a step of a few
+// time units, make it a few times that)
+Eigen::SparseMatrix<double> newton_matrix(int points) {
+  const auto model = gray_scott(true, points);
+  Eigen::SparseMatrix<double> J, identity(model->size(), model->size());
+  model->as<stepwise::SparseJacobian>()->sparse_jacobian(0, model->initial_state(), J);
+  identity.setIdentity();
+  Eigen::SparseMatrix<double> w = identity - J;
+  w.makeCompressed();
+  return w;
+}
+
+template <class Solver>
+void factor_eigen(benchmark::State& state, int points) {
+  Eigen::SparseMatrix<double> w = newton_matrix(points);
+  Solver lu;
+  lu.analyzePattern(w);
+  for (auto _ : state) {
+    lu.factorize(w);
+    benchmark::DoNotOptimize(lu.info());
+  }
+  state.counters["unknowns"] = static_cast<double>(w.rows());
+}
+
+void factor_klu(benchmark::State& state, int points) {
+  Eigen::SparseMatrix<double> w = newton_matrix(points);
+  klu_common common;
+  klu_defaults(&common);
+  common.ordering = 0;  // AMD, as the SUNDIALS adapters set it
+  const int rows = static_cast<int>(w.rows());
+  klu_symbolic* symbolic = klu_analyze(rows, w.outerIndexPtr(), w.innerIndexPtr(), &common);
+  klu_numeric* numeric = klu_factor(w.outerIndexPtr(), w.innerIndexPtr(), w.valuePtr(), symbolic, &common);
+  for (auto _ : state) benchmark::DoNotOptimize(klu_refactor(w.outerIndexPtr(), w.innerIndexPtr(), w.valuePtr(), symbolic, numeric, &common));
+  klu_free_numeric(&numeric, &common);
+  klu_free_symbolic(&symbolic, &common);
+  state.counters["unknowns"] = rows;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -72,10 +116,20 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("gray_scott_256/text", [](benchmark::State& s) { rhs(s, 1); });
   benchmark::RegisterBenchmark("gray_scott_256/interpreted", [](benchmark::State& s) { rhs(s, 2); });
   benchmark::RegisterBenchmark("gray_scott_256/jacobian", jacobian);
-  const int code = stepwise::bench::run_with_ratios(argc, argv,
-                                                    {{"gray_scott_256/text", "gray_scott_256/hand_written"},
-                                                     {"gray_scott_256/interpreted", "gray_scott_256/hand_written"},
-                                                     {"gray_scott_256/jacobian", "gray_scott_256/text"}});
+  std::vector<std::pair<std::string, std::string>> ratios{{"gray_scott_256/text", "gray_scott_256/hand_written"},
+                                                          {"gray_scott_256/interpreted", "gray_scott_256/hand_written"},
+                                                          {"gray_scott_256/jacobian", "gray_scott_256/text"}};
+  for (const int points : {64, 128}) {
+    const std::string at = "gray_scott_" + std::to_string(points) + "/factor_";
+    benchmark::RegisterBenchmark((at + "umfpack").c_str(), [points](benchmark::State& s) { factor_eigen<Eigen::UmfPackLU<Eigen::SparseMatrix<double>>>(s, points); })
+        ->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark((at + "klu_refactor").c_str(), [points](benchmark::State& s) { factor_klu(s, points); })->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark((at + "eigen_sparselu").c_str(), [points](benchmark::State& s) { factor_eigen<Eigen::SparseLU<Eigen::SparseMatrix<double>>>(s, points); })
+        ->Unit(benchmark::kMillisecond);
+    ratios.emplace_back(at + "klu_refactor", at + "umfpack");
+    ratios.emplace_back(at + "eigen_sparselu", at + "umfpack");
+  }
+  const int code = stepwise::bench::run_with_ratios(argc, argv, ratios);
   std::filesystem::remove_all(cache);
   return code;
 }

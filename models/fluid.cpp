@@ -305,7 +305,7 @@ class Fluid final : public Model {
     Shapes s;
     s.planar = true;
     s.up = Eigen::Vector3d::UnitY();
-    Shapes::Field field{n_, grid_.length, Eigen::VectorXd(cells_), !density_};
+    Shapes::Field field{.nx = n_, .ny = n_, .extent = Eigen::Vector2d::Constant(grid_.length), .values = Eigen::VectorXd(cells_), .is_signed = !density_};
     if (density_) {
       field.values = y.tail(cells_);
     } else {
@@ -314,7 +314,7 @@ class Fluid final : public Model {
       fft_.forward(y.data() + cells_, V.data());
       vorticity(U, V, field.values.data());
     }
-    s.field = std::move(field);
+    s.fields.push_back(std::move(field));
     return s;
   }
 

@@ -12,9 +12,10 @@
 // The nodes. A periodic axis of n points has them at a + i h, h = (b - a) / n (b is a's image); any other axis at
 // a + i h, h = (b - a) / (n - 1), both ends nodes. A Dirichlet side's nodes follow their formula (the stencils of
 // their neighbours read its value, and the node's own rate is its time derivative, so the state holds it); a
-// Neumann side's nodes are unknowns whose stencils read a ghost mirrored through the side, u_{-k} = u_k - 2 k h
-// du/dx (du/dx from the outward normal derivative given): the central stencils' order 2 holds at the boundary.
-// Order 4 (five-point stencils) needs two ghosts a side, and is taken on periodic axes.
+// Neumann side's nodes are unknowns. A stencil reaching past a side reads a ghost, a fixed combination of the values
+// inside (models/pde/stencil.cpp): at order 2 the mirror through a Neumann side, u_{-k} = u_k - 2 k h du/dx (du/dx
+// from the outward normal derivative given); at order 4 (five-point stencils) ghosts exact on quartics, from the
+// side's derivative or its value: each order holds over the grid, its sides included.
 //
 // The operators (dx, dy, dxx, dyy, laplace: central differences of the grid's order; upwind_dx(a, f), upwind_dy:
 // a times the one-sided first difference against the flow, the side by the sign of `a` at each node) become
@@ -28,6 +29,7 @@
 #include <stepwise/models/model.hpp>
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -80,8 +82,17 @@ struct PdeGrid {
   std::vector<std::string> fields;
   int nx = 0, ny = 1;
   std::vector<double> x, y;  // each node's coordinates, row-major (node = j nx + i)
+  std::array<std::array<double, 2>, 2> domain{};  // x = [a, b], y = [a, b] (y = [0, 0] in 1-D)
+  std::array<bool, 2> periodic{};                // by axis
+  // the PDE's own solution on the nodes at t, from [exact]; empty without one. It is the solution of the PDE, not
+  // of the grid's ODE system (the model's has_exact() is false): an error against it holds the grid's error
+  std::function<Eigen::VectorXd(double t)> exact;
   int nodes() const { return nx * ny; }
 };
 const PdeGrid* pde_grid(const Model& model);
+
+// where the pictures put field f of a grid: 2-D fields side by side along x, each over its domain shifted by
+// f times 1.1 of the domain's length (the same for a 1-D grid's space-time pictures)
+double drawn_offset(const PdeGrid& grid, size_t field);
 
 }  // namespace stepwise

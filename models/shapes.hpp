@@ -7,6 +7,7 @@
 
 #include <Eigen/Dense>
 
+#include <array>
 #include <optional>
 #include <vector>
 
@@ -29,13 +30,19 @@ struct Shapes {
     Eigen::VectorXd z;       // points^2 heights (m) about the still level z = 0
   };
 
-  // a scalar on a periodic square grid (a fluid's density or vorticity), drawn as a texture over the square
-  // [0, L)^2 in the plane z = 0
+  // a scalar on a grid of nx x ny nodes (a fluid's density or vorticity, a PDE's field), drawn as a texture over
+  // a rectangle in the plane z = 0. Along a periodic axis of n nodes they sit at origin + i extent / n (the
+  // texture repeats); along any other at origin + i extent / (n - 1), both sides nodes
   struct Field {
-    int points = 0;          // per side; values row-major, x along a row: node (i, j) at (j L / points, i L / points)
-    double length = 0;       // L (m)
-    Eigen::VectorXd values;  // points^2
-    bool is_signed = false;  // a diverging colour map about 0 (vorticity); else a smoke-like one from 0
+    int nx = 0, ny = 0;      // values row-major, x along a row
+    Eigen::Vector2d origin = Eigen::Vector2d::Zero();  // the rectangle's corner (m)
+    Eigen::Vector2d extent = Eigen::Vector2d::Zero();  // its sides along x and y (m)
+    std::array<bool, 2> periodic{true, true};
+    Eigen::VectorXd values;  // nx ny
+    bool is_signed = false;  // a diverging colour map about 0 (vorticity); else a smoke-like one from its low end
+    // the values at the colour map's two ends; none: [0, max |v|] (or +-max |v| signed) of the frame drawn
+    std::optional<std::array<double, 2>> range;
+    bool same_range = false;  // an animation holds one range, its fields' least and greatest over all its frames
   };
 
   std::vector<Ball> balls;
@@ -45,7 +52,7 @@ struct Shapes {
   std::optional<Plane> ground;
   std::optional<Aabb> container;                 // the walls of a box, drawn as its edges
   std::optional<Water> water;
-  std::optional<Field> field;
+  std::vector<Field> fields;                     // side by side, as the model places them
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  // against gravity: the camera's up
   bool planar = false;                           // everything in the plane z = 0: seen face on
 };

@@ -82,9 +82,9 @@ Aabb bounds(const Shapes& shapes, double depth) {
     box.extend(shapes.container->lo);
     box.extend(shapes.container->hi);
   }
-  if (shapes.field) {
-    box.extend(Eigen::Vector3d::Zero());
-    box.extend(Eigen::Vector3d(shapes.field->length, shapes.field->length, 0));
+  for (const auto& field : shapes.fields) {
+    box.extend(Eigen::Vector3d(field.origin.x(), field.origin.y(), 0));
+    box.extend(Eigen::Vector3d(field.origin.x() + field.extent.x(), field.origin.y() + field.extent.y(), 0));
   }
   if (shapes.water) {
     const Pool pool(*shapes.water, depth);

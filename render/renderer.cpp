@@ -30,11 +30,12 @@ void main() {
 
 // mode 0: lit (Lambert with a little Blinn-Phong), both sides, back faces in back_color; 1: unlit;
 // 2: lit, checkered along axis_u and axis_v (the ground); 3: unlit, the colour the field texture's value maps
-// to at (world . axis_u, world . axis_v) / tile + field_offset (a fluid's density or vorticity)
+// to at (world.xy - field_origin) * field_scale + field_offset (a fluid's density or vorticity, a PDE's field)
 constexpr const char* lit_fragment = R"(#version 450 core
 in vec3 world, world_normal;
 uniform vec3 color, back_color, light, eye, axis_u, axis_v;
-uniform float tile, field_offset;
+uniform float tile;
+uniform vec2 field_origin, field_scale, field_offset;
 uniform int mode, field_signed;
 uniform sampler2D field;
 out vec4 frag;
@@ -42,7 +43,7 @@ void main() {
   vec3 base = gl_FrontFacing ? color : back_color;
   if (mode == 1) { frag = vec4(base, 1.0); return; }
   if (mode == 3) {
-    float s = texture(field, vec2(dot(world, axis_u), dot(world, axis_v)) / tile + field_offset).r;
+    float s = texture(field, (world.xy - field_origin) * field_scale + field_offset).r;
     if (field_signed == 1)
       base = s >= 0.0 ? mix(vec3(0.97), vec3(0.75, 0.15, 0.12), min(s, 1.0)) : mix(vec3(0.97), vec3(0.15, 0.30, 0.75), min(-s, 1.0));
     else
@@ -238,8 +239,9 @@ struct Renderer::Impl {
   GLuint framebuffer = 0, color = 0, depth = 0;
   GLuint vertex_array = 0, vertices = 0, instances = 0;
   std::unique_ptr<PhotonMap> photons;
-  GLuint field_texture = 0;  // a Shapes::Field's values, R32F, field_points^2
-  int field_points = 0;
+  GLuint field_texture = 0;  // a Shapes::Field's values, R32F, field_size
+  std::array<int, 2> field_size{};
+  std::array<GLenum, 2> field_wrap{};
   // the unit sphere at subdivision levels 0..3 (20·4^level triangles): many balls are drawn coarser
   std::array<std::vector<float>, 4> sphere_vertices;
 
@@ -351,33 +353,47 @@ struct Renderer::Impl {
     gl.DrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(mesh.size() / 6));
   }
 
-  // the field's values scaled by their largest magnitude (to [0, 1], or [-1, 1] signed) into a texture that
-  // repeats (the field is periodic), drawn on the square [0, L)^2 at z = 0
+  // the field's values scaled to its range (to [0, 1], or [-1, 1] signed) into a texture that repeats along a
+  // periodic axis, drawn on its rectangle at z = 0 with the nodes at the texels' centres
   void draw_field(const Shapes::Field& field) {
-    const int n = field.points;
-    if (field_points != n) {
+    const int nx = field.nx, ny = field.ny;
+    const std::array<GLenum, 2> wrap{field.periodic[0] ? GLenum{GL_REPEAT} : GLenum{GL_CLAMP_TO_EDGE}, field.periodic[1] ? GLenum{GL_REPEAT} : GLenum{GL_CLAMP_TO_EDGE}};
+    if (field_size != std::array<int, 2>{nx, ny} || field_wrap != wrap) {
       if (field_texture) gl.DeleteTextures(1, &field_texture);
-      field_texture = gl::make_texture(gl, GL_R32F, n, n, GL_REPEAT);
-      field_points = n;
+      field_texture = gl::make_texture(gl, GL_R32F, nx, ny, wrap[0]);
+      gl.TextureParameteri(field_texture, GL_TEXTURE_WRAP_T, static_cast<GLint>(wrap[1]));
+      field_size = {nx, ny};
+      field_wrap = wrap;
     }
     const double largest = field.values.cwiseAbs().maxCoeff();
-    const double scale = largest > 0 && std::isfinite(largest) ? 1 / largest : 1.0;
+    std::array<double, 2> range = field.range.value_or(std::array<double, 2>{field.is_signed ? -largest : 0.0, largest});
+    if (!(range[1] > range[0]) || !std::isfinite(range[1] - range[0])) range = {range[0], range[0] + 1};
+    // signed: 0 stays 0, the larger end at 1; else the range onto [0, 1]
+    const double low = field.is_signed ? 0 : range[0];
+    const double scale = 1 / (field.is_signed ? std::max(std::abs(range[0]), std::abs(range[1])) : range[1] - range[0]);
     std::vector<float> texels(field.values.size());
-    for (Eigen::Index k = 0; k < field.values.size(); ++k) texels[k] = static_cast<float>(scale * field.values[k]);
+    for (Eigen::Index k = 0; k < field.values.size(); ++k) texels[k] = static_cast<float>(scale * (field.values[k] - low));
     gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    gl.TextureSubImage2D(field_texture, 0, 0, 0, n, n, GL_RED, GL_FLOAT, texels.data());
+    gl.TextureSubImage2D(field_texture, 0, 0, 0, nx, ny, GL_RED, GL_FLOAT, texels.data());
     gl.BindTextureUnit(0, field_texture);
     gl.Uniform1i(gl.GetUniformLocation(lit, "field"), 0);
     gl.Uniform1i(gl.GetUniformLocation(lit, "field_signed"), field.is_signed ? 1 : 0);
-    uniform(lit, "field_offset", static_cast<float>(0.5 / n));  // grid points at the texels' centres
-    uniform(lit, "axis_u", Eigen::Vector3f::UnitX());
-    uniform(lit, "axis_v", Eigen::Vector3f::UnitY());
-    uniform(lit, "tile", static_cast<float>(field.length));
-    std::vector<float> square;
-    const double L = field.length;
-    append_quad(square, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(L, 0, 0), Eigen::Vector3d(L, L, 0), Eigen::Vector3d(0, L, 0));
+    // a periodic axis's n nodes span its extent at 1/n each; another's reach its far side at node n - 1
+    Eigen::Vector2f texel_scale, offset;
+    for (int axis = 0; axis < 2; ++axis) {
+      const int n = axis == 0 ? nx : ny;
+      const double spans = field.periodic[static_cast<size_t>(axis)] ? 1.0 : (n - 1.0) / n;
+      texel_scale[axis] = static_cast<float>(field.extent[axis] > 0 ? spans / field.extent[axis] : 0.0);
+      offset[axis] = static_cast<float>(0.5 / n);
+    }
+    gl.Uniform2f(gl.GetUniformLocation(lit, "field_origin"), static_cast<float>(field.origin.x()), static_cast<float>(field.origin.y()));
+    gl.Uniform2f(gl.GetUniformLocation(lit, "field_scale"), texel_scale.x(), texel_scale.y());
+    gl.Uniform2f(gl.GetUniformLocation(lit, "field_offset"), offset.x(), offset.y());
+    std::vector<float> rectangle;
+    const Eigen::Vector3d o(field.origin.x(), field.origin.y(), 0), ex(field.extent.x(), 0, 0), ey(0, field.extent.y(), 0);
+    append_quad(rectangle, o, o + ex, o + ex + ey, o + ey);
     const Eigen::Vector3f white(1, 1, 1);
-    draw_batch(square, {0, 0, 0, 1}, white, white, 3);
+    draw_batch(rectangle, {0, 0, 0, 1}, white, white, 3);
   }
 
   void set_pool_uniforms(GLuint program, const View& view, double side) const {
@@ -408,7 +424,7 @@ struct Renderer::Impl {
     const std::vector<float> one{0, 0, 0, 1};
     const Eigen::Vector3f color = view.look.color, dark(0.25f, 0.25f, 0.28f);
 
-    if (shapes.field) draw_field(*shapes.field);
+    for (const auto& field : shapes.fields) draw_field(field);
 
     // balls, instanced on the unit sphere
     std::vector<float> balls;

@@ -483,14 +483,14 @@ void check_advice_request(double error, double budget_seconds) {
     throw InputError(fmt::format("--budget: must be between 1 and {:g} seconds, got {}", max_budget_seconds, budget_seconds));
 }
 
-Figure advice_figure(const Advice& advice) {
-  FigureSpec::Layer sweep{.table = "advice_sweep", .x = "cpu_seconds", .y = "error", .where = {{"scene", {advice.scene}}}};
+Figure advice_figure(const Advice& advice, const std::string& tables) {
+  FigureSpec::Layer sweep{.table = tables + "_sweep", .x = "cpu_seconds", .y = "error", .where = {{"scene", {advice.scene}}}};
   FigureSpec::Panel panel{.title = fmt::format("{}: the advice's sweep (dashed: adaptive; x: failed or diverged)", advice.scene),
                           .x_label = "CPU time (s)", .y_label = "max-norm error at t_end", .log_x = true, .log_y = true, .layers = by_mode(sweep),
                           .lines = {{'y', advice.target, "the error asked"}}};
-  panel.layers.push_back({.table = "advice_summary", .x = "cpu_seconds", .y = "error", .series = "method", .label = "advised: {}", .mark = FigureMark::star,
+  panel.layers.push_back({.table = tables + "_summary", .x = "cpu_seconds", .y = "error", .series = "method", .label = "advised: {}", .mark = FigureMark::star,
                           .where = {{"scene", {advice.scene}}}, .hover = {{"setting", "setting"}}});
-  return {"advice", advice.scene, {.title = "The advice's sweep, " + advice.scene, .panels = {std::move(panel)}}};
+  return {tables, advice.scene, {.title = "The advice's sweep, " + advice.scene, .panels = {std::move(panel)}}};
 }
 
 int advise_command(const AdviseOptions& o) {

@@ -89,9 +89,9 @@ struct AdviceTables {
   Table sweep, summary, candidates;  // candidates: each method's verdict (advice_candidates.csv)
 };
 AdviceTables advice_tables(const std::vector<Advice>& advices);
-// the advice's figure (advice_SCENE.png): the sweep's error against CPU time per method, the error asked, the
-// advised point
-Figure advice_figure(const Advice& advice);
+// the advice's figure (TABLES_SCENE.png): the sweep's error against CPU time per method, the error asked, the
+// advised point, from the tables TABLES_sweep and TABLES_summary (advice_tables' sweep and summary)
+Figure advice_figure(const Advice& advice, const std::string& tables = "advice");
 
 // one method's sweep at every third of a decade of rtol (or of a halving of dt) from the coarsest until it meets
 // the target, without the advice's budget (at most `seconds` of CPU): what the advice's pick is checked against

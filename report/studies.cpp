@@ -107,7 +107,7 @@ std::string markdown_table(const Table& table, const std::vector<Shown>& columns
 
 const std::vector<Study>& studies() {
   static const std::vector<Study> all = [] {
-    return std::vector<Study>{work_precision_study(),        convergence_study(),  spatial_convergence_study(), stability_regions_study(), energy_study(),
+    return std::vector<Study>{work_precision_study(),        convergence_study(),  spatial_convergence_study(), pde_scenes_study(), stability_regions_study(), energy_study(),
                               adequacy_study(),              wave_adequacy_study(), bouncing_ball_curve_study(), event_times_study(),
                               wave_stability_study(),        rigid_body_invariants_study(), contacts_study(), cloth_study(), cloth_realtime_study(), cloth_solvers_study(), continuum_cloth_study(), fluid_study(),
                               constraints_study(),           scaling_study(),               advice_study()};

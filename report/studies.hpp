@@ -109,6 +109,7 @@ const std::vector<Study>& studies();
 Study work_precision_study();
 Study convergence_study();
 Study spatial_convergence_study();
+Study pde_scenes_study();
 Study stability_regions_study();
 Study energy_study();
 Study adequacy_study();

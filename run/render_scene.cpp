@@ -1,5 +1,6 @@
 #include "render_scene.hpp"
 
+#include "models/pde.hpp"
 #include "render/renderer.hpp"
 #include "run/atomic_write.hpp"
 #include "run/measure.hpp"
@@ -163,6 +164,7 @@ RenderPlan plan_render(const RenderOptions& options) {
     check_writable_directory(options.out);
     check_replaceable_file(fs::path(options.out) / "render.json");
     for (int k = 0; k < options.frames; ++k) check_replaceable_file(fs::path(options.out) / fmt::format("frame_{:04d}.png", k));
+    check_replaceable_file(fs::path(options.out) / "space_time.png");
   } catch (const InputError&) {
     throw;
   } catch (const BadMethod& e) {
@@ -208,12 +210,49 @@ struct Frames {
   std::vector<size_t> samples;  // the sample each frame shows
 };
 
+// the fields that hold one colour range over an animation get their least and greatest finite values over all
+// of its frames
+void hold_ranges(std::vector<Shapes>& frames) {
+  for (size_t k = 0; k < frames.front().fields.size(); ++k) {
+    if (!frames.front().fields[k].same_range) continue;
+    std::array<double, 2> range{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    for (const auto& frame : frames)
+      for (const double v : frame.fields[k].values)
+        if (std::isfinite(v)) range = {std::min(range[0], v), std::max(range[1], v)};
+    if (range[0] <= range[1])
+      for (auto& frame : frames) frame.fields[k].range = range;
+  }
+}
+
 Frames pick_frames(const PreparedRun& p, const Samples& samples) {
   Frames frames;
   for (size_t k = 0; k < samples.y.size(); ++k)
     if (k % samples.stride == 0 || k + 1 == samples.y.size()) frames.samples.push_back(k);
   for (const size_t k : frames.samples) frames.shapes.push_back(*p.model->shapes(samples.y[k]));
+  hold_ranges(frames.shapes);
   return frames;
+}
+
+// a 1-D PDE's fields over space and time: each a picture with x along and the frames' times up (0.75 of the
+// domain's length high), side by side; none for any other model or a single frame
+std::optional<Shapes> space_time(const PreparedRun& p, const Samples& samples, const Frames& frames) {
+  const PdeGrid* grid = pde_grid(*p.model);
+  if (!grid || grid->ny > 1 || frames.samples.size() < 2) return std::nullopt;
+  Shapes s;
+  s.planar = true;
+  s.up = Eigen::Vector3d::UnitY();
+  const double length = grid->domain[0][1] - grid->domain[0][0];
+  const auto rows = static_cast<int>(frames.samples.size());
+  for (size_t f = 0; f < grid->fields.size(); ++f) {
+    Shapes::Field field{.nx = grid->nx, .ny = rows, .origin = {grid->domain[0][0] + drawn_offset(*grid, f), 0}, .extent = {length, 0.75 * length},
+                        .periodic = {grid->periodic[0], false}, .values = Eigen::VectorXd(Eigen::Index{grid->nx} * rows), .same_range = true};
+    for (int r = 0; r < rows; ++r)
+      field.values.segment(Eigen::Index{r} * grid->nx, grid->nx) = samples.y[frames.samples[static_cast<size_t>(r)]].segment(static_cast<Eigen::Index>(f) * grid->nx, grid->nx);
+    s.fields.push_back(std::move(field));
+  }
+  std::vector<Shapes> one{std::move(s)};
+  hold_ranges(one);
+  return std::move(one.front());
 }
 
 // render.json's facts of the run and the picture, before its frames
@@ -230,6 +269,7 @@ nlohmann::json render_facts(const PreparedRun& p, const Samples& samples, const 
   summary["backend"] = options.backend;
   summary["renderer"] = context.description();
   summary["simulate_seconds"] = simulate_seconds;
+  if (const PdeGrid* grid = pde_grid(*p.model)) summary["fields"] = grid->fields;  // a PDE's, as its pictures place them
   summary["camera"] = {{"eye", {camera.eye.x(), camera.eye.y(), camera.eye.z()}},
                        {"target", {camera.target.x(), camera.target.y(), camera.target.z()}},
                        {"up", {camera.up.x(), camera.up.y(), camera.up.z()}},
@@ -337,6 +377,13 @@ RenderedRun render_scene(const RenderOptions& options) {
       queue.push(std::move(image));
     }
     queue.finish();
+    // a 1-D PDE's space-time picture, in its own view
+    if (const auto picture = space_time(p, samples, frames)) {
+      const render::View whole = render::make_view(std::span(&*picture, 1), render::Look{}, width, height);
+      write_file_atomic(out / "space_time.png", render::encode_png(renderer.draw(*picture, {}, whole)));
+      std::lock_guard lock(summary_mutex);
+      summary["space_time"] = "space_time.png";
+    }
     const double span = samples.t[frames.samples.back()];
     const int fps = span > 0 ? std::clamp(static_cast<int>(std::lround((shapes.size() - 1) / span)), 1, 60) : 1;
     if (shapes.size() > 1 && movies && options.animations) encode_movies(out, fps);

@@ -1,5 +1,7 @@
 #include "method.hpp"
 
+#include "newton_matrix.hpp"
+
 #include "capabilities/contact_bodies.hpp"
 #include "capabilities/distance_constraints.hpp"
 #include "capabilities/mass_spring.hpp"
@@ -92,8 +94,8 @@ double dense_matrix_bytes(const Method& method, const OdeSystem& system) {
     case DenseMatrices::unless_sparse_jacobian:
       if (system.as<SparseJacobian>()) return 0;
       break;
-    case DenseMatrices::unless_mass_spring:
-      if (system.as<MassSpringView>()) return 0;
+    case DenseMatrices::unless_mass_spring_or_sparse:
+      if (system.as<MassSpringView>() || (system.as<SparseJacobian>() && system.size() >= sparse_newton_from)) return 0;
       break;
     case DenseMatrices::always: break;
     case DenseMatrices::constrained_dae: break;

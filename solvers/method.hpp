@@ -37,7 +37,7 @@ enum class DenseMatrices {
   none,                    // explicit, or no Newton iteration: no matrix
   always,                  // every system
   unless_sparse_jacobian,  // KLU on the system's fixed sparse pattern when it has one (CVODE BDF)
-  unless_mass_spring,      // CHOLMOD on a mass-spring system's pattern (the hand-written backward Euler)
+  unless_mass_spring_or_sparse,  // CHOLMOD on a mass-spring system's pattern, UMFPACK on a sparse Jacobian (backward Euler)
   constrained_dae,         // every system, of its size plus two multipliers a distance constraint (IDA)
 };
 

@@ -1,7 +1,8 @@
 #include "sparse_cholesky.hpp"
 
+#include "blas_threads.hpp"
+
 #include <cholmod.h>
-#include <dlfcn.h>
 #include <fmt/format.h>
 #include <omp.h>
 #include <pthread.h>
@@ -17,20 +18,6 @@
 namespace stepwise {
 
 namespace {
-
-// CHOLMOD's supernodal factorisation calls the BLAS on dense blocks. When the BLAS is OpenBLAS (Debian's
-// alternative to the reference BLAS), its own threads would do part of the work: on this project's 2-core
-// machines they spin against the caller (measured: a third of the run in the scheduler), and a run's thread
-// CPU time would not count their work. So the BLAS is kept on the calling thread, through OpenBLAS's own
-// call where it is the BLAS loaded (looked up at run time: the reference BLAS has no such call).
-void keep_blas_on_this_thread() {
-  static const bool done = [] {
-    using SetThreads = void (*)(int);
-    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
-    return true;
-  }();
-  (void)done;
-}
 
 // Debian's CHOLMOD opens OpenMP parallel regions of a fixed 4 threads (CHOLMOD_OMP_NUM_THREADS, compiled in)
 // to copy and clear its arrays, whatever omp_set_num_threads says; on 2 cores their start-up and spinning

@@ -1,6 +1,7 @@
 // What the SUNDIALS adapters (methods/cvode.cpp, methods/arkode.cpp, methods/ida.cpp) share: RAII handles, the C
-// callbacks that reach the counted system, and the loop over output times with events. SUNDIALS' types
-// appear only here, in those three files and in distributed_lines.cpp (the same methods on the parallel vector).
+// callbacks that reach the counted system, the loop over output times with events, and the sparse direct solver
+// (sunlinsol_umfpack.cpp). SUNDIALS' types appear only here, in those three files and in distributed_lines.cpp
+// (the same methods on the parallel vector).
 #pragma once
 
 #include <stepwise/solvers/capabilities/imex_split.hpp>
@@ -81,6 +82,12 @@ void error_handler(int, const char* module, const char* function, char* msg, voi
 void initial_pattern(Callbacks& c, double t0, const Eigen::VectorXd& y0);
 // a CSC SUNMatrix sized for the pattern initial_pattern() left in c.sparse_jac
 SUNMatrix sparse_matrix(const Callbacks& c, SUNContext context);
+
+// the sparse direct solver of Newton's linear systems on `matrix`'s pattern (sunlinsol_umfpack.cpp): KLU (AMD
+// ordering) below umfpack_from unknowns, UMFPACK's multifrontal LU from there (a 2-D grid's fill); null where it
+// could not be made, `made_by` naming the call
+inline constexpr sunindextype umfpack_from = 16384;
+SUNLinearSolver sparse_solver(N_Vector y, SUNMatrix matrix, SUNContext context, const char*& made_by);
 
 // one adapter's entry points for the output loop below
 struct Driver {

@@ -2,7 +2,8 @@
 // unrelated method at the same tight tolerance. Non-stiff systems: GSL's Prince-Dormand 8(9) and the project's
 // Verner 9(8) (two codes, two tableaus). Where either explicit run cannot finish in its step budget (a stiff
 // system: its fast modes hold an explicit method to tiny steps), the stiff pair: CVODE's BDF and GSL's
-// Bader-Deuflhard extrapolation (a multistep and a one-step code). Their difference is the reference's own
+// Bader-Deuflhard extrapolation (a multistep and a one-step code), or on a system too large for the latter's dense
+// matrices (a PDE's grid) the project's RODAS5 on its sparse LU. Their difference is the reference's own
 // uncertainty, said wherever an error is measured against it.
 #pragma once
 

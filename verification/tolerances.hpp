@@ -133,6 +133,15 @@ inline constexpr double bounded_energy_growth = 1.5;
 // may differ by this many ulps of its magnitude per step taken
 inline constexpr double roundoff_per_step = 4.0;
 
+// one formula written twice, as text (a PDE scene) and by hand (a built-in model), with its operations in another
+// order: an evaluation of f differs by a few ulps of its largest term (the 5-point Laplacian's five terms and its
+// coefficient rounded once more: 16), so a step's state by that times dt |f|; on a neutrally stable system such
+// differences add up at most linearly, a rate's over the steps and a position's once more over the run's t_end
+inline constexpr double rewritten_formula_ulps = 16.0;
+inline double rewritten_formula_difference(long steps, double dt, double t_end, double largest_rate, double largest_state) {
+  return rewritten_formula_ulps * 0x1p-52 * (static_cast<double>(steps) * dt * largest_rate * std::max(1.0, t_end) + largest_state);
+}
+
 // the CVODE/GSL cross-check: two adaptive codes at rtol agree to within this multiple of rtol times the
 // solution's size; the global error of a tolerance-proportional code on a non-stiff problem of unit
 // Lipschitz constant over unit time is a small multiple of rtol (CVODE's guide: "a factor of 10 or so")
@@ -541,6 +550,11 @@ inline constexpr double silhouette_tip_px = 3.0;
 // the pixels a flat sheet covers against its projected area: at most the pixels its outline crosses, one
 // per pixel of outline length, and the rest exact
 inline double coverage_px(double outline_px) { return outline_px; }
+
+// a field's colour at a node's pixel against its value's place on the colour map: 8-bit rounding of the map's
+// mix and of the GL's (a level each), plus what the linear texture changes over the half pixel by which the
+// pixel's centre may miss the node (the colour's change a pixel, measured across the image)
+inline double field_colour_levels(double levels_per_pixel) { return 2 + 0.5 * levels_per_pixel; }
 
 // implicit-euler's kept-factor solves (mass_spring_implicit.hpp) stop at a relative residual of 1e-8, and whether
 // a step reuses the factor or refactorises is decided from the CPU time each took: two runs of a cloth (serial

@@ -106,8 +106,7 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
           y[index(f, n)] = sides.at(f, side, boundaries_[static_cast<size_t>(f)].dirichlet_position[static_cast<size_t>(n)]);
     return y;
   }
-  bool has_exact() const override { return !exact_.empty(); }
-  Eigen::VectorXd exact(double t) const override { return exact_.empty() ? Model::exact(t) : on_grid(exact_, t); }
+  std::optional<Shapes> shapes(const Eigen::VectorXd& y) const override;
 
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     // the plain nodes in the compiled loop, the others (by a side, or upwinded) one by one below
@@ -152,9 +151,9 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
       if (native) native(t, local.data(), p_.data(), out.data());
       else
         for (size_t e = 0; e < per_node; ++e) out[e] = run(entries_[e].tape, t, local.data(), p_.data(), stack.get());
-      const int* at = &positions_[static_cast<size_t>(n) * per_node];
+      const int* from = &contributions_[static_cast<size_t>(n) * per_node];
       for (size_t e = 0; e < per_node; ++e)
-        if (at[e] >= 0) values[at[e]] += out[e];
+        for (int c = from[e]; c < from[e + 1]; ++c) values[positions_[static_cast<size_t>(c)]] += weights_[static_cast<size_t>(c)] * out[e];
     }
   }
   void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::MatrixXd> dfdy) const override {
@@ -209,10 +208,15 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
         switch (from.kind) {
           case Source::Kind::node: out[s] = y[index(f, from.node)]; break;
           case Source::Kind::dirichlet: out[s] = sides.at(f, from.side, from.position); break;
-          case Source::Kind::ghost:
-            // k outside the side: its mirror k inside, plus 2 k h times the outward normal derivative (on either side)
-            out[s] = y[index(f, from.node)] + 2 * from.k * grid_.h[from.side < 2 ? 0 : 1] * sides.at(f, from.side, from.position);
+          case Source::Kind::ghost: {
+            // outside the side: its combination of the values inside, plus slope h times the outward normal derivative
+            const Ghost& ghost = b.ghosts[static_cast<size_t>(from.node)];
+            double value = 0;
+            for (const auto& [term, weight] : ghost.terms)
+              value += weight * (term.kind == Source::Kind::node ? y[index(f, term.node)] : sides.at(f, term.side, term.position));
+            out[s] = ghost.slope == 0 ? value : value + ghost.slope * grid_.h[from.side < 2 ? 0 : 1] * sides.at(f, from.side, from.position);
             break;
+          }
         }
       }
     }
@@ -243,6 +247,7 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
   void start_native(bool compile);
 
   PdeGrid info_;
+  std::vector<std::array<double, 2>> drawn_range_;  // each field's least and greatest initial value: a 1-D curve's scale
   Layout grid_;
   Stencil stencil_{2, 1};
   std::vector<FieldBoundary> boundaries_;
@@ -253,7 +258,10 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
   int locals_ = 0, coordinates_ = 0, switches_ = 0, depth_ = 1;
   bool autonomous_ = true;
   Eigen::SparseMatrix<double> pattern_;
-  std::vector<int> positions_;  // node-major: positions_[n * entries + e], the entry's place among the values, or -1
+  // node-major, entry e of node n adds weights_[c] times its value at the place positions_[c] among the Jacobian's
+  // values, for c from contributions_[n * entries + e] to the next
+  std::vector<int> contributions_, positions_;
+  std::vector<double> weights_;
   std::shared_ptr<const NativeCode> native_;
   NativeFn native_rhs_ = nullptr, native_jacobian_ = nullptr;
   NativeGridFn native_grid_ = nullptr;  // null: every node one by one
@@ -329,6 +337,41 @@ void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
         if (*tape) depth_ = std::max(depth_, (*tape)->depth);
   make_pattern();
   start_native(compile);
+  if (!exact_.empty()) info_.exact = [this](double t) { return on_grid(exact_, t); };
+  const Eigen::VectorXd y0 = initial_state();
+  for (int f = 0; f < fields(); ++f) {
+    const auto u = y0.segment(Eigen::Index{f} * grid_.nodes(), grid_.nodes());
+    std::array<double, 2> range{u.minCoeff(), u.maxCoeff()};
+    if (!(range[1] > range[0])) range[1] = range[0] + std::max(1.0, std::abs(range[0]));
+    drawn_range_.push_back(range);
+  }
+}
+
+// a 2-D grid's fields as pictures side by side, one colour range over an animation; a 1-D grid's as curves
+// u(x) over the domain, one above the other, each drawn 0.6 of the domain's length high over its initial range
+std::optional<Shapes> Pde::shapes(const Eigen::VectorXd& y) const {
+  Shapes s;
+  s.planar = true;
+  s.up = Eigen::Vector3d::UnitY();
+  const double length = info_.domain[0][1] - info_.domain[0][0];
+  for (int f = 0; f < fields(); ++f) {
+    const auto u = y.segment(Eigen::Index{f} * grid_.nodes(), grid_.nodes());
+    if (info_.ny > 1) {
+      s.fields.push_back({.nx = info_.nx, .ny = info_.ny,
+                          .origin = {info_.domain[0][0] + drawn_offset(info_, static_cast<size_t>(f)), info_.domain[1][0]},
+                          .extent = {length, info_.domain[1][1] - info_.domain[1][0]},
+                          .periodic = info_.periodic, .values = u, .same_range = true});
+      continue;
+    }
+    const double height = 0.6 * length, base = -1.4 * height * f;
+    const auto [low, high] = drawn_range_[static_cast<size_t>(f)];
+    std::vector<Eigen::Vector3d> curve;
+    for (int i = 0; i < info_.nx; ++i) curve.emplace_back(info_.x[static_cast<size_t>(i)], base + height * (u[i] - low) / (high - low), 0);
+    // a periodic axis's curve closes at the domain's far end, the first node's image
+    if (info_.periodic[0]) curve.emplace_back(info_.domain[0][1], curve.front().y(), 0);
+    s.lines.push_back(std::move(curve));
+  }
+  return s;
 }
 
 
@@ -348,6 +391,9 @@ void Pde::make_grid(const PdeSpec& s) {
   grid_ = layout_of(s, periodic);
   info_.nx = grid_.nx;
   info_.ny = grid_.ny;
+  info_.domain = s.domain;
+  if (s.dimension == 1) info_.domain[1] = {0, 0};
+  info_.periodic = {periodic[0], s.dimension == 2 && periodic[1]};
   for (int j = 0; j < grid_.ny; ++j)
     for (int i = 0; i < grid_.nx; ++i) {
       info_.x.push_back(grid_.origin[0] + i * grid_.h[0]);
@@ -458,9 +504,6 @@ void Pde::make_boundaries(const PdeSpec& s, const Symbols& coordinates, Derived&
           throw BadEquations(fmt::format("{}: no condition on the {} side ({} = \"periodic\", or {} = {{ value = \"...\" }} or {{ derivative = \"...\" }})",
                                          b.where, side_names[side], axis == 0 ? "x" : "y", side_names[side]));
       }
-      if (!periodic && s.order == 4)
-        throw BadEquations(fmt::format("{}: order 4 is taken on periodic axes (a side's two ghosts would be of lower order); {} of {} is not", s.order_where,
-                                       axis == 0 ? "x" : "y", field));
     }
     std::array<SideTapes, 4> tapes;
     for (int side = 0; side < 4; ++side)
@@ -478,33 +521,43 @@ void Pde::make_boundaries(const PdeSpec& s, const Symbols& coordinates, Derived&
 }
 
 // the Jacobian's pattern (every diagonal in it: the Newton matrix I - h J has it), and where each entry of each
-// node adds its value
+// node adds its value, by what weight: a stencil value read from a node adds to that node's column; one from a
+// ghost to each node the ghost is made from, by its weight; one from a Dirichlet side to none
 void Pde::make_pattern() {
-  const int nodes = grid_.nodes();
-  const auto column_of = [&](const Entry& e, int n) -> Eigen::Index {
-    const Source& from = boundaries_[static_cast<size_t>(e.field)].sources[static_cast<size_t>(n) * static_cast<size_t>(stencil_.size()) + static_cast<size_t>(e.slot)];
-    return from.kind == Source::Kind::dirichlet ? -1 : index(e.field, from.node);
+  const int nodes = grid_.nodes(), slots = stencil_.size();
+  // an entry's columns at node n, with their weights
+  const auto columns_of = [&](const Entry& e, int n, const auto& visit) {
+    const FieldBoundary& b = boundaries_[static_cast<size_t>(e.field)];
+    const Source& from = b.sources[static_cast<size_t>(n) * static_cast<size_t>(slots) + static_cast<size_t>(e.slot)];
+    if (from.kind == Source::Kind::node) visit(index(e.field, from.node), 1.0);
+    if (from.kind == Source::Kind::ghost)
+      for (const auto& [term, weight] : b.ghosts[static_cast<size_t>(from.node)].terms)
+        if (term.kind == Source::Kind::node) visit(index(e.field, term.node), weight);
   };
+  const auto evaluated = [&](const Entry& e, int n) { return boundaries_[static_cast<size_t>(e.row)].dirichlet_side[static_cast<size_t>(n)] < 0; };
   std::vector<Eigen::Triplet<double>> triplets;
   for (Eigen::Index i = 0; i < size(); ++i) triplets.emplace_back(i, i, 0.0);
   for (int n = 0; n < nodes; ++n)
     for (const Entry& e : entries_)
-      if (boundaries_[static_cast<size_t>(e.row)].dirichlet_side[static_cast<size_t>(n)] < 0)
-        if (const Eigen::Index c = column_of(e, n); c >= 0) triplets.emplace_back(index(e.row, n), c, 0.0);
+      if (evaluated(e, n)) columns_of(e, n, [&](Eigen::Index c, double) { triplets.emplace_back(index(e.row, n), c, 0.0); });
   pattern_.resize(size(), size());
   pattern_.setFromTriplets(triplets.begin(), triplets.end());
   pattern_.makeCompressed();
-  positions_.assign(static_cast<size_t>(nodes) * entries_.size(), -1);
+  contributions_.assign(static_cast<size_t>(nodes) * entries_.size() + 1, 0);
   for (int n = 0; n < nodes; ++n)
     for (size_t k = 0; k < entries_.size(); ++k) {
       const Entry& e = entries_[k];
-      if (boundaries_[static_cast<size_t>(e.row)].dirichlet_side[static_cast<size_t>(n)] >= 0) continue;
-      const Eigen::Index c = column_of(e, n);
-      if (c < 0) continue;
+      const size_t at = static_cast<size_t>(n) * entries_.size() + k;
+      contributions_[at + 1] = contributions_[at];
+      if (!evaluated(e, n)) continue;
       const Eigen::Index r = index(e.row, n);
-      const int* rows = pattern_.innerIndexPtr();
-      const int begin = pattern_.outerIndexPtr()[c], end = pattern_.outerIndexPtr()[c + 1];
-      positions_[static_cast<size_t>(n) * entries_.size() + k] = static_cast<int>(std::lower_bound(rows + begin, rows + end, r) - rows);
+      columns_of(e, n, [&](Eigen::Index c, double weight) {
+        const int* rows = pattern_.innerIndexPtr();
+        const int begin = pattern_.outerIndexPtr()[c], end = pattern_.outerIndexPtr()[c + 1];
+        positions_.push_back(static_cast<int>(std::lower_bound(rows + begin, rows + end, r) - rows));
+        weights_.push_back(weight);
+        ++contributions_[at + 1];
+      });
     }
 }
 
@@ -548,5 +601,7 @@ void Pde::start_native(bool compile) {
 std::unique_ptr<Model> make_pde(const PdeSpec& spec, const Params& values, bool compile) { return std::make_unique<Pde>(spec, values, compile); }
 
 const PdeGrid* pde_grid(const Model& model) { return model.as<PdeGrid>(); }
+
+double drawn_offset(const PdeGrid& grid, size_t field) { return 1.1 * static_cast<double>(field) * (grid.domain[0][1] - grid.domain[0][0]); }
 
 }  // namespace stepwise

@@ -1,6 +1,7 @@
 // The grid of a PDE scene and where each stencil value of each node comes from (models/pde.hpp): a node of the
-// state, a Dirichlet side's value, or a Neumann side's ghost (a node mirrored through the side, plus 2 k h times the
-// side's normal derivative). Built once; read at every evaluation of f and of its Jacobian.
+// state, a Dirichlet side's value, or a ghost outside a side, a fixed combination of the nodes and values inside it
+// and of the side's normal derivative (models/pde.hpp says which). Built once; read at every evaluation of f and of
+// its Jacobian.
 #pragma once
 
 #include "models/pde.hpp"
@@ -27,9 +28,15 @@ struct Source {
   enum class Kind : std::uint8_t { node, dirichlet, ghost };
   Kind kind = Kind::node;
   std::int8_t side = -1;  // dirichlet and ghost: the side (Side)
-  std::int8_t k = 0;      // ghost: how far outside the side
-  int node = 0;           // node and ghost: the node of the field read (the mirror for a ghost)
+  int node = 0;           // node: the node of the field read; ghost: its combination among FieldBoundary::ghosts
   int position = 0;       // dirichlet and ghost: where along the side its formula is evaluated
+};
+
+// a ghost's value: the sum of each term's weight times its value (a node's, or a Dirichlet side's), plus `slope` h
+// times the side's outward normal derivative (h the spacing across the side)
+struct Ghost {
+  std::vector<std::pair<Source, double>> terms;
+  double slope = 0;
 };
 
 // one field's boundary on the grid: for each node whether it follows a Dirichlet side (then which, and where along
@@ -40,6 +47,7 @@ struct FieldBoundary {
   std::vector<std::int8_t> dirichlet_side;  // per node: the Dirichlet side it lies on, or -1
   std::vector<int> dirichlet_position;      // per node: its place along that side
   std::vector<Source> sources;              // node-major: sources[node * stencil.size() + slot]
+  std::vector<Ghost> ghosts;                // the ghosts' combinations, by Source::node
 };
 
 // the nodes and spacings: a periodic axis of n points spans [a, b) at h = (b - a) / n; another [a, b] at

@@ -40,7 +40,7 @@ struct StudyScene {
   // a scene of the user's (`stepwise study NAME --scene FILE`): how its model is made (model and params unused)
   std::function<std::unique_ptr<Model>()> factory = nullptr;
   // a PDE scene of the user's: its model on a grid of `points` an axis (0: the scene's) with stencils of `order`, and
-  // whether its every axis is periodic (where order 4 applies); null for any other scene
+  // whether its every axis is periodic (n points span it at h = 1/n of it, else 1/(n - 1)); null for any other scene
   std::function<std::unique_ptr<Model>(int points, int order)> on_grid = nullptr;
   bool periodic = false;
 };
@@ -117,18 +117,25 @@ inline std::vector<StudyScene> work_precision_scenes(bool quick) {
 inline constexpr double dense_matrix_budget = 1 << 20;
 
 inline constexpr std::string_view dense_note =
-    "Methods that would keep dense n x n matrices larger than 1 MiB (the standing wave's 578 unknowns: implicit-euler, GSL's implicit "
-    "steppers) are left out of a scene; cvode-bdf, with KLU on the sparse Jacobian, stands for the implicit methods there. On the "
+    "Methods that would keep dense n x n matrices larger than 1 MiB (the standing wave's 578 unknowns: GSL's implicit steppers) are left "
+    "out of a scene, and so is implicit-euler's full Newton beyond as many unknowns (on a sparse Jacobian a sparse LU at every "
+    "iteration: 17 s of a quick report's sweeps on the standing wave); cvode-bdf, with KLU on the sparse Jacobian, stands for the implicit methods there. On the "
     "cloth, GSL's implicit steppers (a dense Jacobian by differences every step: 3-4 s a point at rtol 1e-6) are left out too; "
     "implicit-euler on CHOLMOD and fast-mass-spring join cvode-bdf there.\n\n";
 
 // the constrained methods (xpbd, rattle, ida: a cloth's springs are compliant constraints too) are measured in the
 // constraints study, at their own settings (substeps and iterations), not in these sweeps of steps and tolerances;
 // a method with a twin (a GPU compute pass) gives its twin's numbers, measured once
+// implicit Euler's full Newton factorises I - hJ at every iteration: on a sparse Jacobian (UMFPACK) its sweeps of the
+// standing wave's 578 unknowns took 17 s of a quick report's work-precision, so (but for its mass-spring solver) it
+// keeps the dense rule's reach in the sweeps, 362 unknowns, and a scene that keeps dense matrices out keeps it out
+inline constexpr int newton_per_iteration_unknowns = 362;
+
 inline bool in_sweep(const Method& method, const Model& model, bool dense) {
   const double bytes = dense_matrix_bytes(method, model);
-  return method_applies(method, model) && bytes <= dense_matrix_budget && (dense || bytes == 0) && method.needs.type != &typeid(DistanceConstraints) &&
-         method.twin.empty();
+  const bool newton_out = method.family == Family::implicit_euler && !model.as<MassSpringView>() && (!dense || model.size() > newton_per_iteration_unknowns);
+  return method_applies(method, model) && bytes <= dense_matrix_budget && (dense || bytes == 0) && !newton_out &&
+         method.needs.type != &typeid(DistanceConstraints) && method.twin.empty();
 }
 
 // the methods of a scene's sweeps, fixed-step ones only if asked

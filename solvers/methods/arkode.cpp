@@ -20,7 +20,6 @@
 
 #include <arkode/arkode_arkstep.h>
 #include <sunlinsol/sunlinsol_dense.h>
-#include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 
@@ -161,11 +160,9 @@ class ArkodeIntegrator final : public Integrator {
     } else if (implicit && (imex || system.as<SparseJacobian>())) {
       initial_pattern(callbacks, t0, y0);
       matrix.reset(sparse_matrix(callbacks, context.get()));
-      linear.reset(SUNLinSol_KLU(y.get(), matrix.get(), context.get()));
-      if (!linear) return setup_failed("SUNLinSol_KLU", ARK_MEM_FAIL);
-      // AMD rather than SUNDIALS' default COLAMD: the mass-spring and wave patterns are structurally
-      // symmetric, and COLAMD's fill made the 32 x 32 flag's refactorisations 50% of an IMEX run (see sundials_support.hpp)
-      if (const int code = SUNLinSol_KLUSetOrdering(linear.get(), 0)) return setup_failed("SUNLinSol_KLUSetOrdering", code);
+      const char* made_by = nullptr;
+      linear.reset(sparse_solver(y.get(), matrix.get(), context.get(), made_by));
+      if (!linear) return setup_failed(made_by, ARK_MEM_FAIL);
       if (const int code = ARKStepSetLinearSolver(m, linear.get(), matrix.get())) return setup_failed("ARKStepSetLinearSolver", code);
       if (const int code = ARKStepSetJacFn(m, sundials::sparse_jacobian)) return setup_failed("ARKStepSetJacFn", code);
     } else if (implicit) {

@@ -17,7 +17,6 @@
 #include <cvode/cvode.h>
 #include <cvode/cvode_proj.h>
 #include <sunlinsol/sunlinsol_dense.h>
-#include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
@@ -78,7 +77,7 @@ class CvodeIntegrator final : public Integrator {
       if (const int code = CVodeSetMaxStep(mem.get(), max_step)) return setup_failed("CVodeSetMaxStep", code);
     }
 
-    // nonlinear and linear solvers: fixed point for Adams; Newton with dense LU or KLU for BDF
+    // nonlinear and linear solvers: fixed point for Adams; Newton with dense LU, or KLU or UMFPACK (sparse_solver) for BDF
     NonlinSolPtr nonlinear;
     MatrixPtr matrix;
     LinSolPtr linear;
@@ -88,11 +87,9 @@ class CvodeIntegrator final : public Integrator {
     } else if (system.as<SparseJacobian>()) {
       initial_pattern(callbacks, t0, y0);
       matrix.reset(sparse_matrix(callbacks, context.get()));
-      linear.reset(SUNLinSol_KLU(y.get(), matrix.get(), context.get()));
-      if (!linear) return setup_failed("SUNLinSol_KLU", CV_MEM_FAIL);
-      // AMD rather than SUNDIALS' default COLAMD: the mass-spring and wave patterns are structurally
-      // symmetric, and COLAMD's fill made the 32 x 32 flag's refactorisations 50% of an IMEX run (see sundials_support.hpp)
-      if (const int code = SUNLinSol_KLUSetOrdering(linear.get(), 0)) return setup_failed("SUNLinSol_KLUSetOrdering", code);
+      const char* made_by = nullptr;
+      linear.reset(sparse_solver(y.get(), matrix.get(), context.get(), made_by));
+      if (!linear) return setup_failed(made_by, CV_MEM_FAIL);
       if (const int code = CVodeSetLinearSolver(mem.get(), linear.get(), matrix.get())) return setup_failed("CVodeSetLinearSolver", code);
       if (const int code = CVodeSetJacFn(mem.get(), sundials::sparse_jacobian)) return setup_failed("CVodeSetJacFn", code);
     } else {

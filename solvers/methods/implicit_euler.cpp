@@ -17,7 +17,7 @@ constexpr int newton_max_iterations = 30;
 class ImplicitEuler final : public FixedStepper {
  public:
   explicit ImplicitEuler(const CountedSystem& s)
-      : system_(s), matrix_(make_dense_newton_matrix(s)), f_(s.size()), residual_(s.size()), d_(s.size()), y1_(s.size()) {}
+      : system_(s), matrix_(make_newton_matrix(s)), f_(s.size()), residual_(s.size()), d_(s.size()), y1_(s.size()) {}
 
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override {
     const double t1 = t + h;
@@ -72,11 +72,11 @@ void register_implicit_euler_methods(MethodTable& table) {
       .name = "implicit-euler",
       .family = Family::implicit_euler,
       .source = Source::hand_written,
-      .description = "implicit, fixed step; Newton + dense LU, or for mass-spring systems Baraff-Witkin's linearised step "
-                     "on CHOLMOD (a kept factor preconditioning CG)",
+      .description = "implicit, fixed step; Newton + LU (UMFPACK's sparse LU on a large sparse Jacobian, else dense), or for "
+                     "mass-spring systems Baraff-Witkin's linearised step on CHOLMOD (a kept factor preconditioning CG)",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
-      .dense = DenseMatrices::unless_mass_spring,
+      .dense = DenseMatrices::unless_mass_spring_or_sparse,
       .make = fixed_steps(make_implicit_euler),
       .stability = {.R = implicit_euler_stability},
   });
@@ -84,10 +84,11 @@ void register_implicit_euler_methods(MethodTable& table) {
       .name = "implicit-euler-newton",
       .family = Family::implicit_euler,
       .source = Source::hand_written,
-      .description = "implicit, fixed step, Newton to convergence (CHOLMOD for mass-spring systems, else dense LU)",
+      .description = "implicit, fixed step, Newton to convergence (CHOLMOD for mass-spring systems, UMFPACK on a large sparse "
+                     "Jacobian, else dense LU)",
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
-      .dense = DenseMatrices::unless_mass_spring,
+      .dense = DenseMatrices::unless_mass_spring_or_sparse,
       .make = fixed_steps(make_implicit_euler_newton),
   });
 }

@@ -7,8 +7,8 @@
 //   W k_i = gamma h ( f(t + c_i h, y0 + sum_j a_ij k_j) + sum_j (C_ij / h) k_j + d_i h df/dt ),   i = 1..s
 //   y1 = y0 + sum_j a_sj k_j + k_s,   error estimate k_s
 //
-// W is factorised by dense LU for a small system, by sparse LU on the system's fixed pattern for a large one
-// with a sparse Jacobian. df/dt of a non-autonomous system is a five-point central difference in t.
+// W is factorised by dense LU for a small system, by UMFPACK's sparse LU on the system's fixed pattern for a large
+// one with a sparse Jacobian (solvers/sparse_newton_matrix.cpp). df/dt of a non-autonomous system is a five-point central difference in t.
 #include "solvers/adaptive_step.hpp"
 #include "solvers/fd_jacobian.hpp"
 #include "solvers/fixed_step.hpp"
@@ -16,7 +16,6 @@
 #include "solvers/run_support.hpp"
 #include "solvers/step_controller.hpp"
 
-#include <Eigen/SparseLU>
 #include <fmt/format.h>
 
 #include <array>
@@ -109,37 +108,6 @@ std::complex<double> stability(std::complex<double> z) {
   return arg + k[S - 1];
 }
 
-// W = I - gamma h J on the system's sparse pattern, by Eigen's sparse LU: for a large system with a sparse Jacobian
-class SparseNewtonMatrix final : public NewtonMatrix {
- public:
-  explicit SparseNewtonMatrix(const CountedSystem& s) : system_(s) {}
-  bool factor(double t, const Eigen::VectorXd& y, double h) override {
-    system_.as<SparseJacobian>()->sparse_jacobian(t, y, jac_);
-    ++system_.stats().jac_evals;
-    ++system_.stats().factorizations;
-    Eigen::SparseMatrix<double> identity(jac_.rows(), jac_.cols());
-    identity.setIdentity();
-    w_ = identity - h * jac_;
-    w_.makeCompressed();
-    if (!analysed_) {
-      lu_.analyzePattern(w_);
-      analysed_ = true;
-    }
-    lu_.factorize(w_);
-    return lu_.info() == Eigen::Success;
-  }
-  void solve(const Eigen::VectorXd& r, Eigen::VectorXd& out) override {
-    ++system_.stats().linear_solves;
-    out = lu_.solve(r);
-  }
-
- private:
-  const CountedSystem& system_;
-  Eigen::SparseMatrix<double> jac_, w_;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
-  bool analysed_ = false;
-};
-
 // W = I - gamma h J for a system of N = 2..4 unknowns in fixed-size Eigen types: the LU and its solves unrolled
 // (a dynamic-size LU's solve, two triangular passes through Eigen's general kernels, was most of what remained of
 // a step on Van der Pol after the stages were fused)
@@ -168,13 +136,9 @@ class SmallNewtonMatrix final : public NewtonMatrix {
 
 std::unique_ptr<NewtonMatrix> newton_matrix_for(const CountedSystem& s);
 
-// a system this large with a sparse Jacobian is factorised sparse: a dense LU's n^3/3 passes the sparse one's
-// analysis and fill well before (the standing wave's 578 unknowns: 64 MFLOP a step dense)
-constexpr int sparse_from = 64;
-
 // sparse LU on a large system's pattern, fixed-size LU on 2 to 4 unknowns, else dense LU
 std::unique_ptr<NewtonMatrix> newton_matrix_for(const CountedSystem& s) {
-  if (s.as<SparseJacobian>() && s.size() >= sparse_from) return std::make_unique<SparseNewtonMatrix>(s);
+  if (s.as<SparseJacobian>() && s.size() >= sparse_newton_from) return make_sparse_newton_matrix(s);
   if (s.size() == 2) return std::make_unique<SmallNewtonMatrix<2>>(s);
   if (s.size() == 3) return std::make_unique<SmallNewtonMatrix<3>>(s);
   if (s.size() == 4) return std::make_unique<SmallNewtonMatrix<4>>(s);

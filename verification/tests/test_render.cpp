@@ -1,7 +1,8 @@
 // Rendering: the photon map against closed forms (still water, flux, a sinusoid's paraxial caustic and its
 // focus) and against an independent CPU photon tracer; frames against the simulation (a ball's centroid,
-// a sheet's covered area, every scene drawn where its geometry projects); OSMesa and EGL giving the same
-// bytes; golden frames on any llvmpipe thread count; the render command's contract.
+// a sheet's covered area, a field's colours its values, every scene drawn where its geometry projects); OSMesa
+// and EGL giving the same bytes; golden frames on any llvmpipe thread count; the render command's contract (a
+// 1-D PDE's space-time picture among it).
 #include "render/caustics.hpp"
 #include "render/renderer.hpp"
 #include "render/water_optics.hpp"
@@ -25,6 +26,9 @@
 #include <numbers>
 
 #include <unistd.h>
+
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
 
 namespace stepwise {
 namespace {
@@ -267,6 +271,40 @@ TEST(Frames, FlatSheetCoversItsProjectedArea) {
   EXPECT_LE(std::abs(covered - area), tolerance::coverage_px(outline));
 }
 
+// the smoke-like colour map's red at s in [0, 1] (renderer.cpp's lit_fragment, mode 3), in 8-bit levels
+double field_red(double s) { return 255 * (0.05 + (0.96 - 0.05) * std::clamp(s, 0.0, 1.0)); }
+
+// a field of 8 x 4 nodes on a rectangle, not periodic, its value the node's column: each node's pixel has the
+// colour of its value's place in the range given (a side's nodes at its edge), and a field after it beside it
+TEST(Frames, AFieldsColourIsItsValueOnItsRange) {
+  const int w = 320, h = 240, nx = 8, ny = 4;
+  Shapes shapes;
+  shapes.planar = true;
+  shapes.up = Eigen::Vector3d::UnitY();
+  Shapes::Field field{.nx = nx, .ny = ny, .origin = {1.0, 2.0}, .extent = {2.0, 1.0}, .periodic = {false, false}, .values = Eigen::VectorXd(nx * ny),
+                      .range = std::array<double, 2>{-1.0, 8.0}};
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) field.values[j * nx + i] = i;
+  shapes.fields.push_back(field);
+  const render::View view = render::make_view({&shapes, 1}, {}, w, h);
+  render::Renderer renderer(context(), w, h);
+  const auto image = renderer.draw(shapes, {}, view);
+  const auto red = [&](const Eigen::Vector2d& px) {
+    const int x = std::clamp(static_cast<int>(px.x()), 0, w - 1), y = std::clamp(static_cast<int>(px.y()), 0, h - 1);
+    return static_cast<double>(image.rgba[static_cast<size_t>(4 * (y * w + x))]);
+  };
+  const auto node = [&](int i, int j) {
+    return view.camera.pixel(Eigen::Vector3d(1.0 + 2.0 * i / (nx - 1), 2.0 + 1.0 * j / (ny - 1), 0), w, h);
+  };
+  // the colour's change a pixel along a row: a node's step in the map over the pixels between two nodes
+  const double per_pixel = (field_red(1.0 / 9) - field_red(0)) / (node(1, 1) - node(0, 1)).norm();
+  for (int i = 0; i < nx; ++i) {
+    // a side's node sits on the rectangle's edge: its pixel half inside, half in the background; taken a pixel in
+    const Eigen::Vector2d at = node(i, 1) + Eigen::Vector2d(i == 0 ? 1.0 : i == nx - 1 ? -1.0 : 0.0, 0);
+    EXPECT_NEAR(red(at), field_red((i + 1.0) / 9), tolerance::field_colour_levels(per_pixel) + (i == 0 || i == nx - 1 ? per_pixel : 0.0)) << "node " << i;
+  }
+}
+
 // the pixels where `image` differs from `empty`, as a box [x0, x1) x [y0, y1); empty if none
 struct PixelBox {
   double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
@@ -320,9 +358,9 @@ PixelBox projected_box(const Shapes& shapes, const render::View& view, int w, in
     for (Eigen::Index v = 0; v < sheet.vertices.rows(); ++v) add(sheet.vertices.row(v).transpose());
   for (const auto& line : shapes.lines)
     for (const auto& p : line) add(p, 0.35 * view.point_radius);
-  if (shapes.field)
-    for (const double x : {0.0, shapes.field->length})
-      for (const double y : {0.0, shapes.field->length}) add(Eigen::Vector3d(x, y, 0));
+  for (const auto& field : shapes.fields)
+    for (const double x : {field.origin.x(), field.origin.x() + field.extent.x()})
+      for (const double y : {field.origin.y(), field.origin.y() + field.extent.y()}) add(Eigen::Vector3d(x, y, 0));
   if (shapes.water) {
     // the surround's corners, and the surface where it rises above the deck
     const render::Pool pool(*shapes.water, view.pool_depth);
@@ -349,9 +387,9 @@ TEST(Frames, EverySceneIsDrawnWhereItsShapesProject) {
     RunOptions options;
     options.scene_file = entry.path().string();
     PreparedRun p = prepare_run(options);
-    // a user's equations and PDEs have nothing in space to draw (render refuses them: the bad-input catalogue)
+    // a user's equations have nothing in space to draw (render refuses them: the bad-input catalogue)
     if (!p.model->shapes(p.model->initial_state())) {
-      EXPECT_TRUE(p.scene.model == "equations" || p.scene.model == "pde") << name << ": a built-in model with nothing to draw";
+      EXPECT_EQ(p.scene.model, "equations") << name << ": a model with nothing to draw";
       continue;
     }
     // a moment into the run: a quarter of it, at most 0.2 s (a hundred thousand particles take 40 ms a step)
@@ -451,6 +489,34 @@ TEST(RenderCommand, WritesFramesTheirHashesAndAMovie) {
   std::ifstream in2(again / "render.json");
   const auto j2 = nlohmann::json::parse(in2);
   for (size_t k = 0; k < 5; ++k) EXPECT_EQ(j["frames"][k]["hash"], j2["frames"][k]["hash"]) << "frame " << k;
+}
+
+// a 1-D PDE's render: its curve's frames and space_time.png, the heat equation's mode over x (along) and t (up): at
+// the middle of the domain its colour darkens up the picture as exp(-D pi^2 t) decays, and by the Dirichlet sides
+// (u = 0, the range's low end) it is near the map's dark end throughout
+TEST(RenderCommand, APdesFieldIsPicturedOverSpaceAndTime) {
+  const fs::path out = fs::temp_directory_path() / fmt::format("stepwise_render_pde_{}", getpid());
+  fs::remove_all(out);
+  const Command c = stepwise_render(std::string(STEPWISE_SOURCE_DIR) + "/scenes/heat-1d.toml --frames 6 --size 160x120 --out " + out.string());
+  ASSERT_EQ(c.status, 0) << c.err;
+  std::ifstream in(out / "render.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["fields"], nlohmann::json::array({"u"}));
+  ASSERT_EQ(j["space_time"], "space_time.png");
+  int w = 0, h = 0, channels = 0;
+  std::unique_ptr<unsigned char, decltype(&stbi_image_free)> pixels(stbi_load((out / "space_time.png").string().c_str(), &w, &h, &channels, 4), &stbi_image_free);
+  ASSERT_TRUE(pixels) << stbi_failure_reason();
+  const auto red = [&](int x, int y) { return static_cast<double>(pixels.get()[4 * (y * w + x)]); };
+  // the picture fills the frame's width to within its 5% margin and is 0.75 of the domain high: rows from 20% to
+  // 80% of the frame lie inside it, bottom (early) to top (late)
+  std::vector<double> middle;
+  for (const double f : {0.8, 0.65, 0.5, 0.35, 0.2}) middle.push_back(red(w / 2, static_cast<int>(f * h)));
+  for (size_t k = 1; k < middle.size(); ++k) EXPECT_LT(middle[k], middle[k - 1]) << "row " << k;
+  // u(1/2, t) runs from 1 (the map's light end) to exp(-0.1 pi^2) = 0.37 over the run
+  EXPECT_GT(middle.front(), field_red(0.37));
+  EXPECT_LT(middle.back(), field_red(0.95));
+  // 5% of the frame in from its left, within 0.03 of the side x = 0: u <= sin(0.03 pi) = 0.094 at any time
+  EXPECT_LT(red(static_cast<int>(0.05 * w), h / 2), field_red(0.094) + tolerance::field_colour_levels(0)) << "by the side u = 0";
 }
 
 // the golden frames (verification/golden/frames.json) drawn again on 1 and 3 llvmpipe threads: the same bytes
