@@ -56,11 +56,12 @@ def main():
             seen |= set(summary) | {f"events.{key}" for e in summary["events"] for key in e}
             for error in summaries.iter_errors(summary):
                 problems.append(f"{scene} {' '.join(args)}: {'/'.join(map(str, error.absolute_path)) or 'summary'}: {error.message}")
-        # a render (two small frames) and an advice (a short budget)
+        # a render (two small frames; a 1-D PDE's too, with its fields and space-time picture) and an advice (a short budget)
         others = [("render", "render.json", ["render", os.path.join(scenes, "pendulum.toml"), "--frames", "2", "--size", "64x48"]),
+                  ("render", "render.json", ["render", os.path.join(scenes, "heat-1d.toml"), "--frames", "2", "--size", "64x48"]),
                   ("advice", "advice.json", ["advise", os.path.join(scenes, "pendulum.toml"), "--error", "1e-4", "--budget", "3"])]
-        for name, file, args in others:
-            out = os.path.join(d, name)
+        for k, (name, file, args) in enumerate(others):
+            out = os.path.join(d, f"{name}-{k}")
             done = subprocess.run([stepwise, *args, "--out", out], capture_output=True, text=True, timeout=600)
             if done.returncode != 0:
                 problems.append(f"{' '.join(args)}: exit {done.returncode}: {done.stderr.strip()}")
@@ -74,7 +75,7 @@ def main():
             problems.append(f"no run wrote {field}: the runs no longer cover it")
     for p in problems:
         print(p)
-    print(f"output_schemas: {len(RUNS)} runs, a render and an advice, {len(problems)} problem(s)")
+    print(f"output_schemas: {len(RUNS)} runs, two renders and an advice, {len(problems)} problem(s)")
     return 1 if problems else 0
 
 
