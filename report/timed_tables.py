@@ -3,7 +3,8 @@ code) and verification/tests/mpi_ranks.py (a report on ranks against one process
 
 - TIMING: columns that are CPU or wall times, or rates and ratios of them (by name);
 - CHOSEN_BY_TIME: tables whose rows are chosen by measured time (the cheapest method at a target, a Pareto front,
-  a verdict against a CPU budget, the step a budget buys, the scaling model fitted to timed cells);
+  a verdict against a CPU budget, the step a budget buys, the scaling model fitted to timed cells, the step limits
+  an advice's budget had time to search);
 - KEPT_FACTOR_FILES and KEPT_FACTOR_METHODS: tables, and rows of methods, whose results move by the solver's
   round-off because a factor is kept across steps while measured time says it pays (implicit Euler on the cloth,
   fast mass-spring; backward Euler's Newton starts from the linearised step, and the cloth solvers' rows are
@@ -18,7 +19,7 @@ CHOSEN_BY_TIME = {
     "advice_candidates.csv", "advice_summary.csv", "advice_sweep.csv", "recommendations.csv", "work_precision_pareto.csv",
     "cloth_realtime_verdicts.csv", "constraints_cheapest.csv", "constraints_substeps.csv", "side_by_side.csv",
     "side_by_side_frames.csv", "scaling_crossover.csv", "scaling_model.csv", "scaling_cell.csv",
-    "continuum_cloth_equal_cpu.csv",
+    "continuum_cloth_equal_cpu.csv", "pde_scene_candidates.csv", "pde_scene_summary.csv", "pde_scene_sweep.csv", "pde_scene_limits.csv",
 }
 KEPT_FACTOR_FILES = {"cloth_families.csv", "cloth_momentum.csv", "cloth_realtime.csv", "continuum_cloth_newton.csv", "cloth_solvers.csv",
                      "constraints_compliant_rod.csv"}
