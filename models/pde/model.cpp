@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 namespace stepwise {
 namespace {
@@ -25,31 +26,46 @@ using namespace pde;
 
 using NativeFn = void (*)(double t, const double* y, const double* p, double* out);
 // the pointwise f over a list of nodes (pde_loop below): f at node nodes[m] from the state entries index[m * width ..]
-using NativeGridFn = void (*)(double t, const double* y, const double* p, double* out, const int* index, const int* nodes, int count, int total,
+// the pointwise f over runs of consecutive nodes (pde_loop below): run r is nodes runs[3r] .. runs[3r] + runs[3r + 1]
+// - 1, whose state entries are each node's number plus the offsets tables[runs[3r + 2] * width ..]
+using NativeGridFn = void (*)(double t, const double* y, const double* p, double* out, const int* runs, int count, const int* tables, int total,
                               const double* x, const double* y_coordinate);
 
 // f over the nodes whose every stencil value is a node of the state (no side's value or ghost, no upwind switch), in
 // C beside the pointwise f it calls, so that the compiler inlines that into the loop: a node's cost is its formula's
-// and its gathered values', not a call through a pointer (bench_pde). Its sizes are the formula's, never the grid's
+// and its values' loads at offsets fixed along a run (the interior of a row is one run, a wrapped edge another), not
+// a call through a pointer nor a gather through an index per value (bench_pde). Its sizes are the formula's, never
+// the grid's
 std::string pde_loop(int width, int fields) {
+  // written out value by value: the loop over a run's nodes is then one block of arithmetic, which the compiler
+  // vectorises (restrict: f's values never overlap the state's, nor the parameters)
+  std::string offsets, gather, scatter;
+  for (int k = 0; k < width; ++k) {
+    offsets += fmt::format("    const int offset{0} = table[{0}];\n", k);
+    gather += fmt::format("      local[{0}] = y[n + offset{0}];\n", k);
+  }
+  for (int f = 0; f < fields; ++f) scatter += fmt::format("      out[(long){} * total + n] = o[{}];\n", f, f);
   return fmt::format(
       // a local alias: a call through it binds here, and is inlined (one through the exported name goes through the
       // PLT, which another object could interpose)
       "static void stepwise_point(double t, const double* y, const double* p, double* out) __attribute__((alias(\"stepwise_rhs\")));\n"
-      "void stepwise_grid_rhs(double t, const double* y, const double* p, double* out, const int* index, const int* nodes, int count,\n"
-      "                       int total, const double* x, const double* y_coordinate) {{\n"
-      "  double local[{0} + 2 + {2}], o[{1}];\n"
-      "  for (int m = 0; m < count; ++m) {{\n"
-      "    const int n = nodes[m];\n"
-      "    const int* at = index + (long)m * {0};\n"
-      "    for (int k = 0; k < {0}; ++k) local[k] = y[at[k]];\n"
-      "    local[{0}] = x[n];\n"
-      "    local[{0} + 1] = y_coordinate[n];\n"
-      "    stepwise_point(t, local, p, o);\n"
-      "    for (int f = 0; f < {1}; ++f) out[(long)f * total + n] = o[f];\n"
+      "void stepwise_grid_rhs(double t, const double* restrict y, const double* restrict p, double* restrict out, const int* runs,\n"
+      "                       int count, const int* tables, int total, const double* restrict x, const double* restrict y_coordinate) {{\n"
+      "  for (int r = 0; r < count; ++r) {{\n"
+      "    const int first = runs[3 * r], end = first + runs[3 * r + 1];\n"
+      "    const int* table = tables + (long)runs[3 * r + 2] * {0};\n"
+      "{3}"
+      "    for (int n = first; n < end; ++n) {{\n"
+      "      double local[{0} + 2 + {2}], o[{1}];\n"
+      "{4}"
+      "      local[{0}] = x[n];\n"
+      "      local[{0} + 1] = y_coordinate[n];\n"
+      "      stepwise_point(t, local, p, o);\n"
+      "{5}"
+      "    }}\n"
       "  }}\n"
       "}}\n",
-      width, fields, PdeSymbols::max_upwinds);
+      width, fields, PdeSymbols::max_upwinds, offsets, gather, scatter);
 }
 
 // a Jacobian entry of the pointwise formulas: d f_row / d (field's value at slot)
@@ -111,8 +127,8 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
   void rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> dydt) const override {
     // the plain nodes in the compiled loop, the others (by a side, or upwinded) one by one below
     if (native_grid_)
-      native_grid_(t, y.data(), p_.data(), dydt.data(), plain_index_.data(), plain_nodes_.data(), static_cast<int>(plain_nodes_.size()), grid_.nodes(),
-                   info_.x.data(), info_.y.data());
+      native_grid_(t, y.data(), p_.data(), dydt.data(), runs_.data(), static_cast<int>(runs_.size() / 3), tables_.data(), grid_.nodes(), info_.x.data(),
+                   info_.y.data());
     if (native_grid_ && other_nodes_.empty()) return;
     const SideValues sides = side_values(t);
     thread_local std::vector<double> local, out;
@@ -265,8 +281,8 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
   std::shared_ptr<const NativeCode> native_;
   NativeFn native_rhs_ = nullptr, native_jacobian_ = nullptr;
   NativeGridFn native_grid_ = nullptr;  // null: every node one by one
-  std::vector<int> plain_nodes_, other_nodes_;  // the compiled loop's nodes, and the rest
-  std::vector<int> plain_index_;               // the loop's gathered state entries, fields x slots a node
+  std::vector<int> other_nodes_;    // the nodes the compiled loop leaves, one by one
+  std::vector<int> runs_, tables_;  // the loop's runs of nodes and their offsets tables (NativeGridFn)
 };
 
 // a formula's text parsed with the operators, and expanded; the operator misapplied named at its column
@@ -569,6 +585,9 @@ void Pde::start_native(bool compile) {
   NativeSource source = c_source(rhs_, jacobian, 64 << 10, 1 << 20);
   const int width = fields() * stencil_.size();
   source.units.front() += pde_loop(width, fields());
+  // -O3, which vectorises the loop over a run (bench_pde: 2.3x -O2's time at Gray-Scott 256^2), where the formulas are
+  // of a size the equations model compiles at -O2; -O1 above
+  source.optimisation = source.bytes() <= EquationsOptions{}.optimise_below ? "-O3" : "-O1";
   std::string why;
   native_ = load_native(source, CompileLimits{}, why);
   if (!native_) return;
@@ -581,18 +600,31 @@ void Pde::start_native(bool compile) {
   // an upwinded formula reads its switches, which the loop does not set: every node one by one
   if (!upwinds_.empty()) return;
   native_grid_ = reinterpret_cast<NativeGridFn>(native_->symbol("stepwise_grid_rhs"));
+  // a run: consecutive plain nodes whose state entries lie at the same offsets from the node, fields x slots
+  std::map<std::vector<int>, int> table_of;
+  std::vector<int> offsets(static_cast<size_t>(width));
+  int last_table = -1;
   for (int n = 0; n < grid_.nodes(); ++n) {
     bool plain = true;
     for (int f = 0; f < fields() && plain; ++f) {
       const FieldBoundary& b = boundaries_[static_cast<size_t>(f)];
       plain = b.dirichlet_side[static_cast<size_t>(n)] < 0;
-      for (int k = 0; k < stencil_.size() && plain; ++k) plain = b.sources[static_cast<size_t>(n * stencil_.size() + k)].kind == Source::Kind::node;
+      for (int k = 0; k < stencil_.size() && plain; ++k) {
+        const Source& from = b.sources[static_cast<size_t>(n * stencil_.size() + k)];
+        plain = from.kind == Source::Kind::node;
+        offsets[static_cast<size_t>(f * stencil_.size() + k)] = static_cast<int>(index(f, from.node) - n);
+      }
     }
-    (plain ? plain_nodes_ : other_nodes_).push_back(n);
-    if (!plain) continue;
-    for (int f = 0; f < fields(); ++f)
-      for (int k = 0; k < stencil_.size(); ++k)
-        plain_index_.push_back(static_cast<int>(index(f, boundaries_[static_cast<size_t>(f)].sources[static_cast<size_t>(n * stencil_.size() + k)].node)));
+    if (!plain) {
+      other_nodes_.push_back(n);
+      last_table = -1;
+      continue;
+    }
+    const auto [it, added] = table_of.emplace(offsets, static_cast<int>(table_of.size()));
+    if (added) tables_.insert(tables_.end(), offsets.begin(), offsets.end());
+    if (it->second == last_table && runs_[runs_.size() - 3] + runs_[runs_.size() - 2] == n) ++runs_[runs_.size() - 2];
+    else runs_.insert(runs_.end(), {n, 1, it->second});
+    last_table = it->second;
   }
 }
 
