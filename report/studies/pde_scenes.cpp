@@ -24,7 +24,7 @@ struct ShippedPde {
 };
 constexpr ShippedPde shipped[] = {
     {"heat-1d", "h²/D", "D", true, true},
-    {"advection-upwind", "h/c", "c", false, true},
+    {"advection-upwind", "h/c", "c", false, false},
     {"fisher-kpp", "h²/D", "D", true, false},
 };
 
