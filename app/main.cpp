@@ -1,4 +1,4 @@
-// The stepwise command line: methods, scenes, run, study, report (DESIGN.md's contract).
+// The stepwise command line: methods, scenes, run, study, report (docs/cli.md).
 #include "render_command.hpp"
 #include "run_command.hpp"
 #include "run/interrupt.hpp"

@@ -1,4 +1,4 @@
-// stepwise advise's pick against the cheapest a full sweep finds (issue 37's target: within 1.25x): on each shipped
+// stepwise advise's pick against the cheapest a full sweep finds (the target: within 1.25x): on each shipped
 // equation scene and two it was not tuned on (the damped oscillator at zeta = 0.02, w = 8; Lorenz at rho = 14), the
 // advice at E = 1e-6 in a 10 s budget, then every method swept at every third of a decade (rtol) or of a halving
 // (dt) until it meets E. Both costs are the full sweep's own measurements (thread CPU, minimum of three runs), so

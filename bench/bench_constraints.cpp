@@ -1,6 +1,6 @@
 // The constrained methods on the chain of N rigid links (scenes/chain.toml): one xpbd iteration is O(N) (a sweep
 // over the N constraints), so its time per link and iteration (the counter) stays flat from N = 10 to 1000
-// (issue 50: within 2x); rattle's step (a Newton solve of the N multipliers by LU) against xpbd's frame at the
+// (the target: within 2x); rattle's step (a Newton solve of the N multipliers by LU) against xpbd's frame at the
 // same 1 ms step, to 100 links (at 1000 the 1 mm links turn by more than their length in a step and SHAKE's
 // Newton iteration does not converge: the run fails, saying so). And the seeds' 32 x 32 flag (scenes/flag.toml) for
 // 1 s of 1/60 s frames: xpbd in 20 substeps of one iteration a frame (its springs as compliant constraints), against

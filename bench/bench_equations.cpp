@@ -1,7 +1,7 @@
 // The pendulum written as equations in a scene file (scenes/pendulum-equations.toml: parsed, differentiated and
 // compiled at load time, models/equations.hpp) against the built-in pendulum model, at the same settings, on
 // rk4 (dt 1e-3, 10 s), tsitouras54, verner98 and cvode-bdf (rtol 1e-10, atol 1e-13); and the interpreter (no compiler) beside
-// both. Issue 37's target: the compiled equations cost at most 1.2x the built-in model. Ratios printed after the
+// both. The target: the compiled equations cost at most 1.2x the built-in model. Ratios printed after the
 // table: equations / built-in, interpreted / built-in. On rk4 also the same f hand-written in C++ behind the
 // OdeSystem interface (bench/users_pendulum.hpp), as a user's C++ model would be: the built-in pendulum's f is
 // inlined into the stepper (solvers/capabilities/inline_rhs.hpp), which no f the compiler cannot see can match.

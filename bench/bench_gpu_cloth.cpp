@@ -1,4 +1,4 @@
-// The explicit cloth (issue 9): one symplectic Euler step of the seeds' flag (the cloth model's defaults:
+// The explicit cloth on the GPU: one symplectic Euler step of the seeds' flag (the cloth model's defaults:
 // four corners pinned, the gusting wind through its normals, twelve springs a node) at N x N nodes, N = 128, 256,
 // 1024, 2048, from the flat start. In one run:
 //  - gpu-cloth's fragment pass and gpu-cloth-compute's compute pass on the GL's device (llvmpipe here, its

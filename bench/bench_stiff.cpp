@@ -1,4 +1,4 @@
-// Issue 37's stiff target: on Van der Pol at mu = 1000 to t = 2 (scenes/van-der-pol-stiff.toml, its error against
+// The stiff target: on Van der Pol at mu = 1000 to t = 2 (scenes/van-der-pol-stiff.toml, its error against
 // a converged reference: verification/reference.hpp), the CPU time each stiff method needs to reach an error of
 // 1e-4 ... 1e-8, each method swept over rtol in thirds of a decade (atol 1e-3 rtol), one output at t_end. Printed
 // after the table, per error: the cheapest time of rodas4 and rodas5 over the best of cvode-bdf, gsl-bsimp and

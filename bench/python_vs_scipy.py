@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""stepwise.solve_ivp against scipy.integrate.solve_ivp, at equal error (issue 38).
+"""stepwise.solve_ivp against scipy.integrate.solve_ivp, at equal error.
 
 usage: PYTHONPATH=build/release/python /usr/bin/python3 bench/python_vs_scipy.py [--quick] [--events-only]
 

@@ -1,4 +1,4 @@
-// An offscreen OpenGL 4.5 core context, made current on the calling thread when made and by make_current(): OSMesa (DESIGN.md's choice) or
+// An offscreen OpenGL 4.5 core context, made current on the calling thread when made and by make_current(): OSMesa (the default) or
 // EGL on Mesa's surfaceless platform, which gives the same images and is the path that outlives OSMesa
 // (removed in Mesa 25.1) and reaches a real GPU. Drawing goes to framebuffer objects, never to a window.
 #pragma once

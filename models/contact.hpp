@@ -2,7 +2,7 @@
 // (seeds: collision, the general case, for bodies that turn).
 //
 // Detection. Bodies are closed convex triangle meshes in their principal frames. A pair is tested only
-// where the bounding spheres about the centres of mass overlap; then the collisions issue's hierarchy
+// where the bounding spheres about the centres of mass overlap; then the collision detection's hierarchy
 // (triangle_mesh.hpp: BVH over each mesh, Moller's triangle-triangle test in overlapping leaves) gives the
 // pairs of faces that cut each other, and only their features are examined:
 //   - a vertex of one body inside the other (behind all its face planes): a contact at the vertex, along

@@ -1,4 +1,4 @@
-// A hanging chain of N masses and springs (the cloth issue's check with a known equilibrium): node 1 hangs
+// A hanging chain of N masses and springs (the cloth's first check, with a known equilibrium): node 1 hangs
 // from a pin at the origin by a spring, node k + 1 from node k, gravity along -y. Springs are Voigt's
 // (models/springs.hpp: stiffness c, damping gamma along the spring), each node has mass m and optional
 // linear drag. It starts straight down at rest length, at rest, and falls into its static equilibrium,

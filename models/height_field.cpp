@@ -72,7 +72,7 @@ std::pair<double, double> mode_amplitude(double w2, double mu, double a0, double
 
 namespace {
 
-// the keys every wave scene keeps (issue 6, checked from outside), then the scene's own
+// the keys every wave scene keeps (the contract's, checked from outside), then the scene's own
 std::vector<ParamSpec> with_wave_params(std::initializer_list<ParamSpec> own) {
   std::vector<ParamSpec> specs{
       {"size", 64, "", "grid points per side, boundary included (z = 0 there); at least 3", Bound::positive},

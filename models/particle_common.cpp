@@ -1,6 +1,6 @@
 #include "particle_common.hpp"
 
-#include "solvers/integrator.hpp"
+#include "solvers/memory_budget.hpp"
 
 #include <fmt/format.h>
 

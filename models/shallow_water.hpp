@@ -1,5 +1,5 @@
 // The shallow water equations on the height field's grid: the non-linear model beside the linear wave
-// equation, to show at which amplitude the wave equation stops being enough (issue 6's second model).
+// equation, to show at which amplitude the wave equation stops being enough (the water's second model).
 //
 // Water of rest depth H, surface eta(x, y, t) above rest, depth h = H + eta, depth-averaged velocity (u, w):
 //

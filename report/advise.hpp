@@ -2,7 +2,7 @@
 // accuracy, measured rather than guessed. A short work-precision sweep of every method that applies, each method
 // refined until it first meets E (then between its last two settings, for the cheapest that does), under a
 // budget of wall-clock seconds; the stiffness read off the exact Jacobian's spectrum along a reference run; and
-// why each other method lost. DESIGN.md: the advisor is a budgeted study on one scene.
+// why each other method lost. The advisor is a budgeted study on one scene.
 #pragma once
 
 #include <stepwise/report/studies.hpp>

@@ -76,7 +76,7 @@ def matches(value, half_unit, candidates):
     return i < len(candidates) and candidates[i] <= value + half_unit * (1 + 1e-9)
 
 
-# the tables held-out checks read, as the issues gave them: their columns in order, and what each must hold
+# the tables held-out checks read, as the studies' contracts give them: their columns in order, and what each must hold
 TABLE_CONTRACTS = {
     "cloth_solvers.csv": ["model", "method", "dt", "iterations", "substeps", "threads", "cpu_per_simulated_second", "potential_gap",
                           "pixels_off", "status"],

@@ -151,6 +151,20 @@ struct Shot {
   static auto fields(auto& s) { return std::tie(s.filmed, s.budget); }
 };
 
+// the clips a report films (a quick one, quick_clip alone) whose scene the scenes directory has (STEPWISE_SCENES
+// may name another); the others' names in `missing`
+std::vector<Clip> clips_to_film(const fs::path& scenes_dir, bool quick, std::vector<std::string>& missing) {
+  std::vector<Clip> all;
+  for (const Clip& clip : clips()) {
+    if (quick && clip.clip() != quick_clip) continue;
+    if (fs::exists(scenes_dir / (std::string(clip.scene) + ".toml")))
+      all.push_back(clip);
+    else
+      missing.push_back(clip.clip());
+  }
+  return all;
+}
+
 }  // namespace
 
 std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir, const StudyContext& ctx) {
@@ -160,16 +174,8 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
     return md + "Not filmed: ffmpeg is not installed here (it encodes the videos and draws their labels).\n\n";
   }
   const int fps = ctx.quick ? 15 : 30;
-  // the clips whose scene the scenes directory has (STEPWISE_SCENES may name another): the others said once, skipped
-  std::vector<Clip> all;
   std::vector<std::string> missing;
-  for (const Clip& clip : clips()) {
-    if (ctx.quick && clip.clip() != quick_clip) continue;
-    if (fs::exists(scenes_dir / (std::string(clip.scene) + ".toml")))
-      all.push_back(clip);
-    else
-      missing.push_back(clip.clip());
-  }
+  const std::vector<Clip> all = clips_to_film(scenes_dir, ctx.quick, missing);
   std::string skipped;
   if (!missing.empty()) {
     skipped = fmt::format("Not filmed, their scene files not being in {}: {}.", scenes_dir.string(), fmt::join(missing, ", "));

@@ -1,5 +1,5 @@
 // `stepwise run`'s outputs: trajectory.csv (t, the state's names or the model's summary of a large state,
-// energy where the model has one) and summary.json (DESIGN.md's fields).
+// energy where the model has one) and summary.json (docs/summary.schema.json's fields).
 //
 // The trajectory's rows are streamed to a temporary file as the run produces them (a long run's output is
 // never held in memory). summary.json is the manifest: it is removed before the new trajectory is renamed into
@@ -48,7 +48,7 @@ class TrajectoryRows {
   mutable double drift_ = 0;
 };
 
-// summary.json (DESIGN.md's fields) for a finished run, as a value and as its text; `constraint_drift` where the
+// summary.json (docs/summary.schema.json's fields) for a finished run, as a value and as its text; `constraint_drift` where the
 // scene has constraints
 nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::optional<double> constraint_drift = std::nullopt);
 std::string summary_text(const PreparedRun& p, const Measured& m, std::optional<double> constraint_drift = std::nullopt);

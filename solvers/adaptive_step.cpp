@@ -102,10 +102,4 @@ RunResult AdaptiveStepIntegrator::solve(const OdeSystem& system, double t0, cons
   return result;
 }
 
-MakeIntegrator adaptive_steps(AdaptiveStepperFactory make_stepper) {
-  return [make_stepper = std::move(make_stepper)](const Method& method, const StepControl& control) {
-    return std::make_unique<AdaptiveStepIntegrator>(method, control, make_stepper);
-  };
-}
-
 }  // namespace stepwise

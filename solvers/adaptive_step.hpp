@@ -48,9 +48,6 @@ class AdaptiveStepIntegrator final : public Integrator {
   AdaptiveStepperFactory make_stepper_;
 };
 
-// an adaptive method's MakeIntegrator: the loop above around the steps `make_stepper` makes
-MakeIntegrator adaptive_steps(AdaptiveStepperFactory make_stepper);
-
 // the first trial step: a small fraction of the first output interval, within the cap; the control adapts it
 double first_trial_step(const StepControl& control, const OdeSystem& system, double t0, std::span<const double> t_out);
 

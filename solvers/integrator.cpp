@@ -3,12 +3,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cstdlib>
+#include <atomic>
 #include <ctime>
-#include <fstream>
 #include <string>
-
-#include <unistd.h>
+#include <utility>
 
 namespace stepwise {
 
@@ -21,39 +19,34 @@ std::string_view to_string(Status status) {
   return "failed";
 }
 
-double physical_memory_bytes() {
-  static const double bytes = [] {
-    double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
-    // a container's or a batch job's share (cgroup v2), where it is smaller
-    if (std::ifstream limit("/sys/fs/cgroup/memory.max"); limit) {
-      std::string text;
-      limit >> text;
-      if (!text.empty() && text != "max") memory = std::min(memory, std::strtod(text.c_str(), nullptr));
-    }
-    // what the user says the run may assume (a node shared with other jobs; the fuzzer's own limit)
-    if (const char* env = std::getenv("STEPWISE_MEMORY"))
-      if (const double said = std::strtod(env, nullptr); said > 0) memory = std::min(memory, said);
-    return memory;
-  }();
-  return bytes;
-}
-
-bool over_memory_budget(double bytes) { return bytes > 0.5 * physical_memory_bytes(); }
-
-std::string memory_budget_text() {
-  return fmt::format("more than half of this machine's {:.3g} GiB, the most a run may plan on", physical_memory_bytes() / 0x1p30);
-}
-
 double thread_cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
+namespace {
+thread_local std::atomic<double>* run_workers = nullptr;  // the run on this thread's count of its workers' CPU time
+}  // namespace
+
+std::atomic<double>* worker_cpu_seconds() { return run_workers; }
+
+// cpu_seconds: this thread's CPU time in the run, and its workers' (WorkerCpuTime); a run inside another (a
+// reference the method takes) hands its workers' time on to the outer run's count too
 RunResult Integrator::integrate(const OdeSystem& system, double t0, const Eigen::VectorXd& y0, std::span<const double> t_out) const {
+  std::atomic<double> workers{0};
+  std::atomic<double>* const outer = std::exchange(run_workers, &workers);
+  struct Restore {
+    std::atomic<double>* outer;
+    std::atomic<double>& workers;
+    ~Restore() {
+      run_workers = outer;
+      if (outer) outer->fetch_add(workers.load());
+    }
+  } restore{outer, workers};
   const double start = thread_cpu_seconds();
   RunResult result = solve(system, t0, y0, t_out);
-  result.stats.cpu_seconds = thread_cpu_seconds() - start;
+  result.stats.cpu_seconds = thread_cpu_seconds() - start + workers.load();
   return result;
 }
 

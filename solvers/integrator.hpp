@@ -2,6 +2,7 @@
 // every method is made as (method.hpp registers methods; method_table.hpp makes one by name).
 #pragma once
 
+#include <stepwise/solvers/memory_budget.hpp>
 #include <stepwise/solvers/ode_system.hpp>
 
 #include <functional>
@@ -134,16 +135,8 @@ struct RunResult {
   static auto fields(auto& s) { return std::tie(s.status, s.message, s.t_stop, s.y_stop, s.trajectory, s.stats, s.events, s.terminated); }
 };
 
-// this machine's physical memory, the bound memory checks (a method's dense matrices, a particle count) are made against
-// (the smallest of the machine's, its cgroup's memory.max and $STEPWISE_MEMORY in bytes)
-double physical_memory_bytes();
-
-// the memory budget every refusal keeps, in its words: a run may plan on at most half of physical_memory_bytes()
-// ("more than half of this machine's 23.5 GiB, the most a run may plan on")
-bool over_memory_budget(double bytes);
-std::string memory_budget_text();
-
-// thread CPU time in seconds: sweeps run in parallel, so process time would mix runs
+// thread CPU time in seconds: sweeps run in parallel, so process time would mix runs (a run's cpu_seconds is its
+// thread's and its method's own workers', solvers/run_support.hpp: WorkerCpuTime)
 double thread_cpu_seconds();
 
 class Integrator {

@@ -69,7 +69,7 @@ struct Method;
 using MakeIntegrator = std::function<std::unique_ptr<Integrator>(const Method& method, const StepControl& control)>;
 
 struct Method {
-  std::string_view name;         // as DESIGN.md's table spells it, everywhere: CLI, CSV, plots
+  std::string_view name;         // as docs/methods.md spells it, everywhere: CLI, CSV, plots
   Family family;
   Source source;
   std::string_view description;  // one line: what it is

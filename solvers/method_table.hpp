@@ -1,4 +1,4 @@
-// The table of every method (DESIGN.md's), made once from what each family file registers, in the order
+// The table of every method (docs/methods.md), made once from what each family file registers, in the order
 // `stepwise methods`, methods.csv and the report's sweeps list them. The one place a method's name is
 // looked up: the command line, the report, the tests and the benches all come here.
 #pragma once

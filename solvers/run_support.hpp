@@ -8,11 +8,33 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
 
 namespace stepwise {
+
+// the count of the CPU time a method's own worker threads spend for the run on the calling thread (nullptr outside
+// a run): Integrator::integrate adds it to the run's cpu_seconds, so a run costs every thread it runs
+std::atomic<double>* worker_cpu_seconds();
+
+// made on each thread of a parallel region a method opens (an OpenMP team: vbd's colour sweeps, the wave's rows),
+// with the count read on the calling thread before it: on a worker (not the calling thread) the thread's CPU time
+// from here to the region's end is added to the count
+class WorkerCpuTime {
+ public:
+  WorkerCpuTime(std::atomic<double>* count, bool worker) : count_(worker ? count : nullptr), start_(count_ ? thread_cpu_seconds() : 0) {}
+  ~WorkerCpuTime() {
+    if (count_) count_->fetch_add(thread_cpu_seconds() - start_);
+  }
+  WorkerCpuTime(const WorkerCpuTime&) = delete;
+  WorkerCpuTime& operator=(const WorkerCpuTime&) = delete;
+
+ private:
+  std::atomic<double>* count_;
+  double start_;
+};
 
 // forwards to a system and counts every call of f in Stats; backends see only this wrapper. Capabilities
 // are passed through untouched (as<T>() reaches the model's), but for the projection, which this wrapper offers

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <omp.h>
+
 namespace stepwise {
 
 namespace {
@@ -56,12 +58,17 @@ std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pa
 double vbd_sweep(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, int threads,
                  Eigen::VectorXd& decrease) {
   decrease.setZero(x.size() / potential.dimension());
+  std::atomic<double>* const workers = worker_cpu_seconds();  // the run's, its cpu_seconds counting every thread
   for (const std::vector<int>& colour : colours) {
     const auto count = static_cast<std::ptrdiff_t>(colour.size());
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-    for (std::ptrdiff_t k = 0; k < count; ++k) {
-      const int i = colour[static_cast<size_t>(k)];
-      decrease[i] += move(potential, i, x);
+#pragma omp parallel num_threads(threads) if (threads > 1)
+    {
+      const WorkerCpuTime timed(workers, omp_get_thread_num() != 0);
+#pragma omp for schedule(static)
+      for (std::ptrdiff_t k = 0; k < count; ++k) {
+        const int i = colour[static_cast<size_t>(k)];
+        decrease[i] += move(potential, i, x);
+      }
     }
   }
   return decrease.sum();

@@ -1,5 +1,7 @@
 #include "wave_step.hpp"
 
+#include "solvers/run_support.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -156,10 +158,15 @@ void wave_step_rows(const WaveCoefficients& k, int stride, int rows, int first, 
 
 void wave_step(const WaveCoefficients& k, int n, double* z_prev, const double* z, int threads) {
   const RowKernel row_kernel = row_kernel_for(n);
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-  for (int i = 1; i < n - 1; ++i) {
-    const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(i) * n;
-    row_kernel(k, n, 1, n - 1, z_prev + row, z + row);
+  std::atomic<double>* const workers = worker_cpu_seconds();  // the run's, its cpu_seconds counting every thread
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    const WorkerCpuTime timed(workers, omp_get_thread_num() != 0);
+#pragma omp for schedule(static)
+    for (int i = 1; i < n - 1; ++i) {
+      const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(i) * n;
+      row_kernel(k, n, 1, n - 1, z_prev + row, z + row);
+    }
   }
 }
 
@@ -172,8 +179,10 @@ void wave_steps_blocked(const WaveCoefficients& k, int n, int steps, double* z_p
     std::atomic<int> through{0};
   };
   std::vector<Progress> progress(static_cast<size_t>(asked));
+  std::atomic<double>* const worker_time = worker_cpu_seconds();
 #pragma omp parallel num_threads(asked) if (asked > 1)
   {
+    const WorkerCpuTime timed(worker_time, omp_get_thread_num() != 0);
     const int workers = omp_get_num_threads(), w = omp_get_thread_num();
     const int first = w * steps / workers, count = (w + 1) * steps / workers - first;  // levels first+1 .. first+count
     for (int i = 1; count > 0 && i < n - 1 + count - 1; ++i) {

@@ -1,4 +1,4 @@
-// The cloth's CPU references for gpu-cloth (issue 9): solvers/cloth_grid.hpp's step, node by node, in
+// The cloth's CPU references for gpu-cloth: solvers/cloth_grid.hpp's step, node by node, in
 // float32 (the operations the GPU's pass performs, in its order: what a conforming GPU must match) or in
 // float64 (what the model's own symplectic Euler computes, to its round-off), and the scale of the
 // round-off bound both are held to (tolerances.hpp's cloth_step_bound). The water's references are in

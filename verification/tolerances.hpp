@@ -26,7 +26,7 @@ inline constexpr double newton_solve = 1e-12;
 inline constexpr double roundoff_floor = 1e-12;
 inline constexpr double asymptotic_ceiling = 1e-1;
 
-// the claim: high-order adaptive methods at rtol 1e-12, atol 1e-15 are this close to the exact
+// the claim: high-order adaptive methods at rtol 1e-12, atol 1e-15 are this close to the exact
 // pendulum at theta0 = 170 degrees
 inline constexpr double tight_adaptive_error = 1e-6;
 
@@ -48,7 +48,7 @@ inline constexpr double error_model_deviation(double k, double h) { return (k + 
 
 // the fluid's method of lines: f is projected in Fourier space, so div u of every stage and step is the
 // rounding of the transforms, ~ log2(n^2) eps |grad u| per transform (12 eps at 64^2) over the few transforms
-// a stage takes and the steps' sums: 1e-12 of max |grad u| (the figure) holds with room
+// a stage takes and the steps' sums: 1e-12 of max |grad u| (the figure asked) holds with room
 inline constexpr double spectral_divergence = 1e-12;
 
 // an exact flow's kinetic energy against e^(-4 nu k^2 t) (Taylor-Green) with CVODE at rtol 1e-12: a global
@@ -242,7 +242,7 @@ inline constexpr double contact_band = 1e-7;
 inline constexpr double edge_crossing_energy = 1e-5;
 
 // height field: the seeds' scheme against the exact evolution of its modes (one mode in closed form, or
-// every mode of a random state through FFTW's DST-I), relative to the field's largest value. The issue's
+// every mode of a random state through FFTW's DST-I), relative to the field's largest value. The
 // figure; round-off alone gives a few ulps per cell per step, which add up at worst linearly (a slowly
 // decaying real root keeps every step's error): 4 eps K ~ 4e-13 for K = 1000, and as a random walk
 // (rotating complex roots) ~ 4 eps sqrt(K) when K = 3000; the DST round trip adds ~ eps log N. Measured:
@@ -358,7 +358,7 @@ inline double cloth_steps_bound(double unit, long steps, double h, double nodes,
 // rtol 1e-10: Adams 9 rtol |y|, BDF 250 rtol |y|
 inline constexpr double method_of_lines_rtol_multiple = 1e3;
 
-// the stability limit found by bisection (to 1e-3) against the derivation: the 1%
+// the stability limit found by bisection (to 1e-3) against the derivation: the 1% asked
 inline constexpr double stability_match = 0.01;
 inline constexpr double stability_bisection_width = 1e-3;
 // spectrum_stable_dt bisects its step to 1e-9 of the bracket's top, which lies within a factor 2 of the limit
@@ -401,7 +401,7 @@ inline constexpr double contact_geometry_roundoff = 1e-12;
 // step's start, penetration strictly positive) hold it: that much settling, and 1e-6 of it for round-off
 inline constexpr double resting_settle(double g, double dt) { return g * dt * dt * (1 + 1e-6); }
 // then Gauss-Seidel leaves at most contact_velocity_tolerance at each contact: it creeps by at most that
-// speed times the time it rests (the bound over 10 s: 1e-9 m), and its kinetic energy is at most
+// speed times the time it rests (the bound asked over 10 s: 1e-9 m), and its kinetic energy is at most
 // that of the speed, m v^2 / 2, with a factor 10 for rotation's share
 inline constexpr double resting_creep(double seconds) { return contact_velocity_tolerance * seconds; }
 inline constexpr double resting_kinetic(double mass) { return 10 * mass * contact_velocity_tolerance * contact_velocity_tolerance / 2; }
@@ -470,7 +470,7 @@ inline constexpr double element_fd = 1e-7;
 // stencils, a 9 x 9 eigendecomposition): round-off, some hundred eps of the largest term
 inline constexpr double element_roundoff = 1e-12;
 // a strip stretched by 0.1%: St. Venant-Kirchhoff on the Green strain E = e + e^2 / 2 departs from linear
-// elasticity's Poisson's ratio and modulus at first order in the strain (a few e: ~0.3%); 1% (the issue's
+// elasticity's Poisson's ratio and modulus at first order in the strain (a few e: ~0.3%); 1% (the one asked
 // figure) leaves a factor 3, where a wrong Lame parameter (plane strain's lambda for plane stress's) is off by
 // tens of percent at nu = 0.3
 inline constexpr double small_strain_elastic_constants = 0.01;
@@ -650,5 +650,10 @@ inline constexpr double fem_refinement_order = 0.8;
 // element, then summed), each sum's round-off a few eps of the largest element force (at most |f| times the ~6
 // elements at a node over the cancellation): 1e-12 of 1 + |f|, where a wrong term is O(|f|)
 inline constexpr double damping_linear_map = 1e-12;
+
+// a run's cpu_seconds on 2 threads against the same run's on 1 (the same sweeps, statically split): every thread's
+// CPU time counted, the two agree but for the team's start and join (measured 1.0-1.2); the calling thread's alone
+// would be half the work (~0.5). 0.75 lies between
+inline constexpr double worker_cpu_share = 0.75;
 
 }  // namespace stepwise::tolerance

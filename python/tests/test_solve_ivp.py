@@ -246,7 +246,7 @@ def test_ctrl_c_stops_a_compiled_solve():
     assert time.monotonic() - start < 60
 
 
-# ---- events, the steps taken, dense output and atol per component (issue 51)
+# ---- events, the steps taken, dense output and atol per component
 
 def falling_ball(t, y):
     return [y[1], -9.81]

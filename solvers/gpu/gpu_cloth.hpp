@@ -1,4 +1,4 @@
-// The explicit mass-spring cloth on the GPU (issue 9): every node of a ClothGridView in one texel of two
+// The explicit mass-spring cloth on the GPU: every node of a ClothGridView in one texel of two
 // RGBA32F planes of the grid's size (plane 0: position, w = 1 where pinned; plane 1: velocity), stepped by
 // a full-screen fragment pass into the other pair of planes (two colour attachments), then the pairs swap.
 // A pass is one symplectic Euler step of solvers/cloth_grid.hpp, node by node: the twelve springs, the wind

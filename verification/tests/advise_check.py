@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""stepwise advise against its contract and its claims (issue 37), on shipped equation scenes.
+"""stepwise advise against its contract and its claims, on shipped equation scenes.
 
 usage: advise_check.py STEPWISE SCENES_DIR
 

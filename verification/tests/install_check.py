@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The installed package from outside (issue 38): `cmake --install` into a temporary prefix, then
+"""The installed package from outside: `cmake --install` into a temporary prefix, then
 
 - no installed header includes a backend's header (SUNDIALS, GSL, CHOLMOD, FFTW, GL, MPI, GiNaC, Boost, TOML);
 - every installed header includes the project's others as <stepwise/...>, each installed, and the consumer's

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""What an interruption leaves (issue 26): the previous outputs intact, no litter after the next run.
+"""What an interruption leaves: the previous outputs intact, no litter after the next run.
 
 usage: interruptions.py STEPWISE SCENES_DIR
 

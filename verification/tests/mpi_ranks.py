@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""MPI ranks (issue 24): the same outputs as one process, and a rank that dies fails the run cleanly.
+"""MPI ranks: the same outputs as one process, and a rank that dies fails the run cleanly.
 
 usage: mpi_ranks.py STEPWISE SCENES_DIR TOLERANCES_HPP [SERIAL_QUICK_REPORT]
 

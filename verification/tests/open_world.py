@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A user's own system as a new user writes it (issue 49): no method, a large system, a run killed mid-compile.
+"""A user's own system as a new user writes it: no method, a large system, a run killed mid-compile.
 
 usage: open_world.py STEPWISE [--large N]
 

@@ -1,4 +1,4 @@
-// The command-line contract of DESIGN.md, pinned against the built binary: names and shapes of
+// The command-line contract (docs/cli.md, docs/outputs.md), pinned against the built binary: names and shapes of
 // methods --json, trajectory.csv and summary.json, exit statuses, and one-line errors naming file, line and key.
 #include "solvers/method_table.hpp"
 #include "verification/tolerances.hpp"
@@ -350,7 +350,7 @@ TEST_F(Cli, ADivergedRunExitsOneWithItsSummaryWritten) {
 TEST_F(Cli, AWaveStepPastTheStabilityLimitIsWarnedRunAndReportedDiverged) {
   // water-drop's grid: d = 0.02 m, c = 1 m/s, N = 63: limit d / (sqrt(2) c cos(pi/126)) = 0.0141465 s
   expect_warned_and_diverged("run scenes/water-drop.toml --dt 0.015", "--dt: warning: dt = 0.015 s is past wave-fd's stability limit 0.0141465 s");
-  // and below it: ok, energy and max_abs_z in final_state as the issue names them
+  // and below it: ok, energy and max_abs_z in final_state as the contract names them
   const fs::path ok = dir_ / "below";
   ASSERT_EQ(run(fmt::format("run scenes/water-drop.toml --dt 0.014 --out '{}'", ok.string())).status, 0);
   const auto fine = nlohmann::json::parse(slurp(ok / "summary.json"));
@@ -361,7 +361,7 @@ TEST_F(Cli, AWaveStepPastTheStabilityLimitIsWarnedRunAndReportedDiverged) {
 TEST_F(Cli, AnExplicitClothStepPastItsStiffestModesLimitIsWarnedRunAndReportedDiverged) {
   expect_warned_and_diverged("run scenes/flag.toml --method symplectic-euler --dt 0.002 --t-end 1",
                              "--dt: warning: dt = 0.002 s is past symplectic-euler's stability limit");
-  // the cloth scenes run as written, and the flag's summary carries what the issue's users look at
+  // the cloth scenes run as written, and the flag's summary carries what the flag's users look at
   for (const char* scene : {"flag", "flag-on-pole", "hanging-cloth", "cloth-on-sphere"}) {
     const fs::path ok = dir_ / scene;
     const Output r = run(fmt::format("run scenes/{}.toml --t-end 0.2 --out '{}'", scene, ok.string()));

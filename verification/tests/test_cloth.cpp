@@ -1,4 +1,4 @@
-// Mass-spring systems (the cloth issue's first pieces): Voigt springs' internal forces keep momentum, their
+// Mass-spring systems (the cloth's first pieces): Voigt springs' internal forces keep momentum, their
 // analytic sparse Jacobian against central differences (springs stretched and compressed), and the
 // springs in the plane the same as in space with z zero, the
 // hanging chain settling into its exact static equilibrium under implicit Euler and CVODE BDF with KLU.

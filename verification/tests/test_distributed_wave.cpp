@@ -103,7 +103,7 @@ TEST(DistributedWave, TheHaloIsOneLayerAcrossEachInnerEdgeOfTheDecomposition) {
   EXPECT_LE(std::abs(block.cols - cols / d1), 1);
 }
 
-// the water issue's check of the scheme against its exact discrete mode (test_wave's), on the state the ranks
+// the water's check of the scheme against its exact discrete mode (test_wave's), on the state the ranks
 // hold, gathered at the end: z^k = a_k sin sin with a_k the three-level recurrence's closed form
 TEST(DistributedWave, TheGatheredStateIsTheSchemesExactDiscreteMode) {
   const int n = 33, m = 3, mode_n = 2;

@@ -1,4 +1,4 @@
-// The seeds' GPU simulation (issue 9) on llvmpipe through OSMesa, no GPU needed (on a GPU through EGL with
+// The seeds' GPU simulation on llvmpipe through OSMesa, no GPU needed (on a GPU through EGL with
 // STEPWISE_GPU_BACKEND=egl, where the bitwise claims that hold for llvmpipe alone are not made): the wave schemes'
 // fragment passes against the float32 CPU loops step for step, against float64 to show what precision
 // costs, and against the exactly evolved DST modes; the cloth's pass against its float32 CPU step, that step
@@ -140,7 +140,7 @@ TEST(GpuShader, TheWaveComputePassesGiveTheSameBitsWhateverTheirTiling) {
 }
 
 TEST(GpuShader, ShaderStateMatchesTheExactlyEvolvedDstModes) {
-  // the water issue's FFT check on the shader's state: every mode of a random state evolved by its exact
+  // the water's FFT check on the shader's state: every mode of a random state evolved by its exact
   // discrete recurrence (FFTW's DST-I), against 2000 passes
   Shader shader(49, 0.8, 5);
   const long steps = 2000;
