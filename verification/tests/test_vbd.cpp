@@ -1,6 +1,7 @@
 // Vertex Block Descent (solvers/vertex_block_descent.hpp, the vbd method): its colours share no term, its per-node
 // view of the incremental potential is G's own, a sweep never raises G (on the flag and on a scrambled start), its
-// answer does not depend on the thread count, with enough sweeps its step is backward Euler's, and Chebyshev's
+// answer does not depend on the thread count (and its cpu_seconds counts every thread), with enough sweeps its step
+// is backward Euler's, and Chebyshev's
 // acceleration of the sweeps keeps G from rising. In the plane too: on pendulum-cartesian's compliant rod (a mass-spring
 // system of dimension 2) the node's view is G's, vbd's and xpbd's converged steps are Newton's, and every solver of
 // backward Euler's step converges at first order to the rod's true motion.
