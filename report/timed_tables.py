@@ -9,7 +9,8 @@ code) and verification/tests/mpi_ranks.py (a report on ranks against one process
   round-off because a factor is kept across steps while measured time says it pays (implicit Euler on the cloth,
   fast mass-spring; backward Euler's Newton starts from the linearised step, and the cloth solvers' rows are
   measured against that Newton's runs, as are the constraints study's compliant rod's); KEPT_FACTOR_COUNTS: their counts of work, which the reuse changes;
-- kept_factor_tolerance(): how far such a result may move, verification/tolerances.hpp's kept_factor_reproducibility.
+- kept_factor_tolerance(): how far such a result may move, verification/tolerances.hpp's kept_factor_reproducibility;
+  kept_factor_agree(): two cells of such a row alike, an offset in pixels (PIXEL_OFFSETS) to kept_factor_pixel_offset.
 """
 import os
 import re
@@ -42,6 +43,23 @@ def tolerance(name, root=os.path.dirname(os.path.dirname(os.path.abspath(__file_
 
 def kept_factor_tolerance(root=os.path.dirname(os.path.dirname(os.path.abspath(__file__)))):
     return tolerance("kept_factor_reproducibility", root)
+
+
+# the kept-factor tables' offsets in pixels: a difference of two runs' positions, whose round-off is the positions'
+PIXEL_OFFSETS = {"pixels_off", "pixels_vs_converged"}
+
+
+def kept_factor_agree(column, a, b, root=os.path.dirname(os.path.dirname(os.path.abspath(__file__)))):
+    """two cells of a kept-factor row alike: an offset in pixels within kept_factor_pixel_offset (or the residual of
+    itself), any other number within kept_factor_reproducibility (numbers_agree)"""
+    rel = kept_factor_tolerance(root)
+    if column not in PIXEL_OFFSETS:
+        return numbers_agree(a, b, rel)
+    try:
+        x, y = float(a), float(b)
+    except ValueError:
+        return a == b
+    return x == y or (x != x and y != y) or abs(x - y) <= max(tolerance("kept_factor_pixel_offset", root), rel * max(abs(x), abs(y)))
 
 
 def numbers_agree(a, b, rel):

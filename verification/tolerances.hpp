@@ -561,6 +561,12 @@ inline double field_colour_levels(double levels_per_pixel) { return 2 + 0.5 * le
 // or under mpirun alike) agree to what that residual allows, not to the bit (measured: 1e-11 relative over the
 // quick report's cloth tables). The ranks test (mpi_ranks.py reads this line) asks the residual itself.
 inline constexpr double kept_factor_reproducibility = 1e-8;
+// the same, for an offset in pixels between two runs of such a cloth (cloth_solvers' pixels_off, continuum-cloth's
+// pixels_vs_converged): a difference of positions, so its round-off is the positions' and not the offset's. Each
+// step's solve leaves at most the residual (1e-8) of a position within the 720-pixel frame, and a damped implicit
+// step carries the earlier steps' errors without growing them: over the quick report's longest cloth run (60 steps:
+// 0.25 s at 1/240 s), 1e-8 x 720 x 60 = 4.32e-4 pixels (measured: 9e-6 under 3 ranks)
+inline constexpr double kept_factor_pixel_offset = 4.32e-4;
 
 // two solvers of one backward Euler step on the constraints study's compliant rod (vbd's sweeps, xpbd's iterations,
 // implicit-euler-newton), each converged: apart by at most Newton's velocity tolerance (1e-5 m/s a step,

@@ -31,7 +31,7 @@ import time
 
 failures = []
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "report"))
-from timed_tables import CHOSEN_BY_TIME, KEPT_FACTOR_COUNTS, TIMING, kept_factor_row, kept_factor_tolerance, numbers_agree  # noqa: E402
+from timed_tables import CHOSEN_BY_TIME, KEPT_FACTOR_COUNTS, TIMING, kept_factor_agree, kept_factor_row  # noqa: E402
 
 
 def expect(condition, what):
@@ -51,7 +51,7 @@ def run(args, **kw):
     return subprocess.run(args, capture_output=True, text=True, timeout=900, **kw)
 
 
-def compare_tables(serial, ranked, label, rel):
+def compare_tables(serial, ranked, label, root):
     names = sorted(n for n in os.listdir(serial) if n.endswith(".csv"))
     expect(names == sorted(n for n in os.listdir(ranked) if n.endswith(".csv")), f"{label}: the same CSV files")
     compared = 0
@@ -66,7 +66,7 @@ def compare_tables(serial, ranked, label, rel):
         keep = [i for i, h in enumerate(a[0]) if not TIMING.search(h)]
         for ra, rb in zip(a[1:], b[1:]):
             tolerant = kept_factor_row(name, a[0], ra)
-            same = (all(numbers_agree(ra[i], rb[i], rel) for i in keep if a[0][i] not in KEPT_FACTOR_COUNTS) if tolerant
+            same = (all(kept_factor_agree(a[0][i], ra[i], rb[i], root) for i in keep if a[0][i] not in KEPT_FACTOR_COUNTS) if tolerant
                     else all(ra[i] == rb[i] for i in keep))
             if not same:
                 expect(False, f"{label}: {name}: row {ra} against {rb}")
@@ -81,7 +81,7 @@ def main():
     if not shutil.which("mpirun"):
         print("mpirun not found: install Open MPI's launcher (sudo apt-get install openmpi-bin) to run the MPI tests")
         return 77
-    rel = kept_factor_tolerance(os.path.dirname(os.path.dirname(tolerances)))
+    root = os.path.dirname(os.path.dirname(tolerances))  # the source tree whose tolerances.hpp the comparison reads
     d = tempfile.mkdtemp(prefix="stepwise-mpi-")
     try:
         # studies, byte for byte
@@ -166,7 +166,7 @@ def main():
                 r = run(mpirun(n) + [binary, "report", "--quick", "--threads", "1", "--out", out])
                 expect(r.returncode == 0, f"report on {n} ranks: exit {r.returncode}: {r.stderr[-500:]}")
                 if r.returncode == 0:
-                    compare_tables(serial_report, out, f"report --quick on {n} ranks ({time.time() - start:.0f} s)", rel)
+                    compare_tables(serial_report, out, f"report --quick on {n} ranks ({time.time() - start:.0f} s)", root)
                     p = json.load(open(os.path.join(out, "provenance.json")))
                     print(f"report on {n} ranks: busy {p['rank_busy_seconds']}, busiest over mean {p['rank_busiest_over_mean']:.3f}")
 
