@@ -12,6 +12,7 @@ code) and verification/tests/mpi_ranks.py (a report on ranks against one process
 - kept_factor_tolerance(): how far such a result may move, verification/tolerances.hpp's kept_factor_reproducibility;
   kept_factor_agree(): two cells of such a row alike, an offset in pixels (PIXEL_OFFSETS) to kept_factor_pixel_offset.
 """
+import functools
 import os
 import re
 
@@ -35,8 +36,9 @@ def kept_factor_row(name, header, row):
     return name in KEPT_FACTOR_FILES or (method is not None and row[method] in KEPT_FACTOR_METHODS)
 
 
+@functools.lru_cache(maxsize=None)
 def tolerance(name, root=os.path.dirname(os.path.dirname(os.path.abspath(__file__)))):
-    """verification/tolerances.hpp's constant `name`"""
+    """verification/tolerances.hpp's constant `name` (read once: a comparison asks it for every cell)"""
     text = open(os.path.join(root, "verification", "tolerances.hpp")).read()
     return float(re.search(name + r"\s*=\s*([0-9.eE+-]+)", text).group(1))
 

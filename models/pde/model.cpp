@@ -25,7 +25,6 @@ using namespace equations;
 using namespace pde;
 
 using NativeFn = void (*)(double t, const double* y, const double* p, double* out);
-// the pointwise f over a list of nodes (pde_loop below): f at node nodes[m] from the state entries index[m * width ..]
 // the pointwise f over runs of consecutive nodes (pde_loop below): run r is nodes runs[3r] .. runs[3r] + runs[3r + 1]
 // - 1, whose state entries are each node's number plus the offsets tables[runs[3r + 2] * width ..]
 using NativeGridFn = void (*)(double t, const double* y, const double* p, double* out, const int* runs, int count, const int* tables, int total,
