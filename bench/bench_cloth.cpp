@@ -269,10 +269,10 @@ void BM_continuum_frame_newton(benchmark::State& state) { one_frame(state, true,
 void frame_by(benchmark::State& state, const char* method, int threads, bool continuum) {
   Flag& f = flag(static_cast<int>(state.range(0)), {}, continuum);
   stepwise::StepControl control = stepwise::StepControl::fixed(frame);
-  control.threads = threads;
   const bool vbd = std::string(method).starts_with("vbd");
-  control.iterations = vbd ? 10 : 1;
-  control.substeps = vbd ? 1 : 20;
+  if (vbd) control.settings["threads"] = threads;
+  control.settings["iterations"] = vbd ? 10 : 1;
+  control.settings["substeps"] = vbd ? 1 : 20;
   const auto integrator = stepwise::make_integrator(method, control);
   const std::vector<double> t_out{0.1 + frame};
   for (auto _ : state) {

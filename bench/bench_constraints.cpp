@@ -34,7 +34,7 @@ void solve_each_iteration(benchmark::State& state, const stepwise::Model& model,
 void run(benchmark::State& state, const char* method, int links, int iterations) {
   const auto chain = stepwise::make_model("chain", {{"links", links}});
   stepwise::StepControl control = stepwise::StepControl::fixed(1e-3);
-  control.iterations = iterations;
+  if (std::string_view(method) != "rattle") control.settings["iterations"] = iterations;
   solve_each_iteration(state, *chain, method, control, 0.1);
   // link-iterations a second: frames x iterations x links
   state.counters["link_iterations"] = benchmark::Counter(100.0 * iterations * links, benchmark::Counter::kIsIterationInvariantRate);
@@ -45,8 +45,10 @@ void run(benchmark::State& state, const char* method, int links, int iterations)
 void flag(benchmark::State& state, const char* method, int substeps) {
   const auto cloth = stepwise::make_model("cloth", {});
   stepwise::StepControl control = stepwise::StepControl::fixed(1.0 / 60);
-  control.substeps = substeps;
-  control.iterations = 1;
+  if (std::string_view(method) == "xpbd") {
+    control.settings["substeps"] = substeps;
+    control.settings["iterations"] = 1;
+  }
   solve_each_iteration(state, *cloth, method, control, 1.0);
   state.counters["frames"] = benchmark::Counter(60, benchmark::Counter::kIsIterationInvariantRate);
 }

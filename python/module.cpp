@@ -530,8 +530,10 @@ py::object to_python(const nlohmann::json& j) {
 
 // a scene run as `stepwise run` runs it: the trajectory's columns and rows (trajectory.csv's numbers) and summary.json's fields
 py::dict run(const std::string& scene, const std::optional<std::string>& method, std::optional<double> dt, std::optional<double> rtol, std::optional<double> atol,
-             std::optional<double> t_end, std::optional<double> output_dt, const std::map<std::string, double>& sets, std::optional<double> max_steps) {
+             std::optional<double> t_end, std::optional<double> output_dt, const std::map<std::string, double>& sets, std::optional<double> max_steps,
+             const std::map<std::string, std::string>& options) {
   RunOptions o = run_options(scene, sets);
+  o.method_options.insert(options.begin(), options.end());
   o.method = method;
   o.dt = dt;
   o.rtol = rtol;
@@ -670,6 +672,7 @@ py::list method_list() {
     d["order_max"] = m.order.max;
     d["stepping"] = m.stepping == Stepping::fixed ? "fixed" : m.stepping == Stepping::adaptive ? "adaptive" : "fixed or adaptive";
     d["needs"] = std::string(m.needs.what);
+    d["options"] = to_python(method_options_json(m));
     l.append(d);
   }
   return l;
@@ -696,7 +699,7 @@ PYBIND11_MODULE(_stepwise, m) {
   m.def("solve", &solve, py::arg("fun"), py::arg("t0"), py::arg("t1"), py::arg("y0"), py::arg("method"), py::arg("rtol"), py::arg("atol"), py::arg("dt"),
         py::arg("max_step"), py::arg("t_eval"), py::arg("jac"), py::arg("max_steps"), py::arg("events") = py::list(), py::arg("record_steps") = false);
   m.def("run", &run, py::arg("scene"), py::arg("method"), py::arg("dt"), py::arg("rtol"), py::arg("atol"), py::arg("t_end"), py::arg("output_dt"), py::arg("set"),
-        py::arg("max_steps"));
+        py::arg("max_steps"), py::arg("options"));
   m.def("advise", &advise_scene, py::arg("scene"), py::arg("error"), py::arg("budget"), py::arg("set"), py::arg("threads"));
   m.def("study", &study_scene, py::arg("name"), py::arg("scene"), py::arg("set"), py::arg("quick"), py::arg("threads"));
   py::class_<Equations>(m, "Equations", R"doc(A system written as equations: parsed, differentiated and compiled once (models/equations.hpp).

@@ -99,7 +99,11 @@ std::string scene_description(const fs::path& scene_file) {
   return text;
 }
 
-std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, const StudyContext& ctx) {
+namespace {
+
+StudyOutput pictures(const StudyContext& ctx) {
+  const fs::path& dir = ctx.out;
+  const fs::path& scenes_dir = ctx.scenes_dir;
   // a quick report's animations are a preview: 8 frames each (a frame and its share of the encoding ~40 ms)
   const int frames = ctx.quick ? 8 : 60;
   const std::string size = ctx.quick ? "480x270" : "640x360";
@@ -112,8 +116,6 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
   // without ffmpeg the pictures are the frames alone: said once here rather than by every scene's render
   const bool animations = on_path("ffmpeg");
   if (!animations) print_error("report", "ffmpeg is not installed: the pictures are PNG frames without their animations (apt-get install ffmpeg)");
-  if (ctx.progress) ctx.progress->begin_study("pictures");
-  const auto start = std::chrono::steady_clock::now();
   // each scene's expected cost (report/cost_model.hpp): its run, and its frames by what they show
   std::vector<double> costs;
   // a scene whose model has nothing to draw (a user's equations: a state without a place in space) is left out
@@ -183,7 +185,6 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
     }
     return d;
   }, costs);
-  if (ctx.progress) ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 
   Table table{{"scene", "model", "method", "frames", "t_end", "draw_ms_per_frame", "status", "renderer"}, {}};
   std::string body;
@@ -194,11 +195,8 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
                           shown["t"].get<double>(), per_frame, j["status"].get<std::string>(), j["renderer"].get<std::string>()});
     body += scene_pictures(dir, scenes_dir, scene, j, quick_change(scene, ctx.quick));
   }
-  write_file_atomic(dir / "pictures.csv", to_csv(table));
-  std::string md = "## Pictures\n\n";
-  md += fmt::format("Every scene run through its own method and drawn headlessly as `stepwise render` draws it ({} frames at {}, OpenGL on {}; "
-                    "the report keeps the last frame and the animations{}, `stepwise render` every frame). "
-                    "Data: [pictures.csv](pictures.csv).{}\n\n",
+  std::string md = fmt::format("Every scene run through its own method and drawn headlessly as `stepwise render` draws it ({} frames at {}, OpenGL on {}; "
+                    "the report keeps the last frame and the animations{}, `stepwise render` every frame).{}\n\n",
                     frames, size, std::get<std::string>(table.rows.front().back()), ctx.quick ? " as GIFs (the full report's are MP4s too)" : "",
                     undrawn.empty() ? std::string()
                                     : fmt::format(" Not drawn, having nothing in space to show (a user's equations): {}.", fmt::join(undrawn, ", ")));
@@ -206,7 +204,14 @@ std::string pictures_section(const fs::path& dir, const fs::path& scenes_dir, co
                                {"method", "method"},
                                {"frames", "frames", shown_as("{:.0f}")},
                                {"draw_ms_per_frame", "draw ms per frame", shown_as("{:.1f}")}});
-  return md + "\n" + body;
+  StudyOutput out;
+  out.markdown = md + "\n" + body;
+  out.tables = {{"pictures", std::move(table)}};
+  return out;
 }
+
+}  // namespace
+
+Study pictures_study() { return {.name = "pictures", .title = "Pictures: every scene rendered, the water with its caustic", .run = pictures, .drawn = true}; }
 
 }  // namespace stepwise

@@ -3,8 +3,6 @@
 
 #include "report/cost_model.hpp"
 #include "run/atomic_write.hpp"
-#include "pictures.hpp"
-#include "side_by_side.hpp"
 #include "run/process.hpp"
 #include "run/message.hpp"
 #include "run/prepare.hpp"
@@ -29,16 +27,9 @@
 namespace stepwise {
 namespace fs = std::filesystem;
 
-// the studies' names, and the report's drawn sections, which `stepwise study` runs alone too: the pictures (every
-// scene drawn) and the side-by-side videos, each rank 0's alone
-constexpr const char* pictures_study = "pictures";
-constexpr const char* side_by_side_study = "side-by-side";
-
 std::vector<std::pair<std::string, std::string>> study_list() {
   std::vector<std::pair<std::string, std::string>> list;
   for (const auto& s : studies()) list.emplace_back(s.name, s.title);
-  list.emplace_back(pictures_study, "Pictures: every scene rendered, the water with its caustic");
-  list.emplace_back(side_by_side_study, "Side by side: the methods in motion at one CPU budget, in videos");
   return list;
 }
 
@@ -53,14 +44,6 @@ namespace {
 // the bytes a report takes (its folder: about 23 MB quick, 51 MB full, docs/performance.md) with a margin:
 // checked free before any work starts
 double report_bytes(bool quick) { return quick ? 28e6 : 60e6; }
-
-// a drawn section by name, or null
-using Section = std::string (*)(const fs::path&, const fs::path&, const StudyContext&);
-Section drawn_section(const std::string& name) {
-  if (name == pictures_study) return pictures_section;
-  if (name == side_by_side_study) return side_by_side_section;
-  return nullptr;
-}
 
 }  // namespace
 
@@ -203,16 +186,20 @@ const Study* find_study(const std::string& name) {
   return nullptr;
 }
 
+std::string scene_studies() {
+  std::string names;
+  for (const auto& s : studies())
+    if (s.takes_scene()) names += fmt::format("{}{}", names.empty() ? "" : ", ", s.name);
+  return names;
+}
+
 StudyScene study_scene_of(const std::string& name, const RunOptions& scene) {
-  if (scene_studies.find(name) == std::string_view::npos || drawn_section(name))
-    throw InputError(fmt::format("--scene: study {} runs on its own scenes (those that take --scene: {})", name, scene_studies));
+  const Study* study = find_study(name);
+  if (!study || !study->takes_scene())
+    throw InputError(fmt::format("--scene: study {} runs on its own scenes (those that take --scene: {})", name, scene_studies()));
   StudyScene s = user_study_scene(scene);
-  if (const auto model = scene_model(s); name == "energy" && !model->energy(model->initial_state()))
-    throw InputError(fmt::format("--scene: {} has no energy formula (energy = \"...\" above its first table) for the energy study", scene.scene_file));
-  else if (name == "spatial-convergence" && !s.on_grid)
-    throw InputError(fmt::format("--scene: {} is no PDE scene (model = \"pde\"): the spatial-convergence study refines a grid", scene.scene_file));
-  else if (name == "event-times" && events_of(*model).empty())
-    throw InputError(fmt::format("--scene: {} has no events ([events.NAME] when = \"...\") for the event-times study", scene.scene_file));
+  if (const std::string problem = study->scene_problem(s, *scene_model(s)); !problem.empty())
+    throw InputError(fmt::format("--scene: {} {}", scene.scene_file, problem));
   return s;
 }
 
@@ -221,9 +208,7 @@ int threads_or_default(int requested) { return requested > 0 ? requested : stati
 int study_command(const std::string& name, bool quick, int threads, const std::string& out, const std::optional<RunOptions>& scene) {
   const bool writer = ranks::rank() == 0;
   const Study* study = find_study(name);
-  const Section drawn = drawn_section(name);
-  const bool pictures = drawn != nullptr;
-  if (!study && !pictures) {
+  if (!study) {
     if (writer) print_error("study", fmt::format("unknown study '{}' (the studies: `stepwise study --list`)", name));
     return 2;
   }
@@ -255,18 +240,20 @@ int study_command(const std::string& name, bool quick, int threads, const std::s
     StudyContext ctx{quick, threads_or_default(threads), writer ? &progress : nullptr};
     ctx.load = &load;
     if (scene) ctx.scenes = &user_scenes;
+    ctx.out = out;
+    ctx.scenes_dir = scenes_directory();
     std::vector<Figure> figures;
-    if (pictures) {  // rank 0's alone, as in the report
+    if (study->drawn) {  // rank 0's alone, as in the report
       together = false;
       if (!writer) return 0;
       ctx.distribute = false;
       ctx.load = nullptr;
     }
-    const std::string md = pictures ? drawn(out, scenes_directory(), ctx) : run_study(*study, ctx, out, figures, nullptr);
+    const std::string md = run_study(*study, ctx, out, figures, nullptr);
     together = false;
     if (!writer) return 0;
     write_file_atomic(fs::path(out) / (name + ".md"), md);
-    if (!pictures) draw_figures(figures, out, ctx.threads, false);
+    draw_figures(figures, out, ctx.threads, false);
     write_provenance(out, fmt::format("study {}{}{}", name, quick ? " --quick" : "", scene ? " --scene " + scene->scene_file : ""), ctx, start);
   } catch (const std::exception& e) {
     return fail("study", e, together);
@@ -320,7 +307,8 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
   std::error_code ec;
   bool together = true;
   try {
-    for (const auto& study : studies()) md += run_study(study, ctx, staging, figures, &findings);
+    for (const auto& study : studies())
+      if (!study.drawn) md += run_study(study, ctx, staging, figures, &findings);
     // the answer first: what the studies found, each linking to its evidence, then the sections
     std::string head = fmt::format("# stepwise report{}\n\n", quick ? " (quick)" : "");
     head += "Every number, table and figure below is computed by this run from the CSV files named under its section, in this directory.\n\n";
@@ -329,12 +317,14 @@ int report_command(bool quick, int threads, const std::string& out, const std::s
     md = head + "\n" + md;
     together = false;
     if (!writer) return 0;
-    // the pictures on rank 0 alone: each is a directory of frames, drawn where the report is written
+    // the drawn studies on rank 0 alone: pictures and videos, drawn where the report is written
     StudyContext here = ctx;
     here.distribute = false;
     here.load = nullptr;  // the ranks' shares are the sweeps'; the pictures are rank 0's alone
-    md += pictures_section(staging, scenes_dir, here);
-    md += side_by_side_section(staging, scenes_dir, here);
+    here.out = staging;
+    here.scenes_dir = scenes_dir;
+    for (const auto& study : studies())
+      if (study.drawn) md += run_study(study, here, staging, figures, nullptr);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     md += ranks::size() == 1 ? fmt::format("---\nStudies run in {:.1f} s of wall time on {} threads.\n", seconds, ctx.threads)
                              : fmt::format("---\nStudies run in {:.1f} s of wall time on {} MPI ranks of {} threads (the pictures on rank 0).\n",

@@ -22,7 +22,7 @@ std::vector<std::pair<std::string, std::string>> study_list();
 // run one study into out/ (CSV, Markdown, its figures); its points on `threads` threads (0: one per core).
 // Exit status 0, 1 when a study or its figures failed, 2 for an unknown name or unwritable out
 // `scene`: the user's scene file (--scene, with its --set) in place of the study's own scenes, for the studies
-// that take one (scene_studies); exit status 2 for another
+// that take one (scene_studies()); exit status 2 for another
 int study_command(const std::string& name, bool quick, int threads, const std::string& out, const std::optional<RunOptions>& scene = std::nullopt);
 
 // plot.py's figures (kind and subject: report/studies.hpp's Figure) drawn into dir from its CSVs, by `jobs`
@@ -33,8 +33,8 @@ void draw_figures(const std::vector<Figure>& figures, const std::filesystem::pat
 // the threads asked for, or one per core
 int threads_or_default(int requested);
 
-// the studies that take --scene
-inline constexpr std::string_view scene_studies = "work-precision, convergence, spatial-convergence, stability-regions, energy, event-times";
+// the studies that take --scene (report/studies.hpp's Study::scene_problem), ", " between them
+std::string scene_studies();
 
 // the study of that name, or null
 struct Study;

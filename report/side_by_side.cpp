@@ -118,7 +118,7 @@ Panel panel_at(const Contender& c, int n, double interval, const ClipModels& mod
   const Method& method = *find_method(c.method);
   Panel panel = method.family == Family::vertex_block_descent
                     ? Panel{c.method, interval, fmt::format("{} in {} sweeps", step_text(interval), n), 0, {}, n}
-                : method.substepped ? Panel{c.method, interval, fmt::format("{} in {} substeps", step_text(interval), n), n}
+                : method.option("substeps") ? Panel{c.method, interval, fmt::format("{} in {} substeps", step_text(interval), n), n}
                                     : Panel{c.method, interval / n, step_text(interval / n)};
   if (models.named) panel.setting = fmt::format("{}  {}", c.continuum ? "continuum" : "springs", panel.setting);
   if (c.continuum) panel.sets = models.continuum_sets;
@@ -165,13 +165,14 @@ std::vector<Clip> clips_to_film(const fs::path& scenes_dir, bool quick, std::vec
   return all;
 }
 
-}  // namespace
-
-std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir, const StudyContext& ctx) {
-  std::string md = "## Side by side\n\n";
+StudyOutput side_by_side(const StudyContext& ctx) {
+  const fs::path& dir = ctx.out;
+  const fs::path& scenes_dir = ctx.scenes_dir;
+  StudyOutput out;
   if (!on_path("ffmpeg")) {
     print_error("report", "ffmpeg is not installed: the side-by-side videos were skipped (apt-get install ffmpeg)");
-    return md + "Not filmed: ffmpeg is not installed here (it encodes the videos and draws their labels).\n\n";
+    out.markdown = "Not filmed: ffmpeg is not installed here (it encodes the videos and draws their labels).\n\n";
+    return out;
   }
   const int fps = ctx.quick ? 15 : 30;
   std::vector<std::string> missing;
@@ -180,7 +181,10 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
   if (!missing.empty()) {
     skipped = fmt::format("Not filmed, their scene files not being in {}: {}.", scenes_dir.string(), fmt::join(missing, ", "));
     print_error("report", fmt::format("side by side: {}", skipped));
-    if (all.empty()) return md + skipped + "\n\n";
+    if (all.empty()) {
+      out.markdown = skipped + "\n\n";
+      return out;
+    }
   }
   std::vector<std::string> labels;
   std::vector<double> costs;
@@ -190,8 +194,6 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
     // the runs at their budget, the reference's about as much again, and the frames drawn
     costs.push_back(1e9 * t_end * (clip.per_second.value_or(0.01) * 5) + 4 * fps * t_end * clip.draw_ms * 1e6);
   }
-  if (ctx.progress) ctx.progress->begin_study("side-by-side");
-  const auto start = std::chrono::steady_clock::now();
   fs::create_directories(dir / "side_by_side");
   const auto shots = ctx.sweep<Shot>(labels, [&](size_t i) {
     const Clip& clip = all[i];
@@ -223,7 +225,6 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
     }
     return shot;
   }, costs);
-  if (ctx.progress) ctx.progress->end_study(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 
   Table panels{{"clip", "scene", "panel", "method", "setting", "dt", "steps", "cpu_seconds", "budget_cpu_seconds", "cpu_over_budget", "pixel_error", "status",
                 "t_last", "label", "video", "frames", "width", "height", "fps"},
@@ -270,18 +271,22 @@ std::string side_by_side_section(const fs::path& dir, const fs::path& scenes_dir
                            [&](size_t row) { return row >= first; });
     body += "\n";
   }
-  write_file_atomic(dir / "side_by_side.csv", to_csv(panels));
-  write_file_atomic(dir / "side_by_side_frames.csv", to_csv(frames));
-  md += fmt::format("{}, each run at one CPU budget and filmed beside a converged reference, seen by one camera "
+  out.markdown = fmt::format("{}, each run at one CPU budget and filmed beside a converged reference, seen by one camera "
                     "at the same simulated times: each panel is labelled with its method and step, its CPU time, and its largest offset "
                     "from the reference over the run, in pixels of its {} x {} panel (the farthest any drawn point lies from the same point "
-                    "of the reference's picture). Data: [side_by_side.csv](side_by_side.csv), "
-                    "[side_by_side_frames.csv](side_by_side_frames.csv).{}\n\n",
+                    "of the reference's picture).{}\n\n",
                     ctx.quick ? "The 170-degree pendulum (the quick report's one clip; the full report films the flag by four methods, and as springs "
                                 "and as the continuum, and the water drop beside it)"
                               : "The flag (by four methods, and as springs and as the continuum), the 170-degree pendulum and the water drop",
-                    640, 360, skipped.empty() ? "" : " " + skipped);
-  return md + body;
+                    640, 360, skipped.empty() ? "" : " " + skipped) + body;
+  out.tables = {{"side_by_side", std::move(panels)}, {"side_by_side_frames", std::move(frames)}};
+  return out;
+}
+
+}  // namespace
+
+Study side_by_side_study() {
+  return {.name = "side-by-side", .title = "Side by side: the methods in motion at one CPU budget, in videos", .run = side_by_side, .drawn = true};
 }
 
 }  // namespace stepwise

@@ -3,16 +3,16 @@
 // of a cheap method can be seen.
 #pragma once
 
-#include <stepwise/report/sweep.hpp>
+#include <stepwise/report/studies.hpp>
 
 #include <filesystem>
 #include <string>
 
 namespace stepwise {
 
-// films the scenes of scenes_dir into dir/side_by_side/SCENE.mp4 (the clips run as the context's sweep), writes
-// dir/side_by_side.csv and dir/side_by_side_frames.csv, and returns the report's section. Without ffmpeg it
-// films nothing and says so, in the section and in one line on stderr
-std::string side_by_side_section(const std::filesystem::path& dir, const std::filesystem::path& scenes_dir, const StudyContext& ctx);
+// the side-by-side study, a drawn one: the clips of the context's scenes_dir filmed into its out/side_by_side/CLIP.mp4
+// (the clips run as the context's sweep), with side_by_side.csv and side_by_side_frames.csv. Without ffmpeg it films
+// nothing and says so, in the section and in one line on stderr
+Study side_by_side_study();
 
 }  // namespace stepwise

@@ -1,5 +1,8 @@
 #include "studies.hpp"
 
+#include "pictures.hpp"
+#include "side_by_side.hpp"
+
 #include "solvers/method_table.hpp"
 
 #include <fmt/format.h>
@@ -110,7 +113,7 @@ const std::vector<Study>& studies() {
     return std::vector<Study>{work_precision_study(),        convergence_study(),  spatial_convergence_study(), pde_scenes_study(), stability_regions_study(), energy_study(),
                               adequacy_study(),              wave_adequacy_study(), bouncing_ball_curve_study(), event_times_study(),
                               wave_stability_study(),        rigid_body_invariants_study(), contacts_study(), cloth_study(), cloth_realtime_study(), cloth_solvers_study(), continuum_cloth_study(), fluid_study(),
-                              constraints_study(),           scaling_study(),               advice_study()};
+                              constraints_study(),           scaling_study(),               advice_study(),      pictures_study(), side_by_side_study()};
   }();
   return all;
 }

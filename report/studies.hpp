@@ -96,10 +96,20 @@ struct StudyOutput {
   std::vector<std::string> findings;
 };
 
+class Model;
+
 struct Study {
   std::string_view name;
   std::string_view title;
   std::function<StudyOutput(const StudyContext&)> run;
+  // `stepwise study NAME --scene FILE`: "" where the study can run on this user's scene, else why not (the energy
+  // study: no energy formula); empty for a study that runs on its own scenes only
+  std::function<std::string(const StudyScene& scene, const Model& model)> scene_problem;
+  // drawn on rank 0 alone, after the sweeps, into the context's `out` (pictures, videos): its points are not shared
+  // among MPI ranks, and the report puts its section last
+  bool drawn = false;
+
+  bool takes_scene() const { return static_cast<bool>(scene_problem); }
 };
 
 // every study, in the report's order

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstddef>
 #include <exception>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -79,6 +80,9 @@ struct StudyContext {
   RankLoad* load = nullptr;
   // `stepwise study NAME --scene FILE`: the user's scene, in place of the study's own (report/studies/study_scenes.hpp)
   const std::vector<StudyScene>* scenes = nullptr;
+  // where the study's outputs go, and the scenes a drawn study draws (report/studies.hpp's Study::drawn: it writes
+  // its pictures and videos there itself)
+  std::filesystem::path out, scenes_dir;
 
   // task(i) for each i < labels.size(), on up to `threads` threads; results in index order, whatever the
   // thread count (a point never reads another's result). An exception from any point is rethrown here.

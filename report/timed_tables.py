@@ -48,7 +48,7 @@ def kept_factor_tolerance(root=os.path.dirname(os.path.dirname(os.path.abspath(_
 
 
 # the kept-factor tables' offsets in pixels: a difference of two runs' positions, whose round-off is the positions'
-PIXEL_OFFSETS = {"pixels_off", "pixels_vs_converged"}
+PIXEL_OFFSETS = {"pixels_off", "pixels_off_true_motion", "pixels_vs_converged"}
 
 
 def kept_factor_agree(column, a, b, root=os.path.dirname(os.path.dirname(os.path.abspath(__file__)))):

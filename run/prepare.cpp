@@ -10,6 +10,7 @@
 #include "solvers/stability.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -145,30 +146,23 @@ void check_options(const RunOptions& o, PreparedRun& p, std::exception_ptr& step
   if (o.constraint && *o.constraint != "project" && *o.constraint != "baumgarte")
     throw InputError(fmt::format("--constraint {}: the constraint treatments are project (the state put back on the constraints after each step) "
                                  "and baumgarte (the equations of motion pulling any drift back)", *o.constraint));
-  // a method's own options (a position-based or vbd method's substeps and iterations, vbd's threads,
-  // vbd-chebyshev's rate): each in its range, and only for a method that takes it
+  // the method's own options (its registration's: a position-based or vbd method's substeps and iterations, vbd's
+  // threads, vbd-chebyshev's rate): each one the method takes, in its range
   const Method* method = p.method.empty() ? nullptr : find_method(p.method);
-  const std::string method_named = p.method.empty() ? "the method chosen for this scene" : p.method;
-  const auto whole = [](const std::optional<double>& value, const char* option, long most) {
-    if (!(*value >= 1 && *value <= static_cast<double>(most) && std::floor(*value) == *value))
-      throw InputError(fmt::format("{} {}: must be a whole number in 1..{}", option, *value, most));
-    return static_cast<int>(*value);
-  };
-  for (const auto& [value, option, field] : {std::tuple{o.substeps, "--substeps", &p.control.substeps}, std::tuple{o.iterations, "--iterations", &p.control.iterations}}) {
-    if (!value) continue;
-    *field = whole(value, option, max_substeps);
-    if (!method || !method->substepped)
-      throw InputError(fmt::format("{}: {} takes no substeps or iterations (pbd, xpbd and vbd do)", option, method_named));
-  }
-  if (o.threads) {
-    p.control.threads = whole(o.threads, "--threads", 1024);
-    if (!method || method->family != Family::vertex_block_descent)
-      throw InputError(fmt::format("--threads: {} runs on one thread (vbd's colour sweeps take threads)", method_named));
-  }
-  if (o.rho) {
-    if (!(*o.rho > 0 && *o.rho < 1)) throw InputError(fmt::format("--rho {}: Chebyshev's rate must lie between 0 and 1", *o.rho));
-    if (p.method != "vbd-chebyshev") throw InputError(fmt::format("--rho: {} has no Chebyshev acceleration (vbd-chebyshev has)", method_named));
-    p.control.chebyshev_rho = *o.rho;
+  for (const auto& [name, text] : o.method_options) {
+    const MethodOption* option = method ? method->option(name) : nullptr;
+    if (!option) {
+      std::vector<std::string> takers;
+      for (const auto& m : methods())
+        if (m.option(name)) takers.emplace_back(m.name);
+      throw InputError(fmt::format("--{}: {} takes no --{} ({} do{})", name, method ? p.method : "the method chosen for this scene", name,
+                                   fmt::join(takers, ", "), takers.size() == 1 ? "es" : ""));
+    }
+    try {
+      p.control.settings[name] = option->parse(text);
+    } catch (const BadMethod& e) {
+      throw InputError(fmt::format("--{} {}: {}", name, text, e.what()));
+    }
   }
   // the step: the method's control, told now wherever the method is (a method chosen later is adaptive). A
   // method that needs a capability of the model (vbd: a mass-spring system) may not apply to it at all: that

@@ -6,6 +6,7 @@
 #include <stepwise/run/scene.hpp>
 #include <stepwise/solvers/integrator.hpp>
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -20,9 +21,9 @@ struct RunOptions {
   std::optional<std::string> event_location;  // linear | restep
   std::optional<double> dt, rtol, atol, t_end, output_dt;
   std::optional<double> max_steps;  // the steps (and output rows) a run may take; default_max_steps
-  std::optional<double> substeps, iterations;  // a position-based method's (StepControl's)
-  std::optional<double> threads;               // a method's own parallel loops' (vbd's colour sweeps; StepControl's)
-  std::optional<double> rho;                   // vbd-chebyshev's rate (StepControl's chebyshev_rho)
+  // the method's own options by name, as the user wrote them ("iterations" -> "10", "start" -> "inertial"): each
+  // checked against the method's registration (solvers/method.hpp's MethodOption) into StepControl::settings
+  std::map<std::string, std::string, std::less<>> method_options;
   // "project": a constrained scene's state put back on its constraints after each step; "baumgarte": its
   // equations of motion pulling a drift back (the model's baumgarte flag)
   std::optional<std::string> constraint;

@@ -12,6 +12,25 @@
 #include <cmath>
 
 namespace stepwise {
+
+nlohmann::json method_options_json(const Method& method) {
+  using Kind = MethodOption::Kind;
+  nlohmann::json options = nlohmann::json::array();
+  for (const auto& o : method.options) {
+    nlohmann::json j{{"name", o.name}, {"type", o.kind == Kind::whole ? "whole" : o.kind == Kind::real ? "real" : "choice"}, {"unit", o.unit},
+                     {"help", o.help}, {"summary_key", o.key()}};
+    if (o.kind == Kind::choice) {
+      j["choices"] = o.choices;
+      j["default"] = o.value_text(o.fallback);
+    } else {
+      j[o.kind == Kind::whole ? "minimum" : "exclusive_minimum"] = o.min;
+      j[o.kind == Kind::whole ? "maximum" : "exclusive_maximum"] = o.max;
+      j["default"] = o.fallback;
+    }
+    options.push_back(std::move(j));
+  }
+  return options;
+}
 namespace {
 
 // columns: the state's names, or the model's summary of a large state; energy beside them where it exists
@@ -101,14 +120,14 @@ nlohmann::json summary_json(const PreparedRun& p, const Measured& m, std::option
   if (!p.method_choice.empty()) j["method_choice"] = p.method_choice;
   if (constraint_drift) j["constraint_drift"] = *constraint_drift;
   if (!p.constraint.empty()) j["constraint"] = p.constraint;
-  if (const Method* method = find_method(p.method); method && method->substepped) {
-    j["substeps"] = p.control.substeps;
-    j["iterations"] = p.control.iterations;
-  }
-  if (const Method* method = find_method(p.method); method && method->family == Family::vertex_block_descent) {
-    j["threads"] = p.control.threads;
-    if (method->name == "vbd-chebyshev") j["chebyshev_rho"] = p.control.chebyshev_rho;
-  }
+  // the method's own options, each as the run used it (given or its default), under its key
+  if (const Method* method = find_method(p.method))
+    for (const auto& o : method->options) {
+      const double value = method->setting(p.control, o.name);
+      if (o.kind == MethodOption::Kind::choice) j[std::string(o.key())] = o.value_text(value);
+      else if (o.kind == MethodOption::Kind::whole) j[std::string(o.key())] = static_cast<long long>(value);
+      else j[std::string(o.key())] = value;
+    }
   // a scene's own equations: whether the compiled right-hand side ran or the interpreter, and why
   if (const auto e = equations_evaluation(*p.model)) {
     // a compile still running in the background when the run ended is stopped with the model

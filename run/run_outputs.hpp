@@ -23,6 +23,11 @@
 namespace stepwise {
 
 struct DistanceConstraints;
+struct Method;
+
+// a method's own options as `stepwise methods --json` and Python's methods() list them (solvers/method.hpp's
+// MethodOption): name, type, range, default, unit, help, and the key summary.json echoes it under
+nlohmann::json method_options_json(const Method& method);
 
 // the trajectory's columns and rows: trajectory.csv's, and the Python module's run() (python/module.cpp) holds the
 // same numbers

@@ -83,8 +83,8 @@ PreparedRun prepare_panel(const RunOptions& scene, const Panel& panel, double in
   run.method = panel.method;
   run.dt = panel.dt;
   run.sets.insert(run.sets.end(), panel.sets.begin(), panel.sets.end());
-  if (panel.substeps > 0) run.substeps = panel.substeps, run.iterations = 1;
-  if (panel.iterations > 0) run.iterations = panel.iterations;
+  if (panel.substeps > 0) run.method_options["substeps"] = std::to_string(panel.substeps), run.method_options["iterations"] = "1";
+  if (panel.iterations > 0) run.method_options["iterations"] = std::to_string(panel.iterations);
   PreparedRun p = prepare_run(run);
   const double steps = interval / panel.dt;
   if (!(std::abs(steps - std::round(steps)) <= 1e-9 * steps))

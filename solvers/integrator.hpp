@@ -8,6 +8,7 @@
 #include <functional>
 #include <tuple>
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
 #include <span>
@@ -31,19 +32,10 @@ struct StepControl {
   double blowup = 1e12;  // a state with |y|inf > blowup * max(1, |y0|inf) has diverged
   long max_steps = 5'000'000;  // an adaptive run taking more steps (CVODE: between two outputs) fails
   EventLocation event_location = EventLocation::linear;  // hand-written and GSL steppers; CVODE finds roots itself
-  // a position-based method's frame step dt in `substeps` substeps of `iterations` Gauss-Seidel sweeps over the
-  // constraints each (pbd, xpbd; "small steps" is many substeps of one iteration). PhysX's default of 4
-  // position iterations in one step
-  int substeps = 1;
-  int iterations = 4;
-  // threads a method's own parallel loops may use (vbd's colour sweeps; the same bits for any count). A run's CPU
-  // time is its calling thread's: a figure that compares costs runs on one
-  int threads = 1;
-  // vbd-chebyshev's estimate of its sweeps' rate rho (the spectral radius of the Gauss-Seidel iteration), set by hand
-  // as the VBD paper does. One 1/60 s step of the flag in motion, springs and continuum: after 24 sweeps on 16^2 nodes
-  // 0.99 leaves G 34-100 times closer to its minimum than 0.95 does; after 20 sweeps on 32^2, within 1.2-1.7 times of
-  // 0.995's, the best of 0.97-0.995 there (a larger sheet's slowest mode is slower)
-  double chebyshev_rho = 0.99;
+  // the method's own settings by name (its options, declared with it: solvers/method.hpp's MethodOption, which holds
+  // each one's range and default; a choice as its index), as the caller gives them; a method reads each through its
+  // registration (Method::setting), and check_step_control refuses one it does not declare or out of its range
+  std::map<std::string, double, std::less<>> settings;
   // what the trajectory keeps at each output time: the whole state when empty, or a summary of it (a
   // particle system's energy and centroid rather than every particle)
   std::function<Eigen::VectorXd(const Eigen::VectorXd& y)> observe;

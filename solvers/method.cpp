@@ -8,6 +8,9 @@
 
 #include <fmt/format.h>
 
+#include <fmt/ranges.h>
+
+#include <charconv>
 #include <cmath>
 #include <stdexcept>
 
@@ -51,8 +54,88 @@ std::string_view to_string(Source source) {
   return "unknown";
 }
 
+std::string_view MethodOption::type_text() const {
+  switch (kind) {
+    case Kind::whole: return "INT";
+    case Kind::real: return "FLOAT";
+    case Kind::choice: break;
+  }
+  static thread_local std::string joined;
+  joined = fmt::format("{}", fmt::join(choices, "|"));
+  return joined;
+}
+
+std::string MethodOption::range_text() const {
+  switch (kind) {
+    case Kind::whole: return fmt::format("{}..{}", static_cast<long long>(min), static_cast<long long>(max));
+    case Kind::real: return fmt::format("({}, {})", min, max);
+    case Kind::choice: break;
+  }
+  return fmt::format("{}", fmt::join(choices, " or "));
+}
+
+std::string MethodOption::value_text(double value) const {
+  if (kind == Kind::choice) {
+    const auto at = static_cast<size_t>(value);
+    return value >= 0 && at < choices.size() && double(at) == value ? std::string(choices[at]) : fmt::format("{}", value);
+  }
+  return fmt::format("{}", value);  // the shortest text that reads back as the value
+}
+
+std::string MethodOption::refusal(double value) const {
+  switch (kind) {
+    case Kind::whole:
+      if (!(value >= min && value <= max && std::floor(value) == value)) return fmt::format("must be a whole number in {}", range_text());
+      break;
+    case Kind::real:
+      if (!(value > min && value < max)) return fmt::format("must lie in {}", range_text());
+      break;
+    case Kind::choice:
+      if (!(value >= 0 && value < double(choices.size()) && std::floor(value) == value)) return fmt::format("must be {}", range_text());
+      break;
+  }
+  return {};
+}
+
+double MethodOption::parse(std::string_view text) const {
+  if (kind == Kind::choice) {
+    for (size_t i = 0; i < choices.size(); ++i)
+      if (choices[i] == text) return double(i);
+    throw BadMethod(fmt::format("must be {}", range_text()));
+  }
+  double value = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size() || text.empty())
+    throw BadMethod(kind == Kind::whole ? fmt::format("not a number (a whole number in {})", range_text()) : fmt::format("not a number (a number in {})", range_text()));
+  if (const std::string why = refusal(value); !why.empty()) throw BadMethod(why);
+  return value;
+}
+
+const MethodOption* Method::option(std::string_view option_name) const {
+  for (const auto& o : options)
+    if (o.name == option_name) return &o;
+  return nullptr;
+}
+
+double Method::setting(const StepControl& control, std::string_view option_name) const {
+  const MethodOption* o = option(option_name);
+  if (!o) throw std::logic_error(fmt::format("{} declares no option {}", name, option_name));
+  const auto given = control.settings.find(option_name);
+  return given != control.settings.end() ? given->second : o->fallback;
+}
+
+int Method::whole_setting(const StepControl& control, std::string_view option_name) const {
+  return static_cast<int>(setting(control, option_name));
+}
+
 void MethodTable::add(Method method) {
   if (find(method.name)) throw std::logic_error(fmt::format("method '{}' registered twice", method.name));
+  for (const auto& o : method.options) {
+    if (!o.refusal(o.fallback).empty()) throw std::logic_error(fmt::format("method '{}': option {}'s default {} {}", method.name, o.name, o.fallback, o.refusal(o.fallback)));
+    for (const auto& other : methods_)
+      if (const MethodOption* same = other.option(o.name); same && (same->kind != o.kind || same->key() != o.key() || same->choices != o.choices))
+        throw std::logic_error(fmt::format("method '{}': option {} is declared otherwise by {} (one --{} serves every method)", method.name, o.name, other.name, o.name));
+  }
   methods_.push_back(std::move(method));
 }
 
@@ -76,6 +159,13 @@ std::string method_requirement(const Method& method, const OdeSystem& system) {
   return fmt::format("{} needs {}", method.name, method.needs.what);
 }
 
+std::string options_text(const Method& method) {
+  if (method.options.empty()) return fmt::format("{} has no options of its own", method.name);
+  std::vector<std::string> names;
+  for (const auto& o : method.options) names.push_back(fmt::format("--{}", o.name));
+  return fmt::format("its own: {}", fmt::join(names, ", "));
+}
+
 void check_step_control(const Method& method, const StepControl& control) {
   if (control.dt && !method.fixed_step())
     throw BadMethod(fmt::format("{} is adaptive only: give --rtol/--atol, not --dt", method.name));
@@ -84,8 +174,11 @@ void check_step_control(const Method& method, const StepControl& control) {
     throw BadMethod(fmt::format("dt must be a positive finite number, got {}", *control.dt));
   if (!control.dt && !(control.rtol > 0 && control.atol > 0 && std::isfinite(control.rtol) && std::isfinite(control.atol)))
     throw BadMethod(fmt::format("rtol and atol must be positive finite numbers, got {} and {}", control.rtol, control.atol));
-  if (!(control.substeps >= 1 && control.substeps <= max_substeps && control.iterations >= 1 && control.iterations <= max_substeps))
-    throw BadMethod(fmt::format("substeps and iterations must be whole numbers in 1..{}, got {} and {}", max_substeps, control.substeps, control.iterations));
+  for (const auto& [name, value] : control.settings) {
+    const MethodOption* o = method.option(name);
+    if (!o) throw BadMethod(fmt::format("--{}: {} takes no such option ({})", name, method.name, options_text(method)));
+    if (const std::string why = o->refusal(value); !why.empty()) throw BadMethod(fmt::format("--{} {}: {}", name, o->value_text(value), why));
+  }
 }
 
 double dense_matrix_bytes(const Method& method, const OdeSystem& system) {

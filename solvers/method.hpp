@@ -8,6 +8,7 @@
 #include <stepwise/solvers/integrator.hpp>
 
 #include <complex>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -64,6 +65,33 @@ struct Stability {
 // parallel vector (solvers/distributed_lines.hpp) under CVODE, Adams or BDF, or under ARKODE with the method's tables
 enum class OnRanks { no, split_grid, cvode_adams, cvode_bdf, arkode };
 
+// one setting of a method's own (vbd's sweeps a step, vbd-chebyshev's rate), declared with the method: the command
+// line's --NAME for `run` and `render`, Python's keyword NAME, the refusals (a value out of range, a method that does
+// not take it), `stepwise methods --json`, the echo in summary.json and, through those, docs/cli.md and the schema
+// all come from this one declaration. Methods that declare one name declare it of one kind (MethodTable::add)
+struct MethodOption {
+  enum class Kind { whole, real, choice };
+  std::string_view name;  // lower case and dashes: --NAME; Python's keyword with '_' for '-'
+  Kind kind = Kind::whole;
+  // the range: whole numbers in [min, max]; real numbers in the open (min, max); unused for a choice
+  double min = 1, max = 1;
+  double fallback = 1;  // the default (a choice's: the index of its default in `choices`)
+  std::string_view unit;  // "s", "1/s"; empty for a count or a ratio
+  std::string_view help;  // one line: what it sets
+  std::vector<std::string_view> choices;  // a choice's values
+  std::string_view echo;  // summary.json's key where it is not the name (a key published before the option was)
+
+  std::string_view key() const { return echo.empty() ? name : echo; }
+  std::string_view type_text() const;  // "INT", "FLOAT", or the choices joined by '|'
+  std::string range_text() const;      // "1..1000000", "(0, 1)", "inertial or adaptive"
+  std::string value_text(double value) const;  // as the user writes it: "4", "0.99", "adaptive"
+  // "" when the value is in range, else why not (without the option's name)
+  std::string refusal(double value) const;
+  // the value a user's text names: a number in range, or one of the choices; BadMethod saying what is allowed (the
+  // caller names the option and the text)
+  double parse(std::string_view text) const;
+};
+
 struct Method;
 // the integrator for one run of `method` with `control` (the control already checked against the method)
 using MakeIntegrator = std::function<std::unique_ptr<Integrator>(const Method& method, const StepControl& control)>;
@@ -77,7 +105,7 @@ struct Method {
   Stepping stepping = Stepping::fixed;
   Requirement needs;  // the capability it needs of a system (solvers/capabilities/), if any
   DenseMatrices dense = DenseMatrices::none;
-  bool substepped = false;  // takes StepControl's substeps and iterations (the position-based methods)
+  std::vector<MethodOption> options;  // its own settings, in the order --help and methods --json list them
   OnRanks on_ranks = OnRanks::no;
   MakeIntegrator make;
   Stability stability;
@@ -90,19 +118,25 @@ struct Method {
   std::string_view twin;
 
   bool fixed_step() const { return stepping != Stepping::adaptive; }
+  const MethodOption* option(std::string_view option_name) const;  // nullptr where the method declares none of that name
+  // the value of its option `option_name` in this control: the caller's, or the declared default (std::logic_error
+  // for an option the method does not declare: a method's own code asking for the wrong name)
+  double setting(const StepControl& control, std::string_view option_name) const;
+  int whole_setting(const StepControl& control, std::string_view option_name) const;
   bool adaptive() const { return stepping != Stepping::fixed; }
 };
 
 // the methods in the order they were registered; a family file adds its own with add()
 class MethodTable {
  public:
-  // std::logic_error for a name already taken
+  // std::logic_error for a name already taken, or an option declared of another kind than another method's of
+  // that name (the command line's --NAME is one option for every method that takes it)
   void add(Method method);
-  const std::vector<Method>& all() const { return methods_; }
+  const std::deque<Method>& all() const { return methods_; }
   const Method* find(std::string_view name) const;
 
  private:
-  std::vector<Method> methods_;
+  std::deque<Method> methods_;  // a method's address kept as more are added
 };
 
 // whether the method can run this system at all (the structure it needs: y = (x, v), a wave grid; bodies in
@@ -115,11 +149,17 @@ struct BadMethod : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-// the most substeps a frame, and iterations a substep, a position-based method takes
+// the most substeps a frame, and iterations a substep, a position-based or vbd method takes (their options' range)
 inline constexpr int max_substeps = 1000000;
+// the most threads a method's own parallel loops run on (vbd's colour sweeps), and a sweep's points (--threads)
+inline constexpr int max_threads = 1024;
+
+// "its own: --substeps, --iterations", or that it has none: what a refusal of another option says
+std::string options_text(const Method& method);
 
 // BadMethod unless the method can be stepped with this control (fixed against adaptive; a finite positive dt,
-// rtol and atol): the one check every way into a method goes through
+// rtol and atol; each of control.settings an option the method declares, in its range): the one check every way
+// into a method goes through
 void check_step_control(const Method& method, const StepControl& control);
 
 // bytes of the dense n x n matrices the method would keep for this system (0 when it keeps none): a large

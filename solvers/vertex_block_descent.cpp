@@ -105,9 +105,9 @@ namespace {
 using Coordinates = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;  // a node's, on the stack
 }  // namespace
 
-VbdStepper::VbdStepper(const CountedSystem& s, const StepControl& control, double rho, std::string_view name)
-    : system_(s), view_(*s.as<MassSpringView>()), potential_(s, view_), substeps_(control.substeps),
-      sweeps_{control.iterations, std::max(control.threads, 1), rho}, name_(name), n_(s.size() / 2) {}
+VbdStepper::VbdStepper(const CountedSystem& s, const VbdSettings& settings, std::string_view name)
+    : system_(s), view_(*s.as<MassSpringView>()), potential_(s, view_), substeps_(settings.substeps),
+      sweeps_{settings.sweeps.sweeps, std::max(settings.sweeps.threads, 1), settings.sweeps.rho}, start_(settings.start), name_(name), n_(s.size() / 2) {}
 
 bool VbdStepper::step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) {
   if (colours_.empty()) {
@@ -141,7 +141,7 @@ bool VbdStepper::substep(double t, double h, Eigen::VectorXd& y, std::string& fa
   // the adaptive start: along each node's other forces' acceleration a (gravity, wind, ...), the last step's
   // acceleration's component, clamped to [0, |a|]
   const int dim = view_.dimension;
-  for (int i = 0; i < view_.nodes; ++i) {
+  for (int i = 0; start_ == VbdStart::adaptive && i < view_.nodes; ++i) {
     const Eigen::Index at = Eigen::Index{dim} * i;
     const Coordinates a = potential_.other_forces().segment(at, dim) / m[at];
     const double size = a.norm();

@@ -50,14 +50,32 @@ struct VbdSweeps {
 double vbd_iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, const VbdSweeps& how,
                    Eigen::VectorXd& decrease);
 
+// where a step's sweeps start: the inertial position x + h v (the step's guess with no force), or the paper's adaptive
+// start (Chen et al. 2024, sec. 3.5; the authors' Gaia code): that plus h^2 times the part of the last step's
+// acceleration along the other forces' acceleration a (gravity, wind), clamped to [0, |a|] (all of a at the first step)
+enum class VbdStart { adaptive, inertial };
+
+// the vbd methods' own settings (their options: solvers/methods/vbd.cpp declares them)
+struct VbdSettings {
+  int substeps = 1;    // backward Euler steps a step
+  VbdSweeps sweeps;    // a (sub)step's sweeps, their threads and Chebyshev's rate
+  VbdStart start = VbdStart::adaptive;
+};
+
+struct Method;
+struct MethodOption;
+// the vbd methods' options (substeps, iterations, start; threads for the CPU's sweeps, rho for Chebyshev's), declared
+// once for vbd, vbd-chebyshev and gpu-vbd-compute (solvers/methods/vbd.cpp), and their values in a run's control
+std::vector<MethodOption> vbd_options(bool threads, bool chebyshev);
+VbdSettings vbd_settings(const Method& method, const StepControl& control);
+
 // The vbd method's step (and gpu-vbd-compute's) on a mass-spring system: each (sub)step is backward Euler's incremental
-// potential minimised by `control.iterations` coloured sweeps, from the paper's adaptive start (the inertial position
-// plus the part of the last step's acceleration along the other forces', clamped between none and all of it; all of
-// it at the first step). The nodes are coloured at the first step; summary.json's colours and G's decrease are counted
+// potential minimised by `sweeps.sweeps` coloured sweeps from `start`. The nodes are coloured at the first step;
+// summary.json's colours and G's decrease are counted
 class VbdStepper : public FixedStepper {
  public:
-  // rho: Chebyshev's rate (0: plain sweeps); `name` for a failure's message
-  VbdStepper(const CountedSystem& system, const StepControl& control, double rho, std::string_view name);
+  // `name` for a failure's message
+  VbdStepper(const CountedSystem& system, const VbdSettings& settings, std::string_view name);
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string& failure) override;
 
  protected:
@@ -77,6 +95,7 @@ class VbdStepper : public FixedStepper {
   IncrementalPotential potential_;
   int substeps_;
   VbdSweeps sweeps_;
+  VbdStart start_;
   std::string_view name_;
   Eigen::Index n_;
   std::vector<std::vector<int>> colours_;

@@ -22,7 +22,8 @@ __version__ = _stepwise.version()
 
 def methods():
     """The method table, as ``stepwise methods`` prints it: a list of dicts (name, family, source,
-    description, order, order_min, order_max, stepping, needs)."""
+    description, order, order_min, order_max, stepping, needs, and options: the method's own, each a dict as
+    ``stepwise methods --json`` lists it, which ``run`` takes as keyword arguments)."""
     return _stepwise.methods()
 
 
@@ -59,7 +60,7 @@ def _sets(set):
     return {str(k): float(v) for k, v in set.items()}
 
 
-def run(scene, method=None, dt=None, rtol=None, atol=None, t_end=None, output_dt=None, set=None, max_steps=None):
+def run(scene, method=None, dt=None, rtol=None, atol=None, t_end=None, output_dt=None, set=None, max_steps=None, **options):
     """Run a scene file as ``stepwise run`` runs it, with the same overrides.
 
     Parameters
@@ -76,6 +77,10 @@ def run(scene, method=None, dt=None, rtol=None, atol=None, t_end=None, output_dt
         Scene parameters overridden, as ``--set key=value``.
     max_steps : float, optional
         The steps (and output rows) the run may take.
+    **options
+        The method's own options (``methods()``' ``options``, ``stepwise run --NAME``), by name with ``_`` for
+        ``-``: ``run("flag", method="vbd", dt=1/60, iterations=10, start="inertial")``. Checked as the command
+        line checks them: one the method does not take, or out of its range, is a ValueError naming both.
 
     Returns
     -------
@@ -91,7 +96,8 @@ def run(scene, method=None, dt=None, rtol=None, atol=None, t_end=None, output_dt
     TypeError
         ``set`` not a dict.
     """
-    out = _stepwise.run(str(scene), method, dt, rtol, atol, t_end, output_dt, _sets(set), max_steps)
+    given = {name.replace("_", "-"): str(value) for name, value in options.items()}
+    out = _stepwise.run(str(scene), method, dt, rtol, atol, t_end, output_dt, _sets(set), max_steps, given)
     return RunResult(out["columns"], out["values"], out["summary"], out.get("fields"), out.get("x"), out.get("y"))
 
 

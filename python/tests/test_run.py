@@ -17,6 +17,7 @@ def test_methods_are_the_command_lines_table():
     for a, b in zip(ours, cli):
         assert (a["family"], a["source"], a["order"]) == (b["family"], b["source"], b["order"])
         assert (a["stepping"] != "adaptive") == b["fixed_step"] and (a["stepping"] != "fixed") == b["adaptive"]
+        assert a["options"] == b["options"], a["name"]
 
 
 @pytest.mark.parametrize("name, args", [
@@ -25,13 +26,14 @@ def test_methods_are_the_command_lines_table():
     ("pendulum-equations", dict(method="verner98", rtol=1e-9, atol=1e-12)),
     ("van-der-pol", dict(method="gsl-rk8pd", rtol=1e-8, atol=1e-10, set={"mu": 2.0})),
     ("bouncing-ball", dict(method="tsitouras54", rtol=1e-8, atol=1e-10)),
+    ("hanging-chain", dict(method="vbd", dt=1 / 60, t_end=0.1, iterations=7, start="inertial")),
 ])
 def test_run_equals_the_command_line_bit_for_bit(tmp_path, name, args):
     r = stepwise.run(scene(name), **args)
     cmd = [BINARY, "run", scene(name), "--out", str(tmp_path)]
-    for key in ("method", "dt", "rtol", "atol"):
+    for key in ("method", "dt", "rtol", "atol", "t_end", "iterations", "start"):
         if key in args:
-            cmd += [f"--{key}", args[key] if key == "method" else repr(args[key])]
+            cmd += ["--" + key.replace("_", "-"), args[key] if isinstance(args[key], str) else repr(args[key])]
     for key, value in args.get("set", {}).items():
         cmd += ["--set", f"{key}={value!r}"]
     subprocess.run(cmd, check=True, capture_output=True)
@@ -46,6 +48,9 @@ def test_run_equals_the_command_line_bit_for_bit(tmp_path, name, args):
     summary = json.loads((tmp_path / "summary.json").read_text())
     for key in ("status", "steps", "rejected", "rhs_evals", "jac_evals", "final_state", "error", "events", "parameters"):
         assert summary[key] == r.summary[key], key
+    # a method's own options, as keyword arguments: taken, and echoed as the command line echoes them
+    for key in ("iterations", "start"):
+        assert (summary.get(key), r.summary.get(key)) == (args.get(key),) * 2, key
 
 
 def test_run_by_name_and_bad_input():
@@ -56,6 +61,11 @@ def test_run_by_name_and_bad_input():
         stepwise.run("pendulum", dt=-1.0)
     with pytest.raises(ValueError, match="nonsense"):
         stepwise.run("pendulum", set={"nonsense": 1.0})
+    # a method's option: out of its range, or for a method that does not take it, refused naming both
+    with pytest.raises(ValueError, match=r"--iterations 0: must be a whole number in 1\.\.1000000"):
+        stepwise.run("hanging-chain", method="vbd", dt=0.01, iterations=0)
+    with pytest.raises(ValueError, match="--iterations: rk4 takes no --iterations"):
+        stepwise.run("pendulum", method="rk4", dt=0.01, iterations=3)
 
 
 def test_advise_meets_the_error_asked():

@@ -39,8 +39,8 @@ std::vector<Point> plan(bool quick) {
   const auto small_steps = [&](std::initializer_list<int> substeps) {
     for (const int s : substeps) {
       StepControl c = StepControl::fixed(1.0 / 60);
-      c.substeps = s;
-      c.iterations = 1;
+      c.settings["substeps"] = s;
+      c.settings["iterations"] = 1;
       points.push_back({"xpbd", c, fmt::format("1/60 s, {} substeps", s)});
     }
   };
@@ -48,7 +48,7 @@ std::vector<Point> plan(bool quick) {
   const auto sweeps = [&](std::initializer_list<int> counts) {
     for (const int k : counts) {
       StepControl c = StepControl::fixed(1.0 / 60);
-      c.iterations = k;
+      c.settings["iterations"] = k;
       points.push_back({"vbd", c, fmt::format("1/60 s, {} sweeps", k)});
     }
   };
@@ -110,8 +110,8 @@ StudyOutput cloth_realtime(const StudyContext& ctx) {
     const Method& m = *find_method(p.method);
     costs.push_back(!p.control.dt                     ? 2e9
                     : m.source == Source::opengl_shader ? steps * 2.5e5
-                    : m.family == Family::vertex_block_descent ? steps * p.control.iterations * 150 * n
-                    : m.substepped                      ? steps * p.control.substeps * p.control.iterations * 25 * n
+                    : m.family == Family::vertex_block_descent ? steps * m.setting(p.control, "iterations") * 150 * n
+                    : m.option("substeps")              ? steps * m.setting(p.control, "substeps") * m.setting(p.control, "iterations") * 25 * n
                     : m.stability.oscillator_dt         ? steps * 25 * n * m.order.min
                                                         : steps * 5e6);
   }

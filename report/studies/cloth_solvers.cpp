@@ -12,6 +12,7 @@
 #include "solvers/incremental_potential.hpp"
 #include "solvers/run_support.hpp"
 
+#include <array>
 #include <random>
 
 namespace stepwise {
@@ -25,6 +26,7 @@ struct Row {
   double dt = frame;
   int iterations = 1;  // vbd's sweeps a step; xpbd's a substep
   int substeps = 1;
+  std::string start = "adaptive";  // vbd's (--start): the paper's adaptive guess, or the inertial position
 };
 
 Params model_params(const std::string& model) {
@@ -32,6 +34,9 @@ Params model_params(const std::string& model) {
   if (model == "continuum-stiff") return {{"continuum", 1}, {"E", 100 * 5e5}};
   return {};
 }
+
+// the true motion's step: continuum-cloth's reference (200 steps of its 1/15 s frames), which divides 1/60 and 1/30 s
+constexpr double true_motion_dt = 1.0 / 3000;
 
 // the rows: the iteration budgets and substeps at 1/60 s, then the stability rows at 1/30 s and the scrambled start
 std::vector<Row> plan(bool quick) {
@@ -46,6 +51,7 @@ std::vector<Row> plan(bool quick) {
     for (const int k : std::string(model) == "springs" ? sweeps : continuum_sweeps) rows.push_back({model, "vbd", frame, k});
     for (const int k : std::string(model) == "springs" ? accelerated : continuum_sweeps) rows.push_back({model, "vbd-chebyshev", frame, k});
   }
+  for (const int k : quick ? std::vector<int>{5} : std::vector<int>{1, 5, 20}) rows.push_back({"springs", "vbd", frame, k, 1, "inertial"});
   rows.push_back({"springs", "fast-mass-spring"});
   for (const int s : substeps) rows.push_back({"springs", "xpbd", frame, 1, s});
   for (const char* model : quick ? std::vector<const char*>{"springs"} : std::vector<const char*>{"springs", "continuum-stiff"}) {
@@ -54,6 +60,25 @@ std::vector<Row> plan(bool quick) {
   }
   rows.push_back({"springs-scrambled", "vbd", frame, 10});
   return rows;
+}
+
+// the true motion: rk4 at 1/3000 s (converged: continuum-cloth's reference step, its offset from the run at twice the
+// step Richardson-estimated there), the springs and the continuum from their flat start, sampled every 1/60 s. The
+// stiff continuum's rk4 would take ten times the steps (its limit is E's square root lower): its rows say n/a
+const std::array<std::string, 2> true_motion_models{"springs", "continuum"};
+std::vector<Measured> true_motions(const StudyContext& ctx, double t_end) {
+  std::vector<std::string> labels;
+  for (const auto& model : true_motion_models) labels.push_back(fmt::format("cloth-solvers {} true motion (rk4 at {:.3g} s)", model, true_motion_dt));
+  const auto truths = ctx.sweep<Measured>(labels, [&](size_t i) {
+    const auto model = make_model("cloth", model_params(true_motion_models[i]));
+    StepControl c = StepControl::fixed(true_motion_dt);
+    c.observe = [](const Eigen::VectorXd& y) { return y; };
+    return run_and_measure(*model, "rk4", c, t_end, frame);
+  }, {t_end / true_motion_dt * 2.5e5, t_end / true_motion_dt * 5e5});  // an rk4 step ~0.25 ms (springs), 0.5 ms (continuum)
+  for (size_t i = 0; i < truths.size(); ++i)
+    if (truths[i].result.status != Status::ok)
+      throw std::runtime_error(fmt::format("cloth-solvers: the {}'s true motion failed: {}", true_motion_models[i], truths[i].result.message));
+  return truths;
 }
 
 // every node of the flag placed at random in a cube the sheet's size about its centre, at rest (the paper's test)
@@ -67,20 +92,38 @@ Eigen::VectorXd scrambled(const Model& flag) {
   return y;
 }
 
+// how far the scrambled start has recovered its shape, in the springs' elastic energy: at its start and last frame, beside the flag's
+// from its flat start at its last frame (converged backward Euler's)
+std::string recovery_text(const Trajectory& run, const Trajectory& reference) {
+  const auto flag = make_model("cloth", {});
+  const Eigen::Index positions = flag->as<SecondOrderView>()->positions;
+  const auto& psi = flag->as<MassSpringView>()->potential;
+  return fmt::format(
+      "From every node scrambled, vbd's springs' elastic energy falls from {:.3g} J at the start to {:.3g} J at {:g} s, where the "
+      "flag's from its flat start is {:.3g} J. ",
+      psi(scrambled(*flag).head(positions)), psi(run.y.back().head(positions)), run.t.back(), psi(reference.y.back().head(positions)));
+}
+
 // the findings, first: each method's rows at 1/60 s, the paper's claim read off G, and the stability rows
 std::string findings(const Table& table, const std::vector<Row>& rows, double t_end, const std::string& recovery) {
   // the findings: each method's rows at 1/60 s, cheapest first, as "N px at C CPU s/s (setting)"
   const auto cell = [&](size_t k, const char* column) { return std::get<double>(cell_of(table, table.rows[k], column)); };
-  const auto said = [&](const std::string& model, const std::string& method) {
+  const auto said = [&](const std::string& model, const std::string& method, const std::string& start = "adaptive") {
     std::vector<std::string> parts;
     for (size_t k = 0; k < rows.size(); ++k)
-      if (rows[k].model == model && rows[k].method == method && rows[k].dt == frame)
-        parts.push_back(fmt::format("{:.0f} px at {:.2g} CPU s/s{}", cell(k, "pixels_off"), cell(k, "cpu_per_simulated_second"),
+      if (rows[k].model == model && rows[k].method == method && rows[k].dt == frame && rows[k].start == start)
+        parts.push_back(fmt::format("{:.0f} px ({:.0f} from the true motion) at {:.2g} CPU s/s{}", cell(k, "pixels_off"), cell(k, "pixels_off_true_motion"),
+                                    cell(k, "cpu_per_simulated_second"),
                                     method.starts_with("vbd") ? fmt::format(" ({} sweep{}, G − G* {:.2g} J)", rows[k].iterations, rows[k].iterations == 1 ? "" : "s", cell(k, "potential_gap"))
                                     : method == "xpbd"        ? fmt::format(" ({} substeps)", rows[k].substeps)
                                                               : fmt::format(" (G − G* {:.2g} J)", cell(k, "potential_gap"))));
     return fmt::format("{} {}", method, fmt::join(parts, ", "));
   };
+  // backward Euler's own offset from the true motion: what no solver of its step can do better than
+  std::string own;
+  for (size_t k = 0; k < rows.size(); ++k)
+    if (rows[k].method == "implicit-euler-newton" && rows[k].dt == frame)
+      own += fmt::format("{}{:.0f} px ({})", own.empty() ? "" : ", ", cell(k, "pixels_off_true_motion"), rows[k].model);
   std::string stability;
   for (size_t k = 0; k < rows.size(); ++k)
     if (rows[k].dt != frame || rows[k].model == "springs-scrambled")
@@ -90,7 +133,7 @@ std::string findings(const Table& table, const std::vector<Row>& rows, double t_
   std::optional<size_t> most_sweeps, linearised;
   for (size_t k = 0; k < rows.size(); ++k) {
     if (rows[k].model != "springs" || rows[k].dt != frame) continue;
-    if (rows[k].method == "vbd" && (!most_sweeps || rows[k].iterations > rows[*most_sweeps].iterations)) most_sweeps = k;
+    if (rows[k].method == "vbd" && rows[k].start == "adaptive" && (!most_sweeps || rows[k].iterations > rows[*most_sweeps].iterations)) most_sweeps = k;
     if (rows[k].method == "implicit-euler") linearised = k;
   }
   const std::string verdict =
@@ -107,24 +150,26 @@ std::string findings(const Table& table, const std::vector<Row>& rows, double t_
   for (size_t a = 0; a < rows.size(); ++a)
     for (size_t p = 0; p < rows.size(); ++p)
       if (rows[a].model == "springs" && rows[a].dt == frame && rows[a].method == "vbd-chebyshev" && rows[p].model == "springs" &&
-          rows[p].dt == frame && rows[p].method == "vbd" && rows[p].iterations == rows[a].iterations)
+          rows[p].dt == frame && rows[p].method == "vbd" && rows[p].start == "adaptive" && rows[p].iterations == rows[a].iterations)
         acceleration = fmt::format(
             "Chebyshev's acceleration of the sweeps (ρ {:g}) leaves G {:.3g} times closer to its minimum after {} sweeps, and the run {:.3g} times "
             "closer to converged backward Euler's, for {:.2g} times the CPU. ",
-            StepControl{}.chebyshev_rho, cell(p, "potential_gap") / cell(a, "potential_gap"), rows[a].iterations,
+            find_method("vbd-chebyshev")->option("rho")->fallback, cell(p, "potential_gap") / cell(a, "potential_gap"), rows[a].iterations,
             cell(p, "pixels_off") / cell(a, "pixels_off"), cell(a, "cpu_per_simulated_second") / cell(p, "cpu_per_simulated_second"));
   return fmt::format(
-      "**Off converged backward Euler at 1/60 s on the 32 × 32 flag over {:g} s — springs: {}; {}; {}; {}; {}. Continuum: {}; {}; {}.** "
-      "{} {}"
+      "**Off converged backward Euler at 1/60 s on the 32 × 32 flag over {:g} s — springs: {}; {} from the inertial start; {}; {}; {}; {}. Continuum: {}; {}; {}. Converged "
+      "backward Euler is itself {} from the true motion.** {} {}"
       "Stability (the rows at 1/30 s, continuum-stiff being the continuum at 100 × E, and vbd from every node scrambled): {}. {}Each row's G − G* is how far "
       "its one step from the flag in motion leaves G above its minimum (J, Newton's to 1e-9 m/s); its pixels, how far its "
-      "run is from converged backward Euler's at the same step, the largest node offset over the frames in a 720-pixel "
-      "frame 1.5 m tall (the scrambled start: at the last frame). A billowing flag magnifies small differences: the "
+      "run is from converged backward Euler's at the same step (how well it solves backward Euler), and from the true motion, rk4 at "
+      "1/3000 s (how well it animates: converged backward Euler's own offset is its rows'), the largest node offset over the frames in a "
+      "720-pixel frame 1.5 m tall (the scrambled start: at the last frame, off backward Euler only; the stiff continuum's true motion "
+      "is not run). A billowing flag magnifies small differences: the "
       "offsets rank the methods, they do not measure one step. xpbd steps the springs as compliant constraints without "
       "their Voigt damping: part of its offset is that model's. One core; vbd's colours share no term, and its answer is "
       "the same on any number of threads.\n\n",
-      t_end, said("springs", "vbd"), said("springs", "vbd-chebyshev"), said("springs", "xpbd"), said("springs", "implicit-euler"),
-      said("springs", "fast-mass-spring"), said("continuum", "vbd"), said("continuum", "vbd-chebyshev"), said("continuum", "implicit-euler"), verdict,
+      t_end, said("springs", "vbd"), said("springs", "vbd", "inertial"), said("springs", "vbd-chebyshev"), said("springs", "xpbd"), said("springs", "implicit-euler"),
+      said("springs", "fast-mass-spring"), said("continuum", "vbd"), said("continuum", "vbd-chebyshev"), said("continuum", "implicit-euler"), own, verdict,
       acceleration, stability, recovery);
 }
 
@@ -157,11 +202,14 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
   const std::vector<Row> rows = plan(ctx.quick);
   std::vector<std::string> labels;
   for (const Row& r : rows)
-    labels.push_back(fmt::format("cloth-solvers {} {} dt {:.3g} iterations {} substeps {}", r.model, r.method, r.dt, r.iterations, r.substeps));
+    labels.push_back(fmt::format("cloth-solvers {} {} dt {:.3g} iterations {} substeps {} start {}", r.model, r.method, r.dt, r.iterations, r.substeps, r.start));
   const auto control_of = [](const Row& r) {
     StepControl c = StepControl::fixed(r.dt);
-    c.iterations = r.iterations;
-    c.substeps = r.substeps;
+    if (const Method* m = find_method(r.method); m->option("iterations")) {
+      c.settings["iterations"] = r.iterations;
+      c.settings["substeps"] = r.substeps;
+      if (const MethodOption* start = m->option("start")) c.settings["start"] = start->parse(r.start);
+    }
     c.observe = [](const Eigen::VectorXd& y) { return y; };  // the whole state at each frame
     return c;
   };
@@ -176,6 +224,12 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
     return m;
   });
 
+  const std::vector<Measured> truths = true_motions(ctx, t_end);
+  const auto truth_of = [&](const Row& r) {
+    const auto at = std::find(true_motion_models.begin(), true_motion_models.end(), r.model);
+    return at == true_motion_models.end() ? nullptr : &truths[static_cast<size_t>(at - true_motion_models.begin())];
+  };
+
   // converged backward Euler's run at each model and step: the reference of its rows
   const auto reference_of = [&](const Row& r) -> const Measured* {
     const std::string model = r.model == "springs-scrambled" ? "springs" : r.model;
@@ -185,12 +239,16 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
   };
   const Eigen::Index positions = make_model("cloth", {})->as<SecondOrderView>()->positions;
   const double pixel = flag_frame_extent / frame_pixels;
-  // the largest node offset over the frames (the scrambled start: at the last frame only), in pixels
+  // the largest node offset over the run's frames from the reference's at the same times (the scrambled start: at
+  // the last frame only), in pixels; both sampled at whole frames, the reference as often as the run or more
   const auto pixels_off = [&](const Trajectory& run, const Trajectory& reference, bool last_only) {
     double largest = 0;
-    const size_t frames = std::min(run.y.size(), reference.y.size());
-    for (size_t f = last_only ? frames - 1 : 0; f < frames; ++f)
-      for (Eigen::Index i = 0; i < positions; i += 3) largest = std::max(largest, (run.y[f].segment<3>(i) - reference.y[f].segment<3>(i)).norm());
+    size_t k = 0;
+    for (size_t f = last_only ? run.y.size() - 1 : 0; f < run.y.size(); ++f) {
+      while (k + 1 < reference.t.size() && reference.t[k] < run.t[f] - frame / 4) ++k;
+      if (k >= reference.t.size() || std::abs(reference.t[k] - run.t[f]) > frame / 4) continue;
+      for (Eigen::Index i = 0; i < positions; i += 3) largest = std::max(largest, (run.y[f].segment<3>(i) - reference.y[k].segment<3>(i)).norm());
+    }
     return largest / pixel;
   };
   // one step of each method from the flag in motion (the reference's state halfway), and G there
@@ -214,32 +272,27 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
     if (!newton.minimise(G, x, stats).empty()) return std::numeric_limits<double>::quiet_NaN();
     return std::max(0.0, G.value(step.y_stop.head(positions)) - G.value(x));
   };
-  Table table{{"model", "method", "dt", "iterations", "substeps", "threads", "cpu_per_simulated_second", "potential_gap", "pixels_off", "status"}, {}};
+  Table table{{"model", "method", "dt", "iterations", "substeps", "start", "threads", "cpu_per_simulated_second", "potential_gap", "pixels_off", "pixels_off_true_motion",
+               "status"}, {}};
   for (size_t k = 0; k < rows.size(); ++k) {
     const Row& r = rows[k];
     const Measured& m = runs[k];
     const Measured* reference = reference_of(r);
     const bool ok = m.result.status == Status::ok && reference && reference->result.status == Status::ok;
-    table.rows.push_back({r.model, r.method, r.dt, long{r.method.starts_with("vbd") || r.method == "xpbd" ? r.iterations : 0}, long{r.substeps}, long{1},
+    const Measured* truth = truth_of(r);
+    table.rows.push_back({r.model, r.method, r.dt, long{r.method.starts_with("vbd") || r.method == "xpbd" ? r.iterations : 0}, long{r.substeps},
+                          r.method.starts_with("vbd") ? r.start : std::string(), long{1},
                           m.result.stats.cpu_seconds / t_end, ok ? potential_gap(r, *reference) : NAN,
                           ok ? pixels_off(m.result.trajectory, reference->result.trajectory, r.model == "springs-scrambled") : NAN,
+                          m.result.status == Status::ok && truth ? pixels_off(m.result.trajectory, truth->result.trajectory, false) : NAN,
                           std::string(to_string(m.result.status))});
   }
 
-  // how far the scrambled start has recovered its shape, in the springs' elastic energy: at its start and last frame, beside the flag's
-  // from its flat start at its last frame (converged backward Euler's)
   std::string recovery;
   for (size_t k = 0; k < rows.size(); ++k)
     if (const Measured* reference = reference_of(rows[k]); rows[k].model == "springs-scrambled" && reference && runs[k].result.status == Status::ok &&
-                                                            reference->result.status == Status::ok) {
-      const auto flag = make_model("cloth", {});
-      const auto& psi = flag->as<MassSpringView>()->potential;
-      const Trajectory& run = runs[k].result.trajectory;
-      recovery = fmt::format(
-          "From every node scrambled, vbd's springs' elastic energy falls from {:.3g} J at the start to {:.3g} J at {:g} s, where the "
-          "flag's from its flat start is {:.3g} J. ",
-          psi(scrambled(*flag).head(positions)), psi(run.y.back().head(positions)), run.t.back(), psi(reference->result.trajectory.y.back().head(positions)));
-    }
+                                                            reference->result.status == Status::ok)
+      recovery = recovery_text(runs[k].result.trajectory, reference->result.trajectory);
   StudyOutput out;
   out.markdown = findings(table, rows, t_end, recovery);
   out.markdown += add_figure(out.figures, "cloth_solvers", "", gap_figure(), "The flag's one step: G − G* against sweeps and against CPU");
@@ -248,9 +301,11 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
                                          {"dt", "dt (s)", shown_as("{:.4f}")},
                                          {"iterations", "sweeps"},
                                          {"substeps", "substeps"},
+                                         {"start", "start"},
                                          {"cpu_per_simulated_second", "CPU s per simulated s", shown_as("{:.3g}")},
                                          {"potential_gap", "G − G* (J)", shown_as("sci")},
-                                         {"pixels_off", "pixels off", shown_as("{:.3g}")},
+                                         {"pixels_off", "px off backward Euler", shown_as("{:.3g}")},
+                                         {"pixels_off_true_motion", "px off the true motion", shown_as("{:.3g}")},
                                          {"status", "status"}});
   out.markdown += "\n";
   out.tables.emplace_back("cloth_solvers", std::move(table));

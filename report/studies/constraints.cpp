@@ -12,6 +12,7 @@
 #include "models/pendulum.hpp"
 #include "solvers/capabilities/distance_constraints.hpp"
 #include "solvers/mass_spring_implicit.hpp"
+#include "solvers/method_table.hpp"
 
 #include <fmt/format.h>
 
@@ -40,9 +41,22 @@ std::unique_ptr<Model> constrained(const std::string& name, Params params, const
 
 StepControl position_based(double dt, int substeps, int iterations) {
   StepControl c = StepControl::fixed(dt);
-  c.substeps = substeps;
-  c.iterations = iterations;
+  c.settings["substeps"] = substeps;
+  c.settings["iterations"] = iterations;
   return c;
+}
+
+// a setting's substeps or iterations as the tables show them: as set, else one substep a step and PhysX's 4 iterations
+long knob(const StepControl& control, std::string_view name) {
+  const auto at = control.settings.find(name);
+  return at != control.settings.end() ? static_cast<long>(at->second) : name == "substeps" ? 1 : 4;
+}
+
+// the control a method runs: the sweep's substeps and iterations where it takes them (a row of the compliant rod
+// sets them alike for every method, for its table)
+StepControl taken_by(const std::string& method, StepControl control) {
+  std::erase_if(control.settings, [m = find_method(method)](const auto& setting) { return !m->option(setting.first); });
+  return control;
 }
 
 struct ConstrainedScene {
@@ -70,7 +84,7 @@ struct Outcome {
 Outcome run_setting(const ConstrainedScene& scene, const Setting& s, const Eigen::VectorXd& truth) {
   const auto model = constrained(scene.model, scene.params, s.variant);
   const auto* constraints = model->as<DistanceConstraints>();
-  const Measured m = run_and_measure(*model, s.method, s.control, scene.t_end, scene.t_end / 100);
+  const Measured m = run_and_measure(*model, s.method, taken_by(s.method, s.control), scene.t_end, scene.t_end / 100);
   Outcome o{std::string(to_string(m.result.status)), NAN, 0, m.result.stats.cpu_seconds, m.result.stats.rhs_evals};
   // the trajectory holds the whole state, or (a cloth) the model's summary of it: then the drift at the end alone
   if (model->summary_names().empty())
@@ -128,7 +142,7 @@ Table work_precision_table(const StudyContext& ctx, const std::vector<Constraine
     const Setting& s = settings[i];
     const Outcome& o = outcomes[i];
     t.rows.push_back({scenes[s.scene].label, s.method, s.variant, label_of(s), mode_of(s.control), s.control.dt.value_or(NAN), s.control.dt ? NAN : s.control.rtol,
-                      long{s.control.substeps}, long{s.control.iterations}, o.error, o.drift, o.cpu_seconds, o.rhs_evals, o.status});
+                      knob(s.control, "substeps"), knob(s.control, "iterations"), o.error, o.drift, o.cpu_seconds, o.rhs_evals, o.status});
   }
   return t;
 }
@@ -148,7 +162,7 @@ Table long_run_table(const StudyContext& ctx, double theta0, int periods, Table&
   for (const auto& s : settings) labels.push_back(s.method + " " + s.variant);
   const auto runs = ctx.sweep<RunResult>(labels, [&](size_t i) {
     const auto model = constrained("pendulum-cartesian", params, settings[i].variant);
-    return run_and_measure(*model, settings[i].method, settings[i].control, periods * period, period).result;
+    return run_and_measure(*model, settings[i].method, taken_by(settings[i].method, settings[i].control), periods * period, period).result;
   });
   const auto model = make_model("pendulum-cartesian", params);
   const auto* constraints = model->as<DistanceConstraints>();
@@ -183,7 +197,7 @@ Table damping_table(const StudyContext& ctx, bool quick) {
   const Params params{{"theta0", theta0}};
   const auto ends = ctx.sweep<RunResult>(labels, [&](size_t i) {
     const auto model = constrained("pendulum-cartesian", params, settings[i].variant);
-    RunResult r = run_and_measure(*model, settings[i].method, settings[i].control, periods * period, periods * period).result;
+    RunResult r = run_and_measure(*model, settings[i].method, taken_by(settings[i].method, settings[i].control), periods * period, periods * period).result;
     r.trajectory = {};
     return r;
   });
@@ -192,7 +206,7 @@ Table damping_table(const StudyContext& ctx, bool quick) {
   Table t{{"method", "variant", "label", "step", "energy_loss_per_period", "status"}, {}};
   for (size_t i = 0; i < settings.size(); ++i) {
     const double left = (*model->energy(ends[i].y_stop) - bottom) / (e0 - bottom);
-    t.rows.push_back({settings[i].method, settings[i].variant, label_of(settings[i]), *settings[i].control.dt / settings[i].control.substeps,
+    t.rows.push_back({settings[i].method, settings[i].variant, label_of(settings[i]), *settings[i].control.dt / knob(settings[i].control, "substeps"),
                       1 - std::pow(std::max(left, 0.0), 1.0 / periods), std::string(to_string(ends[i].status))});
   }
   return t;
@@ -227,11 +241,11 @@ Table substeps_table(const StudyContext& ctx, const std::vector<SubstepSubject>&
         budgets.push_back(budget);
       }
   std::vector<std::string> labels;
-  for (const auto& s : settings) labels.push_back(fmt::format("{} xpbd {}x{}", subjects[s.scene].scene.label, s.control.substeps, s.control.iterations));
+  for (const auto& s : settings) labels.push_back(fmt::format("{} xpbd {}x{}", subjects[s.scene].scene.label, knob(s.control, "substeps"), knob(s.control, "iterations")));
   const auto outcomes = ctx.sweep<Outcome>(labels, [&](size_t i) { return run_setting(subjects[settings[i].scene].scene, settings[i], subjects[settings[i].scene].truth); });
   Table t{{"scene", "budget", "substeps", "iterations", "error", "drift", "cpu_seconds", "status"}, {}};
   for (size_t i = 0; i < settings.size(); ++i)
-    t.rows.push_back({subjects[settings[i].scene].scene.label, budgets[i], long{settings[i].control.substeps}, long{settings[i].control.iterations},
+    t.rows.push_back({subjects[settings[i].scene].scene.label, budgets[i], knob(settings[i].control, "substeps"), knob(settings[i].control, "iterations"),
                       outcomes[i].error, outcomes[i].drift, outcomes[i].cpu_seconds, outcomes[i].status});
   return t;
 }
@@ -245,10 +259,10 @@ Table stiffness_table(const StudyContext& ctx) {
   for (int i = 1; i <= 64; i *= 2)
     for (const char* method : {"pbd", "xpbd"}) settings.push_back({0, method, "", position_based(frame, 1, i)});
   std::vector<std::string> labels;
-  for (const auto& s : settings) labels.push_back(fmt::format("{} {} iterations", s.method, s.control.iterations));
+  for (const auto& s : settings) labels.push_back(fmt::format("{} {} iterations", s.method, knob(s.control, "iterations")));
   const auto runs = ctx.sweep<RunResult>(labels, [&](size_t i) {
     const auto model = make_model("pendulum-cartesian", {{"theta0", 0.0}, {"compliance", alpha}});
-    return run_and_measure(*model, settings[i].method, settings[i].control, 1.0, frame).result;
+    return run_and_measure(*model, settings[i].method, taken_by(settings[i].method, settings[i].control), 1.0, frame).result;
   });
   Table t{{"method", "iterations", "stretch", "hooke"}, {}};
   for (size_t i = 0; i < settings.size(); ++i) {
@@ -256,7 +270,7 @@ Table stiffness_table(const StudyContext& ctx) {
     double sum = 0;
     const size_t half = ys.size() / 2;
     for (size_t k = half; k < ys.size(); ++k) sum += ys[k].head<2>().norm() - 1.0;
-    t.rows.push_back({settings[i].method, long{settings[i].control.iterations}, sum / double(ys.size() - half), hooke});
+    t.rows.push_back({settings[i].method, knob(settings[i].control, "iterations"), sum / double(ys.size() - half), hooke});
   }
   return t;
 }
@@ -303,11 +317,10 @@ Table compliant_rod_table(const StudyContext& ctx, std::vector<double>& backward
     settings.push_back({k, "symplectic-euler", "", position_based(frame, 1, 1)});
   }
   std::vector<std::string> labels;
-  for (const auto& s : settings) labels.push_back(fmt::format("rod {:g} m/N {} {}", rod_compliances[s.scene], s.method, s.control.iterations));
+  for (const auto& s : settings) labels.push_back(fmt::format("rod {:g} m/N {} {}", rod_compliances[s.scene], s.method, knob(s.control, "iterations")));
   const auto runs = ctx.sweep<RodOutcome>(labels, [&](size_t i) {
     const Setting& s = settings[i];
-    const bool iterated = s.method == "xpbd" || s.method == "vbd";  // the others take no --iterations
-    const Measured m = run_and_measure(*rod(rod_compliances[s.scene]), s.method, iterated ? s.control : StepControl::fixed(frame), rod_t_end, rod_t_end);
+    const Measured m = run_and_measure(*rod(rod_compliances[s.scene]), s.method, taken_by(s.method, s.control), rod_t_end, rod_t_end);
     RodOutcome o{std::string(to_string(m.result.status)), NAN, NAN, m.result.stats.cpu_seconds};
     if (m.result.status == Status::ok) {
       o.off_backward_euler = (m.result.y_stop.head<2>() - backward_euler[s.scene]).lpNorm<Eigen::Infinity>();
@@ -317,7 +330,7 @@ Table compliant_rod_table(const StudyContext& ctx, std::vector<double>& backward
   });
   Table t{{"compliance", "method", "iterations", "off_backward_euler", "off_true_motion", "cpu_seconds", "status"}, {}};
   for (size_t i = 0; i < settings.size(); ++i)
-    t.rows.push_back({rod_compliances[settings[i].scene], settings[i].method, long{settings[i].control.iterations}, runs[i].off_backward_euler,
+    t.rows.push_back({rod_compliances[settings[i].scene], settings[i].method, knob(settings[i].control, "iterations"), runs[i].off_backward_euler,
                       runs[i].off_true_motion, runs[i].cpu_seconds, runs[i].status});
   for (size_t k = 0; k < rod_compliances.size(); ++k) {
     const long a_frame = (newton[k].newton_iterations + newton[k].steps - 1) / std::max(newton[k].steps, 1L);
@@ -338,7 +351,7 @@ Table sag_table(const StudyContext& ctx, bool quick, double& spring_sag) {
   for (int i = 1; i <= (quick ? 8 : 64); i *= 2)
     for (const char* method : {"pbd", "xpbd"}) settings.push_back({0, method, "", position_based(frame, 1, i)});
   std::vector<std::string> labels;
-  for (const auto& s : settings) labels.push_back(fmt::format("hanging cloth {} {}", s.method, s.method == "implicit-euler" ? "at rest" : fmt::format("{} iterations", s.control.iterations)));
+  for (const auto& s : settings) labels.push_back(fmt::format("hanging cloth {} {}", s.method, s.method == "implicit-euler" ? "at rest" : fmt::format("{} iterations", knob(s.control, "iterations"))));
   const auto model = make_model("cloth", hanging_cloth);
   const auto names = model->summary_names();
   const auto mean_height = static_cast<Eigen::Index>(std::find(names.begin(), names.end(), "y_mean") - names.begin());
@@ -347,7 +360,7 @@ Table sag_table(const StudyContext& ctx, bool quick, double& spring_sag) {
   const auto sags = ctx.sweep<double>(labels, [&](size_t i) {
     const auto cloth = make_model("cloth", hanging_cloth);
     const bool spring = i == 0;
-    const RunResult r = run_and_measure(*cloth, settings[i].method, settings[i].control, spring ? 5.0 : 3.0, spring ? 5.0 : frame).result;
+    const RunResult r = run_and_measure(*cloth, settings[i].method, taken_by(settings[i].method, settings[i].control), spring ? 5.0 : 3.0, spring ? 5.0 : frame).result;
     if (r.status != Status::ok) return std::numeric_limits<double>::quiet_NaN();
     if (spring) return rest - y_mean(r.y_stop);
     double sum = 0;
@@ -358,7 +371,7 @@ Table sag_table(const StudyContext& ctx, bool quick, double& spring_sag) {
   });
   spring_sag = sags[0];
   Table t{{"method", "iterations", "sag", "spring_model_sag"}, {}};
-  for (size_t i = 1; i < settings.size(); ++i) t.rows.push_back({settings[i].method, long{settings[i].control.iterations}, sags[i], spring_sag});
+  for (size_t i = 1; i < settings.size(); ++i) t.rows.push_back({settings[i].method, knob(settings[i].control, "iterations"), sags[i], spring_sag});
   return t;
 }
 

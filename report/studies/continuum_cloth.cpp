@@ -296,8 +296,10 @@ EqualCpu equal_cpu_table(const StudyContext& ctx, const Params& continuum) {
   const auto measured = ctx.sweep<Measured>(labels, [&](size_t i) {
     const auto model = make_model("cloth", runs[i].model == "continuum" ? continuum : runs[i].model == "springs" ? Params{} : Params{{"damping", 0}});
     StepControl control = StepControl::fixed(runs[i].dt);
-    control.substeps = runs[i].substeps;
-    control.iterations = 1;  // xpbd's small steps: one sweep a substep
+    if (runs[i].method == "xpbd") {
+      control.settings["substeps"] = runs[i].substeps;
+      control.settings["iterations"] = 1;  // xpbd's small steps: one sweep a substep
+    }
     control.observe = [](const Eigen::VectorXd& y) { return y; };  // the whole state at each frame, not the model's summary
     return run_and_measure(*model, runs[i].method, control, t_end, flag_frame);
   }, costs);

@@ -112,6 +112,6 @@ StudyOutput convergence(const StudyContext& ctx) {
 
 }  // namespace
 
-Study convergence_study() { return {"convergence", "Convergence", convergence}; }
+Study convergence_study() { return {.name = "convergence", .title = "Convergence", .run = convergence, .scene_problem = [](const StudyScene&, const Model&) { return std::string(); }}; }
 
 }  // namespace stepwise

@@ -106,6 +106,8 @@ StudyOutput energy(const StudyContext& ctx) {
 
 }  // namespace
 
-Study energy_study() { return {"energy", "Energy over long runs", energy}; }
+Study energy_study() { return {.name = "energy", .title = "Energy over long runs", .run = energy, .scene_problem = [](const StudyScene&, const Model& model) {
+            return model.energy(model.initial_state()) ? std::string() : std::string("has no energy formula (energy = \"...\" above its first table) for the energy study");
+          }}; }
 
 }  // namespace stepwise

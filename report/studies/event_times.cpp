@@ -153,6 +153,9 @@ StudyOutput event_times(const StudyContext& ctx) {
 
 }  // namespace
 
-Study event_times_study() { return {"event-times", "Events: the bouncing ball's impacts and apexes per method", event_times}; }
+Study event_times_study() { return {.name = "event-times", .title = "Events: the bouncing ball's impacts and apexes per method", .run = event_times,
+          .scene_problem = [](const StudyScene&, const Model& model) {
+            return events_of(model).empty() ? std::string("has no events ([events.NAME] when = \"...\") for the event-times study") : std::string();
+          }}; }
 
 }  // namespace stepwise

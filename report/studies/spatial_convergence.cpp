@@ -144,6 +144,9 @@ StudyOutput spatial_convergence(const StudyContext& ctx) {
 
 }  // namespace
 
-Study spatial_convergence_study() { return {"spatial-convergence", "Spatial convergence: your own PDE's stencils on refined grids", spatial_convergence}; }
+Study spatial_convergence_study() { return {.name = "spatial-convergence", .title = "Spatial convergence: your own PDE's stencils on refined grids", .run = spatial_convergence,
+          .scene_problem = [](const StudyScene& scene, const Model&) {
+            return scene.on_grid ? std::string() : std::string("is no PDE scene (model = \"pde\"): the spatial-convergence study refines a grid");
+          }}; }
 
 }  // namespace stepwise

@@ -174,6 +174,6 @@ StudyOutput stability_regions(const StudyContext& ctx) {
 
 }  // namespace
 
-Study stability_regions_study() { return {"stability-regions", "Stability: the methods' regions against the scenes' spectra", stability_regions}; }
+Study stability_regions_study() { return {.name = "stability-regions", .title = "Stability: the methods' regions against the scenes' spectra", .run = stability_regions, .scene_problem = [](const StudyScene&, const Model&) { return std::string(); }}; }
 
 }  // namespace stepwise

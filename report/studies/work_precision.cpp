@@ -321,6 +321,6 @@ StudyOutput work_precision(const StudyContext& ctx) {
 
 }  // namespace
 
-Study work_precision_study() { return {"work-precision", "Accuracy against cost, and the recommendations", work_precision}; }
+Study work_precision_study() { return {.name = "work-precision", .title = "Accuracy against cost, and the recommendations", .run = work_precision, .scene_problem = [](const StudyScene&, const Model&) { return std::string(); }}; }
 
 }  // namespace stepwise

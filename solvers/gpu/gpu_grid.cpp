@@ -251,10 +251,15 @@ void add_shader_methods(MethodTable& table, const ShaderMethod& m) {
   }
 }
 
+}  // namespace stepwise::gpu
+
+namespace stepwise {
+
+// the gpu family (solvers/CMakeLists.txt's list): the wave's and the cloth's passes, and vbd's sweeps
 void register_gpu_methods(MethodTable& table) {
-  register_wave_methods(table);
-  register_cloth_methods(table);
-  register_vbd_compute_method(table);
+  gpu::register_wave_methods(table);
+  gpu::register_cloth_methods(table);
+  gpu::register_vbd_compute_method(table);
 }
 
-}  // namespace stepwise::gpu
+}  // namespace stepwise

@@ -294,7 +294,7 @@ namespace {
 // vbd's step with its sweeps on the device: the state uploaded at each step's start, read back at its end
 class GpuVbdStepper final : public VbdStepper {
  public:
-  GpuVbdStepper(const CountedSystem& s, const StepControl& control) : VbdStepper(s, control, 0, "gpu-vbd-compute") {}
+  GpuVbdStepper(const CountedSystem& s, const VbdSettings& settings) : VbdStepper(s, settings, "gpu-vbd-compute") {}
 
  protected:
   bool iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, double& decrease,
@@ -332,10 +332,10 @@ void register_vbd_compute_method(MethodTable& table) {
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
       .needs = needs_spring_network,
-      .substepped = true,
+      .options = vbd_options(false, false),
       .make = [](const Method& method, const StepControl& control) {
-        return std::make_unique<FixedStepIntegrator>(method, control, [control](const CountedSystem& system) {
-          return std::make_unique<GpuVbdStepper>(system, control);
+        return std::make_unique<FixedStepIntegrator>(method, control, [settings = vbd_settings(method, control)](const CountedSystem& system) {
+          return std::make_unique<GpuVbdStepper>(system, settings);
         });
       },
       .device_problem = vbd_device_problem,

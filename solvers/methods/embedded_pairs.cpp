@@ -285,7 +285,7 @@ MakeIntegrator pair_integrator() {
 
 }  // namespace
 
-void register_embedded_pair_methods(MethodTable& table) {
+void register_embedded_pairs_methods(MethodTable& table) {
   table.add({.name = "tsitouras54",
              .family = Family::embedded_pairs,
              .source = Source::hand_written,

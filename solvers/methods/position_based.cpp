@@ -1,5 +1,5 @@
 // pbd and xpbd: position-based dynamics, the way game and film engines step cloth, ropes and joints. A frame step
-// dt is taken in `substeps` substeps (StepControl); each predicts the positions from the external acceleration
+// dt is taken in `substeps` substeps (its options); each predicts the positions from the external acceleration
 // alone (v += h a, p = x + h v), then moves them onto the constraints by `iterations` Gauss-Seidel sweeps (each
 // constraint in turn, on the positions the previous one left), and takes the velocity from the positions' change
 // (v = (p - x) / h). Müller et al., "Position Based Dynamics" (2007); Macklin, Müller & Chentanez, "XPBD" (2016):
@@ -26,8 +26,8 @@ class PositionBased final : public PlainStepping<PositionBased> {
  public:
   static constexpr int size = 0;  // PlainStepping: no advance(), the state of a run-time size
 
-  PositionBased(const CountedSystem& s, const StepControl& control, Multiplier multiplier)
-      : system_(s), c_(*s.as<DistanceConstraints>()), substeps_(control.substeps), iterations_(control.iterations),
+  PositionBased(const CountedSystem& s, int substeps, int iterations, Multiplier multiplier)
+      : system_(s), c_(*s.as<DistanceConstraints>()), substeps_(substeps), iterations_(iterations),
         multiplier_(multiplier), n_(s.size() / 2), a_(n_), p_(n_), lambda_(c_.constraints.size()) {}
 
   bool step(double t, double h, const Eigen::VectorXd& y, Eigen::VectorXd& y_next, std::string&) override {
@@ -101,10 +101,18 @@ class PositionBased final : public PlainStepping<PositionBased> {
 
 MakeIntegrator position_based(Multiplier multiplier) {
   return [multiplier](const Method& method, const StepControl& control) {
-    return std::make_unique<FixedStepIntegrator>(method, control, [control, multiplier](const CountedSystem& system) {
-      return std::make_unique<PositionBased>(system, control, multiplier);
+    const int substeps = method.whole_setting(control, "substeps"), iterations = method.whole_setting(control, "iterations");
+    return std::make_unique<FixedStepIntegrator>(method, control, [substeps, iterations, multiplier](const CountedSystem& system) {
+      return std::make_unique<PositionBased>(system, substeps, iterations, multiplier);
     });
   };
+}
+
+// a frame step in substeps of iterations sweeps each; PhysX's default of 4 position iterations in one step. "Small
+// steps" is many substeps of one iteration
+std::vector<MethodOption> position_based_options() {
+  return {{.name = "substeps", .max = max_substeps, .fallback = 1, .help = "substeps a step, each predicting and projecting"},
+          {.name = "iterations", .max = max_substeps, .fallback = 4, .help = "constraint sweeps a substep"}};
 }
 
 }  // namespace
@@ -118,7 +126,7 @@ void register_position_based_methods(MethodTable& table) {
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
       .needs = needs_distance_constraints,
-      .substepped = true,
+      .options = position_based_options(),
       .make = position_based(Multiplier::none),
   });
   table.add({
@@ -129,7 +137,7 @@ void register_position_based_methods(MethodTable& table) {
       .order = {1, 1, "1"},
       .stepping = Stepping::fixed,
       .needs = needs_distance_constraints,
-      .substepped = true,
+      .options = position_based_options(),
       .make = position_based(Multiplier::kept),
   });
 }

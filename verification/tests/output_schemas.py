@@ -70,7 +70,7 @@ def main():
                 problems.append(f"{file}: {'/'.join(map(str, error.absolute_path)) or name}: {error.message}")
     # the runs reach what they are for: the fields written only sometimes
     for field in ("dt", "rtol", "events.state", "method_choice", "constraint_drift", "constraint", "substeps", "newton_iterations", "colours",
-                  "chebyshev_rho", "equations", "energy_initial"):
+                  "chebyshev_rho", "start", "equations", "energy_initial"):
         if field not in seen:
             problems.append(f"no run wrote {field}: the runs no longer cover it")
     for p in problems:

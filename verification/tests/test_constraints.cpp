@@ -23,8 +23,8 @@ std::unique_ptr<Model> cartesian(double theta0, double compliance, double mass =
 
 StepControl frames(double dt, int substeps, int iterations) {
   StepControl c = StepControl::fixed(dt);
-  c.substeps = substeps;
-  c.iterations = iterations;
+  c.settings["substeps"] = substeps;
+  c.settings["iterations"] = iterations;
   return c;
 }
 

@@ -2,7 +2,7 @@
 // view of the incremental potential is G's own, a sweep never raises G (on the flag and on a scrambled start), its
 // answer does not depend on the thread count (and its cpu_seconds counts every thread), with enough sweeps its step
 // is backward Euler's, and Chebyshev's
-// acceleration of the sweeps keeps G from rising. In the plane too: on pendulum-cartesian's compliant rod (a mass-spring
+// acceleration of the sweeps keeps G from rising and gains what the sweeps' rate says it should. In the plane too: on pendulum-cartesian's compliant rod (a mass-spring
 // system of dimension 2) the node's view is G's, vbd's and xpbd's converged steps are Newton's, and every solver of
 // backward Euler's step converges at first order to the rod's true motion.
 #include "models/model.hpp"
@@ -147,8 +147,8 @@ TEST(Vbd, TheAnswerDoesNotDependOnTheThreadCount) {
     std::vector<Eigen::VectorXd> ends;
     for (const int threads : {1, 2, 3}) {
       StepControl control = StepControl::fixed(1.0 / 60);
-      control.iterations = 5;
-      control.threads = threads;
+      control.settings["iterations"] = 5;
+      control.settings["threads"] = threads;
       const Measured m = run_and_measure(*model, "vbd", control, 0.1, 0.1);
       ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
       ends.push_back(m.result.y_stop);
@@ -164,8 +164,8 @@ TEST(Vbd, ItsCpuSecondsCountEveryThreadItRuns) {
   std::array<double, 2> cpu{};
   for (const int threads : {1, 2}) {
     StepControl control = StepControl::fixed(1.0 / 60);
-    control.iterations = 20;
-    control.threads = threads;
+    control.settings["iterations"] = 20;
+    control.settings["threads"] = threads;
     const Measured m = least_of_runs(*model, "vbd", control, 0.25, 3);
     ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
     cpu[static_cast<size_t>(threads - 1)] = m.result.stats.cpu_seconds;
@@ -191,7 +191,7 @@ TEST(Vbd, WithEnoughSweepsItsStepIsBackwardEulers) {
       double gap = std::numeric_limits<double>::infinity();
       for (int next = 1; next <= 8192 && gap > NewtonOnPotential{}.velocity_tolerance; next = chebyshev ? 2 * next : next + 1) {
         if (chebyshev || sweeps == 0) x = step.potential.inertial();
-        vbd_iterate(step.potential, colours, x, {.sweeps = chebyshev ? next : 1, .rho = chebyshev ? StepControl{}.chebyshev_rho : 0.0}, decrease);
+        vbd_iterate(step.potential, colours, x, {.sweeps = chebyshev ? next : 1, .rho = chebyshev ? find_method("vbd-chebyshev")->option("rho")->fallback : 0.0}, decrease);
         sweeps = next;
         gap = (x - newton_x).lpNorm<Eigen::Infinity>() / h;
       }
@@ -211,7 +211,7 @@ TEST(Vbd, ChebyshevsExtrapolationNeverRaisesTheIncrementalPotential) {
     Eigen::VectorXd plain = step.potential.inertial(), decrease, best = plain;
     PotentialNewton newton(NewtonOnPotential{.velocity_tolerance = 1e-9});
     ASSERT_EQ(newton.minimise(step.potential, best, step.stats), "");
-    const double least = step.potential.value(best), rho = StepControl{}.chebyshev_rho;
+    const double least = step.potential.value(best), rho = find_method("vbd-chebyshev")->option("rho")->fallback;
     double last = std::numeric_limits<double>::infinity();
     for (int k = 1; k <= 24; ++k) {
       Eigen::VectorXd x = step.potential.inertial();
@@ -262,7 +262,7 @@ TEST(Vbd, InThePlaneOnTheCompliantPendulumItsStepIsBackwardEulersAndXpbds) {
   EXPECT_LE((swept - newton_x).lpNorm<Eigen::Infinity>() / h, tolerance);
   for (const char* method : {"vbd", "xpbd"}) {
     StepControl control = StepControl::fixed(h);
-    control.iterations = 20;
+    control.settings["iterations"] = 20;
     const Measured m = run_and_measure(*model, method, control, h, h);
     ASSERT_EQ(m.result.status, Status::ok) << m.result.message;
     EXPECT_LE((m.result.y_stop.head<2>() - newton_x).lpNorm<Eigen::Infinity>() / h, tolerance) << method;
@@ -287,6 +287,42 @@ TEST(Vbd, OnTheCompliantPendulumItConvergesAtFirstOrderAsEverySolverOfBackwardEu
     std::cout << "the compliant pendulum, " << name << ": observed order " << sweep.observed_order << ", error " << sweep.fit_error.front() << " -> "
               << sweep.fit_error.back() << "\n";
     EXPECT_NEAR(sweep.observed_order, 1.0, tolerance::order_band) << name;
+  }
+}
+
+// |x|, weighted by the nodes' masses: the norm the sweeps' error decays in
+double mass_norm(const IncrementalPotential& G, const Eigen::VectorXd& x) { return std::sqrt(x.cwiseAbs2().dot(G.mass())); }
+
+TEST(Vbd, ChebyshevsAccelerationIsWhatTheSweepsRateGives) {
+  // Chebyshev's semi-iteration on an iteration of rate rho: after k sweeps its error is at most 2 r^k / (1 + r^2k) of the
+  // start's, r = rho / (1 + sqrt(1 - rho^2)), where plain sweeps leave rho^k (Golub & Varga 1961; Wang 2015 takes the
+  // weights for Gauss-Seidel). The flag's step measured: the plain sweeps' rate read off their error's late decay, the
+  // accelerated sweeps at that rate, their error after k sweeps against the theory's gain
+  for (const double continuum : {0.0, 1.0}) {
+    const Flag f = flag(continuum, 16, 6);
+    Step step(*f.model, f.y, 1.0 / 60);
+    const auto colours = step.colours();
+    Eigen::VectorXd best = step.potential.inertial(), decrease;
+    PotentialNewton newton(NewtonOnPotential{.velocity_tolerance = 1e-12});
+    ASSERT_EQ(newton.minimise(step.potential, best, step.stats), "");
+    std::vector<double> plain;  // the plain sweeps' error after k sweeps
+    Eigen::VectorXd x = step.potential.inertial();
+    plain.push_back(mass_norm(step.potential, x - best));
+    for (int k = 1; k <= 80; ++k) {
+      vbd_sweep(step.potential, colours, x, 1, decrease);
+      plain.push_back(mass_norm(step.potential, x - best));
+    }
+    const double rho = std::pow(plain[80] / plain[60], 1.0 / 20);
+    const double r = rho / (1 + std::sqrt(1 - rho * rho));
+    for (const int k : {10, 20, 40}) {
+      Eigen::VectorXd accelerated = step.potential.inertial();
+      vbd_iterate(step.potential, colours, accelerated, {.sweeps = k, .rho = rho}, decrease);
+      const double chebyshev = mass_norm(step.potential, accelerated - best);
+      const double gain = plain[static_cast<size_t>(k)] / chebyshev, theory = std::pow(rho, k) / (2 * std::pow(r, k) / (1 + std::pow(r, 2 * k)));
+      std::cout << "continuum " << continuum << ": rho " << rho << ", after " << k << " sweeps plain " << plain[static_cast<size_t>(k)] / plain[0]
+                << ", Chebyshev " << chebyshev / plain[0] << ": gain " << gain << ", theory's " << theory << "\n";
+      EXPECT_GE(std::log(gain), tolerance::chebyshev_gain_share * std::log(theory)) << "continuum " << continuum << ", " << k << " sweeps";
+    }
   }
 }
 
