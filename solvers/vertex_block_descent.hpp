@@ -59,7 +59,7 @@ enum class VbdStart { adaptive, inertial };
 struct VbdSettings {
   int substeps = 1;    // backward Euler steps a step
   VbdSweeps sweeps;    // a (sub)step's sweeps, their threads and Chebyshev's rate
-  VbdStart start = VbdStart::adaptive;
+  VbdStart start = VbdStart::inertial;
 };
 
 struct Method;

@@ -1,6 +1,6 @@
 // vbd's coloured sweeps as an OpenGL 4.3 compute pass (gpu-vbd-compute), on a mass-spring system whose elastic forces
 // are its springs alone (a spring cloth, the hanging chain, the compliant pendulum): the step's host part is vbd's own
-// (VbdStepper: the incremental potential's xb, f0 and D0 in float64, the adaptive start), and each sweep is a
+// (VbdStepper: the incremental potential's xb, f0 and D0 in float64, the start), and each sweep is a
 // dispatch a colour over storage buffers, a barrier between colours, one invocation a node. An invocation does what
 // vbd's CPU sweep does for its node (solvers/vertex_block_descent.cpp): the node's view of G (its springs, each
 // spring's Hessian made semidefinite as Choi & Ko's clamp does; the rows of D0 at the node), the 3 x 3 Newton step

@@ -489,7 +489,7 @@ TEST(GpuVbd, EachSweepIsVbdsToFloat32RoundOff) {
 }
 
 TEST(GpuVbd, TheMethodsConvergedStepIsImplicitEulerNewtonsToFloat32RoundOff) {
-  // gpu-vbd-compute as `run` takes it (the adaptive start, the sweeps, the velocity from the positions), 1000 sweeps a
+  // gpu-vbd-compute as `run` takes it (its default start, the sweeps, the velocity from the positions), 1000 sweeps a
   // step, one 1/60 s step, against implicit-euler-newton's; and what it counts (the colours, G's decrease)
   for (const SpringScene& scene : spring_scenes()) {
     const double h = 1.0 / 60;
