@@ -41,7 +41,7 @@ std::string study_names() {
 
 namespace {
 
-// the bytes a report takes (its folder: about 23 MB quick, 51 MB full, docs/performance.md) with a margin:
+// the bytes a report takes (its folder's size: docs/performance.md) with a margin:
 // checked free before any work starts
 double report_bytes(bool quick) { return quick ? 28e6 : 60e6; }
 
