@@ -83,8 +83,13 @@ PreparedRun prepare_panel(const RunOptions& scene, const Panel& panel, double in
   run.method = panel.method;
   run.dt = panel.dt;
   run.sets.insert(run.sets.end(), panel.sets.begin(), panel.sets.end());
-  if (panel.substeps > 0) run.method_options["substeps"] = std::to_string(panel.substeps), run.method_options["iterations"] = "1";
-  if (panel.iterations > 0) run.method_options["iterations"] = std::to_string(panel.iterations);
+  // a position-based panel's substeps of one iteration each; vbd's sweeps (GCC 12 warns, falsely, of an overflow in a
+  // string assigned from a literal here: the values are made as strings first)
+  if (panel.substeps > 0) {
+    run.method_options.insert_or_assign("substeps", std::to_string(panel.substeps));
+    run.method_options.insert_or_assign("iterations", std::to_string(1));
+  }
+  if (panel.iterations > 0) run.method_options.insert_or_assign("iterations", std::to_string(panel.iterations));
   PreparedRun p = prepare_run(run);
   const double steps = interval / panel.dt;
   if (!(std::abs(steps - std::round(steps)) <= 1e-9 * steps))
