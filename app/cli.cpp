@@ -45,7 +45,7 @@ void add_method_options(CLI::App& command, std::map<std::string, std::string, st
     for (const auto& [text, names] : said) help += fmt::format("{}{} ({})", help.empty() ? "" : "; ", text, fmt::join(names, ", "));
     if (option->kind != stepwise::MethodOption::Kind::choice) help += fmt::format("; {}", option->range_text());
     command.add_option_function<std::string>(fmt::format("--{}", option->name), [&given, name = std::string(option->name)](const std::string& text) { given[name] = text; }, help)
-        ->type_name(std::string(option->type_text()));
+        ->type_name(option->type_text());
   }
 }
 

@@ -54,15 +54,13 @@ std::string_view to_string(Source source) {
   return "unknown";
 }
 
-std::string_view MethodOption::type_text() const {
+std::string MethodOption::type_text() const {
   switch (kind) {
     case Kind::whole: return "INT";
     case Kind::real: return "FLOAT";
     case Kind::choice: break;
   }
-  static thread_local std::string joined;
-  joined = fmt::format("{}", fmt::join(choices, "|"));
-  return joined;
+  return fmt::format("{}", fmt::join(choices, "|"));
 }
 
 std::string MethodOption::range_text() const {

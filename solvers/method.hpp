@@ -82,7 +82,7 @@ struct MethodOption {
   std::string_view echo;  // summary.json's key where it is not the name (a key published before the option was)
 
   std::string_view key() const { return echo.empty() ? name : echo; }
-  std::string_view type_text() const;  // "INT", "FLOAT", or the choices joined by '|'
+  std::string type_text() const;  // "INT", "FLOAT", or the choices joined by '|'
   std::string range_text() const;      // "1..1000000", "(0, 1)", "inertial or adaptive"
   std::string value_text(double value) const;  // as the user writes it: "4", "0.99", "adaptive"
   // "" when the value is in range, else why not (without the option's name)

@@ -46,10 +46,10 @@ StepControl position_based(double dt, int substeps, int iterations) {
   return c;
 }
 
-// a setting's substeps or iterations as the tables show them: as set, else one substep a step and PhysX's 4 iterations
+// a setting's substeps or iterations as the tables show them: as set, else xpbd's defaults (its registration's)
 long knob(const StepControl& control, std::string_view name) {
   const auto at = control.settings.find(name);
-  return at != control.settings.end() ? static_cast<long>(at->second) : name == "substeps" ? 1 : 4;
+  return static_cast<long>(at != control.settings.end() ? at->second : find_method("xpbd")->option(name)->fallback);
 }
 
 // the control a method runs: the sweep's substeps and iterations where it takes them (a row of the compliant rod
