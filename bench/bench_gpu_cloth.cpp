@@ -11,7 +11,9 @@
 //
 // And vbd's sweeps (the flag of springs at 32, 64, 128 and 256 a side, a 1/60 s step from its start, 10 sweeps from the
 // inertial point): gpu-vbd-compute's pass (the step's upload, the sweeps, the read-back, finished) against vbd's
-// sweeps on one CPU core, each after the same host part (the potential's start, not timed). Ratio: pass over CPU.
+// sweeps on one CPU core, each after the same host part (the potential's start, not timed), and vbd's sweeps with each
+// node read through G's view of it instead of the network's layout. Ratios: pass over CPU, G's view over the layout;
+// the layout's rate of node moves at 256 a side against 32's.
 #include "models/model.hpp"
 #include "solvers/cloth_grid.hpp"
 #include "solvers/gpu/gpu_cloth.hpp"
@@ -111,7 +113,10 @@ void BM_gpu_cloth(benchmark::State& state) {
   state.SetLabel(fmt::format("{}, {}", pass == stepwise::gpu::Pass::fragment ? "fragment" : "compute", context->description()));
 }
 
-// 10 sweeps of one 1/60 s step of the n x n flag of springs from its start: range(1) 0 vbd's on one core, 1 the pass
+// 10 sweeps of one 1/60 s step of the n x n flag of springs from its start: range(1) 0 vbd's on one core (from its
+// layout of the network: each node's springs and blocks of D0 in sweep order), 1 the pass, 2 vbd's on one core with
+// each node read through G's view of it (IncrementalPotential::vertex, the continuum's path). Counters: node_sweep, the
+// time a node's move takes (the sweeps' time over nodes x sweeps), and node_sweeps their rate
 void BM_vbd_sweeps(benchmark::State& state) {
   static const std::unique_ptr<stepwise::gl::Context> context = stepwise::gl::make_context(stepwise::gpu::backend());
   const int n = static_cast<int>(state.range(0));
@@ -127,6 +132,7 @@ void BM_vbd_sweeps(benchmark::State& state) {
   const auto colours = stepwise::colour_nodes(k, view.dimension);
   const bool device = state.range(1) == 1;
   std::unique_ptr<stepwise::gpu::GpuVbd> gpu = device ? std::make_unique<stepwise::gpu::GpuVbd>(*context, view, colours, potential.damping()) : nullptr;
+  const stepwise::VbdNodes nodes(potential, colours, state.range(1) == 2 ? nullptr : &view);
   Eigen::VectorXd x, decrease;
   for (auto _ : state) {
     x = potential.inertial();
@@ -135,19 +141,21 @@ void BM_vbd_sweeps(benchmark::State& state) {
       gpu->sweep(10);
       gpu->download(potential, x);
     } else {
-      stepwise::vbd_iterate(potential, colours, x, {.sweeps = 10}, decrease);
+      stepwise::vbd_iterate(nodes, x, {.sweeps = 10}, decrease);
     }
     benchmark::DoNotOptimize(x.data());
   }
-  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * view.nodes);
-  state.SetLabel(device ? fmt::format("gpu-vbd-compute, {}", context->description()) : "vbd, one core");
+  const double moves = static_cast<double>(state.iterations()) * view.nodes * 10;
+  state.counters["node_sweep"] = benchmark::Counter(moves, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["node_sweeps"] = benchmark::Counter(moves, benchmark::Counter::kIsRate);
+  state.SetLabel(device ? fmt::format("gpu-vbd-compute, {}", context->description()) : state.range(1) == 2 ? "vbd, one core, through G's view" : "vbd, one core");
 }
 
 #define SIZES ->Arg(128)->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime()
 BENCHMARK(BM_cloth_grid_cpu<double>) SIZES;
 BENCHMARK(BM_cloth_grid_cpu<float>) SIZES;
 BENCHMARK(BM_gpu_cloth)->ArgsProduct({{128, 256, 1024, 2048, 4096}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_vbd_sweeps)->ArgsProduct({{32, 64, 128, 256}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_vbd_sweeps)->ArgsProduct({{32, 64, 128, 256}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_gpu_cloth_transfer)->ArgsProduct({{128, 256, 1024}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
@@ -158,6 +166,11 @@ int main(int argc, char** argv) {
     pairs.emplace_back(fmt::format("BM_gpu_cloth/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
     pairs.emplace_back(fmt::format("BM_cloth_grid_cpu<float>/{}/real_time", n), fmt::format("BM_cloth_grid_cpu<double>/{}/real_time", n));
   }
-  for (const char* n : {"32", "64", "128", "256"}) pairs.emplace_back(fmt::format("BM_vbd_sweeps/{}/1/real_time", n), fmt::format("BM_vbd_sweeps/{}/0/real_time", n));
-  return stepwise::bench::run_with_ratios(argc, argv, pairs);
+  for (const char* n : {"32", "64", "128", "256"}) {
+    pairs.emplace_back(fmt::format("BM_vbd_sweeps/{}/1/real_time", n), fmt::format("BM_vbd_sweeps/{}/0/real_time", n));
+    pairs.emplace_back(fmt::format("BM_vbd_sweeps/{}/2/real_time", n), fmt::format("BM_vbd_sweeps/{}/0/real_time", n));
+  }
+  // a node's move at 256 a side (the sweep out of the cache) against 32 (in it): the rate's share
+  const std::vector<stepwise::bench::RateBound> bounds{{"BM_vbd_sweeps/256/0/real_time", "node_sweeps", "BM_vbd_sweeps/32/0/real_time", "node_sweeps", 1.0}};
+  return stepwise::bench::run_with_ratios(argc, argv, pairs, bounds);
 }

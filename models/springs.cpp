@@ -1,5 +1,6 @@
 #include "springs.hpp"
 
+#include "kernels/spring_end.hpp"
 #include "kernels/spring_force.hpp"
 
 #include <algorithm>
@@ -28,30 +29,20 @@ void add_at(double* f, int i, int dimension, const Eigen::Vector3d& g) {
   for (int c = 0; c < dimension; ++c) f[dimension * i + c] += g[c];
 }
 
-// a spring's stiffness block dF/dr at zero closing speed (F = c (|r| - l) r / |r|, the force on a): exact, c u u^T + c
-// (1 - l / |r|) (I - u u^T), or (definite) its transverse part clamped at zero where the spring is compressed
-Eigen::Matrix3d stiffness_block(const Spring& s, const Eigen::Vector3d& r, bool definite) {
-  const double length = r.norm();
-  const Eigen::Vector3d u = r / length;
-  const Eigen::Matrix3d uu = u * u.transpose();
-  const double transverse = 1 - s.rest / length;
-  return s.stiffness * uu + s.stiffness * (definite ? std::max(0.0, transverse) : transverse) * (Eigen::Matrix3d::Identity() - uu);
-}
-
 }  // namespace
 
 void add_springs_at_node(std::span<const Spring> springs, std::span<const int> which, int node, const double* x, bool definite, bool derivatives,
                          VertexElastic& out, int dimension) {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  LowerSum<3> block;
   for (const int k : which) {
     const Spring& s = springs[static_cast<size_t>(k)];
-    const Eigen::Vector3d r = span_of(s, x, dimension);
-    const double stretch = r.norm() - s.rest;
-    out.energy += s.stiffness * stretch * stretch / 2;
-    if (!derivatives) continue;
-    const Eigen::Vector3d f = spring_force(r, Eigen::Vector3d::Zero().eval(), s.rest, s.stiffness, 0.0);  // on a; -f on b
-    out.force += node == s.b ? Eigen::Vector3d(-f) : f;
-    out.jacobian -= stiffness_block(s, r, definite);  // d(-f)/dx_b = d(f)/dx_a = -dF/dr
+    const Eigen::Vector3d r = span_of(s, x, dimension);  // from a to b: from b, the other end is -r away
+    out.energy += spring_end_energy<3>(r, s.rest, s.stiffness);
+    if (derivatives) add_spring_end<3>(node == s.b ? Eigen::Vector3d(-r) : r, r.norm(), s.rest, s.stiffness, definite, force, block);
   }
+  out.force += force;
+  out.jacobian -= block.full();  // the force's derivative by the node's place: -dF/dr
 }
 
 std::vector<std::vector<int>> springs_by_node(std::span<const Spring> springs, int nodes) {
@@ -156,7 +147,7 @@ void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const
     const Eigen::Matrix3d uu = u * u.transpose(), across = Eigen::Matrix3d::Identity() - uu;
     Eigen::Matrix3d dr;
     if (definite) {
-      dr = stiffness_block(s, r, true);
+      dr = spring_stiffness<3>(u, length, s.rest, s.stiffness, true);
     } else {
       const Eigen::Vector3d w = closing_of(s, v, dimension);
       const double tension = s.stiffness * (length - s.rest) + s.damping * u.dot(w);

@@ -94,13 +94,22 @@ IncrementalPotential::Vertex IncrementalPotential::vertex(int i, const Eigen::Ve
   const double m = m_[at], hh = h_ * h_;
   // 1/2 d^T (M / h^2 - D0 / h) d's terms in e, the others' work, and node i's elastic terms
   Vertex out;
+  out.elastic_energy = elastic.energy;
   out.value = m * e.squaredNorm() / (2 * hh) - (e.dot(d0e) - e.dot(d0ii * e) / 2) / h_ - f0i.dot(xi) + elastic.energy;
   if (!derivatives) return out;
-  out.gradient = m * e / hh - d0e / h_ - f0i;
+  out.quadratic_gradient = m * e / hh - d0e / h_ - f0i;
+  out.quadratic_hessian = m / hh * Eigen::Matrix3d::Identity() - d0ii / h_;
+  out.gradient = out.quadratic_gradient;
   out.gradient.head(dim) -= elastic.force.head(dim);
-  out.hessian = m / hh * Eigen::Matrix3d::Identity() - d0ii / h_;
+  out.hessian = out.quadratic_hessian;
   out.hessian.topLeftCorner(dim, dim) -= elastic.jacobian.topLeftCorner(dim, dim);
   return out;
+}
+
+double IncrementalPotential::vertex_change(int i, const Eigen::VectorXd& x, const Vertex& at, const Eigen::Vector3d& d) const {
+  VertexElastic elastic;
+  view_.vertex_elastic(i, x, true, false, elastic);
+  return at.quadratic_gradient.dot(d) + d.dot(at.quadratic_hessian * d) / 2 + (elastic.energy - at.elastic_energy);
 }
 
 std::string PotentialNewton::factor_positive_definite(const IncrementalPotential& potential, const Eigen::VectorXd& x, Stats& stats) {

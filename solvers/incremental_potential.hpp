@@ -53,8 +53,16 @@ class IncrementalPotential {
     double value = 0;
     Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
     Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+    // G's terms other than the elastic ones are quadratic in x_i: their gradient and Hessian (with `derivatives`), and
+    // the elastic terms' energy
+    Eigen::Vector3d quadratic_gradient = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d quadratic_hessian = Eigen::Matrix3d::Zero();
+    double elastic_energy = 0;
   };
   Vertex vertex(int i, const Eigen::VectorXd& x, bool definite, bool derivatives) const;
+  // G's change when node i moves by d from where `at` was evaluated (with derivatives), x holding the node moved: the
+  // quadratic terms' change exactly (at's gradient and Hessian along d), the elastic terms' as their energies' difference
+  double vertex_change(int i, const Eigen::VectorXd& x, const Vertex& at, const Eigen::Vector3d& d) const;
   double h() const { return h_; }
   int dimension() const { return view_.dimension; }
   const Eigen::VectorXd& inertial() const { return xb_; }  // xb = x0 + h v0

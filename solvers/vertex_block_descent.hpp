@@ -16,6 +16,8 @@
 
 #include <Eigen/SparseCore>
 
+#include <array>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -31,10 +33,50 @@ inline constexpr int vbd_max_halvings = 8;
 // of its neighbours has, in node order; the nodes of each colour
 std::vector<std::vector<int>> colour_nodes(const Eigen::SparseMatrix<double>& pattern, int dimension = 3);
 
+// vbd's view of one step's potential G node by node, as its sweeps read it: the colours, and, for a network of springs
+// alone (SpringNetworkView: a spring cloth, the chain, the compliant rod), each node's springs and its rows of D0 as 3 x 3
+// blocks laid out contiguous in sweep order (colour by colour), as the paper's and Warp's kernels lay them out. Any other
+// system's nodes (the continuum's elements) are read through IncrementalPotential::vertex. A node's move is the same
+// on both: its Newton step on G, halved until G falls by Armijo's fraction of what it predicts; G's change along it
+// written as a difference (the quadratic terms' exactly, a spring's as kernels/spring_end.hpp writes it), so that a
+// halving costs the node's springs' lengths alone
+class VbdNodes {
+ public:
+  // `springs`: the network whose springs are G's elastic terms, or nullptr (through IncrementalPotential::vertex).
+  // The potential must be started; `refresh` after each start
+  VbdNodes(const IncrementalPotential& potential, std::vector<std::vector<int>> colours, const MassSpringView* springs);
+  // the step's D0, xb and f0 read again (D0's pattern is the view's, fixed)
+  void refresh();
+  const IncrementalPotential& potential() const { return potential_; }
+  const std::vector<std::vector<int>>& colours() const { return colours_; }
+  // the node at sweep slot k moved in x; G's decrease (0 where it stays)
+  double move(size_t k, Eigen::VectorXd& x) const;
+
+ private:
+  struct NodeSpring {
+    int other;                    // the other end's node, or -1: the fixed point `anchor`
+    double rest, stiffness;
+    std::array<double, 3> anchor;
+  };
+  template <int D>
+  double move_in_network(size_t k, double* x) const;
+  double move_through_vertex(int i, Eigen::VectorXd& x) const;
+
+  const IncrementalPotential& potential_;
+  std::vector<std::vector<int>> colours_;
+  const MassSpringView* springs_;
+  std::vector<int> order_;                    // the nodes in sweep order
+  // slot k's springs are springs_at_[spring_end_[k - 1] .. spring_end_[k]), its blocks likewise (the first its own, (i, i))
+  std::vector<int> spring_end_, block_end_;
+  std::vector<NodeSpring> springs_at_;
+  std::vector<int> block_node_;               // each block's column node j
+  std::vector<double> blocks_;                // D0's blocks (i, j), row-major, d x d each
+  std::vector<Eigen::Index> value_at_;        // where each of D0's stored values goes in blocks_
+};
+
 // one sweep over the colours, x moved in place on `threads` threads; G's decrease over it (J). `decrease` is scratch
 // (each node's part, summed in node order: the same bits for any thread count)
-double vbd_sweep(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, int threads,
-                 Eigen::VectorXd& decrease);
+double vbd_sweep(const VbdNodes& nodes, Eigen::VectorXd& x, int threads, Eigen::VectorXd& decrease);
 
 // `sweeps` sweeps from x, in place; G's decrease over them (J). With rho > 0, Chebyshev's semi-iterative acceleration
 // (Wang 2015, "A Chebyshev semi-iterative approach for accelerating projective and position-based dynamics", as the
@@ -47,8 +89,7 @@ struct VbdSweeps {
   int threads = 1;
   double rho = 0;  // Chebyshev's rate; 0: no acceleration
 };
-double vbd_iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, const VbdSweeps& how,
-                   Eigen::VectorXd& decrease);
+double vbd_iterate(const VbdNodes& nodes, Eigen::VectorXd& x, const VbdSweeps& how, Eigen::VectorXd& decrease);
 
 // where a step's sweeps start: the inertial position x + h v (the step's guess with no force), or the paper's adaptive
 // start (Chen et al. 2024, sec. 3.5; the authors' Gaia code): that plus h^2 times the part of the last step's
@@ -81,8 +122,7 @@ class VbdStepper : public FixedStepper {
  protected:
   // the sweeps of one (sub)step from x, in place: vbd_iterate here; G's decrease over them added to `decrease` (J).
   // false, with `failure` naming the call, where they cannot be swept
-  virtual bool iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, double& decrease,
-                       std::string& failure);
+  virtual bool iterate(const VbdNodes& nodes, Eigen::VectorXd& x, double& decrease, std::string& failure);
   const VbdSweeps& sweeps() const { return sweeps_; }
   const MassSpringView& view() const { return view_; }
 
@@ -98,7 +138,7 @@ class VbdStepper : public FixedStepper {
   VbdStart start_;
   std::string_view name_;
   Eigen::Index n_;
-  std::vector<std::vector<int>> colours_;
+  std::optional<VbdNodes> nodes_;  // made at the first step, its colours from the force Jacobian's pattern
   Eigen::VectorXd x_, decrease_, previous_v_;
   double previous_h_ = 0;
 };

@@ -340,6 +340,15 @@ inline double cloth_step_roundoff(double unit, double h, double nodes, const Clo
   return unit * (2 * (s.max_x + h * s.max_v) + 2 * h * (s.max_v + h * s.acceleration) + cloth_acceleration_roundings * h * h * s.acceleration) *
          std::sqrt(nodes);
 }
+
+// vbd_float32_step in float64: two float64 sweeps of one G that round differently (vbd's layout of a network of springs and
+// G's own view of each node) each stop within it of G's minimiser, and a sweep carries a difference on without
+// amplifying it (a Gauss-Seidel sweep of G contracts in G's Hessian norm). Where the gradient holds a stiff spring's
+// c |r| (the compliant rod's 1e6 N/m over 1 m) against a node's mass term m / h^2, this is far above eps |x|
+inline double vbd_float64_step(double h, double least_mass, double gradient_scale) {
+  return h * h / least_mass * vbd_float32_roundings * float64_unit_roundoff * gradient_scale;
+}
+
 // k steps: each step's new error carried by symplectic Euler's linearised propagator, whose powers map a
 // position error by at most 1 / cos(theta / 2) (theta a mode's angle; <= 1 / cos(pi / 4) for h omega <= sqrt 2)
 // and a velocity error into x by at most k h: with the step's errors split so (the x roundings and the rest),

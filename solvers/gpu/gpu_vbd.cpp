@@ -297,12 +297,12 @@ class GpuVbdStepper final : public VbdStepper {
   GpuVbdStepper(const CountedSystem& s, const VbdSettings& settings) : VbdStepper(s, settings, "gpu-vbd-compute") {}
 
  protected:
-  bool iterate(const IncrementalPotential& potential, const std::vector<std::vector<int>>& colours, Eigen::VectorXd& x, double& decrease,
-               std::string& failure) override {
+  bool iterate(const VbdNodes& nodes, Eigen::VectorXd& x, double& decrease, std::string& failure) override {
+    const IncrementalPotential& potential = nodes.potential();
     start_ = x;
     try {
       if (!context_) context_ = make_device_context();
-      if (!gpu_) gpu_ = std::make_unique<GpuVbd>(*context_, view(), colours, potential.damping());
+      if (!gpu_) gpu_ = std::make_unique<GpuVbd>(*context_, view(), nodes.colours(), potential.damping());
       gpu_->start(potential, x);
       gpu_->sweep(sweeps().sweeps);
       gpu_->download(potential, x);

@@ -20,6 +20,7 @@
 #include "verification/gpu_references.hpp"
 #include "verification/stability.hpp"
 #include "verification/tolerances.hpp"
+#include "verification/vbd_roundoff.hpp"
 #include "verification/wave_modes.hpp"
 
 #include <fmt/format.h>
@@ -395,29 +396,6 @@ std::vector<SpringScene> spring_scenes() {
   return scenes;
 }
 
-// |S|_2 over the nodes at x: S_i the magnitudes of node i's gradient terms (tolerances.hpp's vbd_float32_step)
-double gradient_scale(const IncrementalPotential& G, const MassSpringView& view, const Eigen::VectorXd& x) {
-  const int d = view.dimension;
-  const Eigen::VectorXd e = x - G.inertial();
-  Eigen::VectorXd s = (e.cwiseAbs().cwiseProduct(G.mass()) / (G.h() * G.h()) + G.damping().cwiseAbs() * e.cwiseAbs() / G.h() + G.other_forces().cwiseAbs())
-                          .reshaped(d, view.nodes)
-                          .colwise()
-                          .sum()
-                          .transpose();
-  const auto at = [&](int node, const Eigen::Vector3d& anchor) {
-    Eigen::Vector3d p = anchor;
-    if (node >= 0) p.head(d) = x.segment(Eigen::Index{d} * node, d);
-    return p;
-  };
-  for (const Spring& spring : view.springs) {
-    const Eigen::Vector3d a = at(spring.a, spring.anchor), b = at(spring.b, spring.anchor);
-    const double term = spring.stiffness * (std::abs((b - a).norm() - spring.rest) + (b - a).norm() + a.norm() + b.norm());
-    for (const int node : {spring.a, spring.b})
-      if (node >= 0) s[node] += term;
-  }
-  return s.norm();
-}
-
 // one 1/60 s backward Euler step of a scene: its potential G, vbd's colours, and the float32 bound at x
 struct SpringStep {
   static constexpr double h = 1.0 / 60;
@@ -475,7 +453,7 @@ TEST(GpuVbd, EachSweepIsVbdsToFloat32RoundOff) {
     gpu::GpuVbd gpu(context(), step.view, step.colours, G.damping());
     for (const int sweeps : {1, 2, 5}) {
       Eigen::VectorXd cpu = G.inertial(), gpu_x = G.inertial(), decrease;
-      vbd_iterate(G, step.colours, cpu, {.sweeps = sweeps}, decrease);
+      vbd_iterate(VbdNodes(G, step.colours, &step.view), cpu, {.sweeps = sweeps}, decrease);
       gpu.start(G, gpu_x);
       gpu.sweep(sweeps);
       gpu.download(G, gpu_x);

@@ -13,6 +13,7 @@
 #include "solvers/vertex_block_descent.hpp"
 #include "verification/convergence.hpp"
 #include "verification/tolerances.hpp"
+#include "verification/vbd_roundoff.hpp"
 
 #include <gtest/gtest.h>
 
@@ -54,6 +55,11 @@ struct Step {
     Eigen::SparseMatrix<double> k, d;
     system.as<MassSpringView>()->force_jacobians(0, Eigen::VectorXd::Zero(system.size()), true, k, d);
     return colour_nodes(k, system.as<MassSpringView>()->dimension);
+  }
+  // vbd's view of the nodes: a network of springs laid out node by node (through_vertex: read through G's vertex)
+  VbdNodes nodes(bool through_vertex = false) {
+    const auto* network = system.as<SpringNetworkView>();
+    return VbdNodes(potential, colours(), network && !through_vertex ? network->network : nullptr);
   }
 };
 
@@ -111,6 +117,8 @@ TEST(Vbd, EachNodesViewIsTheIncrementalPotentialsOwn) {
       dx.segment<3>(3 * i) = d;
       const double global = G.change(x, dx);
       EXPECT_NEAR(local, global, tolerance::potential_roundoff * (std::abs(G.value(x)) + std::abs(global))) << continuum << " node " << i;
+      // and as the sweep's line search reads it: the quadratic terms from the node's derivatives, the elastic ones' energies
+      EXPECT_NEAR(G.vertex_change(i, moved, v, d), global, tolerance::potential_roundoff * (std::abs(G.value(x)) + std::abs(global))) << continuum << " node " << i;
     }
   }
 }
@@ -128,17 +136,43 @@ TEST(Vbd, ASweepNeverRaisesTheIncrementalPotential) {
         y.tail(y.size() / 2).setZero();
       }
       Step step(*f.model, y, 1.0 / 30);
-      const auto colours = step.colours();
+      const VbdNodes nodes = step.nodes();
       Eigen::VectorXd x = step.potential.inertial(), decrease;
       double G = step.potential.value(x);
       for (int sweep = 0; sweep < 20; ++sweep) {
-        const double reported = vbd_sweep(step.potential, colours, x, 1, decrease);
+        const double reported = vbd_sweep(nodes, x, 1, decrease);
         const double after = step.potential.value(x);
         EXPECT_LE(after, G + tolerance::potential_roundoff * std::abs(G)) << "continuum " << continuum << (scrambled ? ", scrambled" : "") << ", sweep " << sweep;
-        EXPECT_NEAR(G - after, reported, tolerance::potential_roundoff * std::abs(G) * colours.size()) << continuum << " sweep " << sweep;
+        EXPECT_NEAR(G - after, reported, tolerance::potential_roundoff * std::abs(G) * nodes.colours().size()) << continuum << " sweep " << sweep;
         G = after;
       }
     }
+}
+
+TEST(Vbd, ANetworkOfSpringsLaidOutNodeByNodeSweepsAsGsOwnViewOfTheNodes) {
+  // the sweep's layout of a network of springs (each node's springs and blocks of D0 in sweep order) against the same
+  // sweeps read through G's view of each node (IncrementalPotential::vertex): the same moves but for round-off, each
+  // sweep's within twice vbd_float64_step of the other's, on the flag and on the compliant rod in the plane
+  const auto rod = make_model("pendulum-cartesian", {{"compliance", 1e-6}});
+  const Flag f = flag(0.0, 16, 6);
+  for (const bool plane : {false, true}) {
+    const Model& model = plane ? *rod : *f.model;
+    Step step(model, plane ? rod->initial_state() : f.y, 1.0 / 30);
+    ASSERT_NE(step.system.as<SpringNetworkView>(), nullptr);
+    const VbdNodes laid_out = step.nodes(), through_vertex = step.nodes(true);
+    Eigen::VectorXd a = step.potential.inertial(), b = a, decrease;
+    for (int sweep = 1; sweep <= 5; ++sweep) {
+      const double fell_a = vbd_sweep(laid_out, a, 1, decrease), fell_b = vbd_sweep(through_vertex, b, 1, decrease);
+      const MassSpringView& view = *step.system.as<MassSpringView>();
+      const double bound = 2 * sweep * tolerance::vbd_float64_step(step.potential.h(), *std::min_element(view.mass.begin(), view.mass.end()),
+                                                                   gradient_scale(step.potential, view, a));
+      EXPECT_LE((a - b).norm(), bound) << (plane ? "rod" : "flag") << ", sweep " << sweep;
+      EXPECT_NEAR(fell_a, fell_b, tolerance::potential_roundoff * std::abs(step.potential.value(a))) << (plane ? "rod" : "flag") << ", sweep " << sweep;
+      if (sweep == 1) {
+        EXPECT_GT(fell_a, 0) << (plane ? "rod" : "flag");
+      }
+    }
+  }
 }
 
 TEST(Vbd, TheAnswerDoesNotDependOnTheThreadCount) {
@@ -184,14 +218,14 @@ TEST(Vbd, WithEnoughSweepsItsStepIsBackwardEulers) {
     Eigen::VectorXd newton_x = step.potential.inertial();
     PotentialNewton newton(NewtonOnPotential{.velocity_tolerance = 1e-9});
     ASSERT_EQ(newton.minimise(step.potential, newton_x, step.stats), "");
-    const auto colours = step.colours();
+    const VbdNodes nodes = step.nodes();
     for (const bool chebyshev : {false, true}) {
       Eigen::VectorXd x, decrease;
       int sweeps = 0;
       double gap = std::numeric_limits<double>::infinity();
       for (int next = 1; next <= 8192 && gap > NewtonOnPotential{}.velocity_tolerance; next = chebyshev ? 2 * next : next + 1) {
         if (chebyshev || sweeps == 0) x = step.potential.inertial();
-        vbd_iterate(step.potential, colours, x, {.sweeps = chebyshev ? next : 1, .rho = chebyshev ? find_method("vbd-chebyshev")->option("rho")->fallback : 0.0}, decrease);
+        vbd_iterate(nodes, x, {.sweeps = chebyshev ? next : 1, .rho = chebyshev ? find_method("vbd-chebyshev")->option("rho")->fallback : 0.0}, decrease);
         sweeps = next;
         gap = (x - newton_x).lpNorm<Eigen::Infinity>() / h;
       }
@@ -207,7 +241,7 @@ TEST(Vbd, ChebyshevsExtrapolationNeverRaisesTheIncrementalPotential) {
   for (const double continuum : {0.0, 1.0}) {
     const Flag f = flag(continuum, 16, 6);
     Step step(*f.model, f.y, 1.0 / 60);
-    const auto colours = step.colours();
+    const VbdNodes nodes = step.nodes();
     Eigen::VectorXd plain = step.potential.inertial(), decrease, best = plain;
     PotentialNewton newton(NewtonOnPotential{.velocity_tolerance = 1e-9});
     ASSERT_EQ(newton.minimise(step.potential, best, step.stats), "");
@@ -215,8 +249,8 @@ TEST(Vbd, ChebyshevsExtrapolationNeverRaisesTheIncrementalPotential) {
     double last = std::numeric_limits<double>::infinity();
     for (int k = 1; k <= 24; ++k) {
       Eigen::VectorXd x = step.potential.inertial();
-      vbd_iterate(step.potential, colours, x, {.sweeps = k, .rho = rho}, decrease);
-      vbd_sweep(step.potential, colours, plain, 1, decrease);
+      vbd_iterate(nodes, x, {.sweeps = k, .rho = rho}, decrease);
+      vbd_sweep(nodes, plain, 1, decrease);
       const double G = step.potential.value(x);
       EXPECT_LE(G, last + tolerance::potential_roundoff * std::abs(G)) << "continuum " << continuum << ", " << k << " sweeps";
       if (k % 4 == 0)
@@ -257,7 +291,8 @@ TEST(Vbd, InThePlaneOnTheCompliantPendulumItsStepIsBackwardEulersAndXpbds) {
   const double tolerance = NewtonOnPotential{}.velocity_tolerance;
   Eigen::VectorXd swept = G.inertial(), decrease;
   int sweeps = 0;
-  for (; sweeps < 50 && (swept - newton_x).lpNorm<Eigen::Infinity>() / h > tolerance; ++sweeps) vbd_sweep(G, step.colours(), swept, 1, decrease);
+  const VbdNodes nodes = step.nodes();
+  for (; sweeps < 50 && (swept - newton_x).lpNorm<Eigen::Infinity>() / h > tolerance; ++sweeps) vbd_sweep(nodes, swept, 1, decrease);
   std::cout << "the compliant pendulum: vbd within " << (swept - newton_x).lpNorm<Eigen::Infinity>() / h << " m/s of Newton's step after " << sweeps << " sweeps\n";
   EXPECT_LE((swept - newton_x).lpNorm<Eigen::Infinity>() / h, tolerance);
   for (const char* method : {"vbd", "xpbd"}) {
@@ -301,7 +336,7 @@ TEST(Vbd, ChebyshevsAccelerationIsWhatTheSweepsRateGives) {
   for (const double continuum : {0.0, 1.0}) {
     const Flag f = flag(continuum, 16, 6);
     Step step(*f.model, f.y, 1.0 / 60);
-    const auto colours = step.colours();
+    const VbdNodes nodes = step.nodes();
     Eigen::VectorXd best = step.potential.inertial(), decrease;
     PotentialNewton newton(NewtonOnPotential{.velocity_tolerance = 1e-12});
     ASSERT_EQ(newton.minimise(step.potential, best, step.stats), "");
@@ -309,14 +344,14 @@ TEST(Vbd, ChebyshevsAccelerationIsWhatTheSweepsRateGives) {
     Eigen::VectorXd x = step.potential.inertial();
     plain.push_back(mass_norm(step.potential, x - best));
     for (int k = 1; k <= 80; ++k) {
-      vbd_sweep(step.potential, colours, x, 1, decrease);
+      vbd_sweep(nodes, x, 1, decrease);
       plain.push_back(mass_norm(step.potential, x - best));
     }
     const double rho = std::pow(plain[80] / plain[60], 1.0 / 20);
     const double r = rho / (1 + std::sqrt(1 - rho * rho));
     for (const int k : {10, 20, 40}) {
       Eigen::VectorXd accelerated = step.potential.inertial();
-      vbd_iterate(step.potential, colours, accelerated, {.sweeps = k, .rho = rho}, decrease);
+      vbd_iterate(nodes, accelerated, {.sweeps = k, .rho = rho}, decrease);
       const double chebyshev = mass_norm(step.potential, accelerated - best);
       const double gain = plain[static_cast<size_t>(k)] / chebyshev, theory = std::pow(rho, k) / (2 * std::pow(r, k) / (1 + std::pow(r, 2 * k)));
       std::cout << "continuum " << continuum << ": rho " << rho << ", after " << k << " sweeps plain " << plain[static_cast<size_t>(k)] / plain[0]
