@@ -59,6 +59,14 @@ double symplectic_euler_oscillator_dt(double omega, double damping) {
   return 2 * (std::sqrt(damping * damping + omega * omega) - damping) / (omega * omega);
 }
 
+Eigen::VectorXcd dense_eigenvalues(const Eigen::MatrixXd& a) { return Eigen::EigenSolver<Eigen::MatrixXd>(a, false).eigenvalues(); }
+
+Eigen::VectorXd symmetric_eigenvalues(const Eigen::MatrixXd& s, Eigen::MatrixXd* eigenvectors) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(s, eigenvectors ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
+  if (eigenvectors) *eigenvectors = eigen.eigenvectors();
+  return eigen.eigenvalues();
+}
+
 StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::VectorXd& y) {
   const MassSpringView* view = system.as<MassSpringView>();
   if (!view) throw std::invalid_argument("stiffest_mode: not a mass-spring system");
@@ -74,9 +82,9 @@ StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::Vecto
   Eigen::VectorXd mode(n);
   double lambda = 0;
   if (n <= 3000) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen{Eigen::MatrixXd(s)};
-    lambda = eigen.eigenvalues()[n - 1];
-    mode = eigen.eigenvectors().col(n - 1);
+    Eigen::MatrixXd vectors;
+    lambda = symmetric_eigenvalues(Eigen::MatrixXd(s), &vectors)[n - 1];
+    mode = vectors.col(n - 1);
   } else {
     mode = Eigen::VectorXd::LinSpaced(n, 1, 2);
     for (int k = 0; k < 400; ++k) mode = (s * mode).normalized();
@@ -93,7 +101,7 @@ std::optional<double> fastest_decay(const OdeSystem& system, double t, const Eig
   Eigen::MatrixXd j(n, n);
   system.as<DenseJacobian>()->jacobian(t, y, j);
   if (!j.allFinite()) return std::nullopt;
-  const Eigen::VectorXcd lambda = Eigen::EigenSolver<Eigen::MatrixXd>(j, false).eigenvalues();
+  const Eigen::VectorXcd lambda = dense_eigenvalues(j);
   double fastest = 0;
   for (const auto& l : lambda) fastest = std::max(fastest, -l.real());
   return fastest;

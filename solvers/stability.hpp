@@ -41,6 +41,12 @@ struct StiffestMode {
 };
 StiffestMode stiffest_mode(const OdeSystem& system, double t, const Eigen::VectorXd& y);
 
+// The dense eigenvalue problems, instantiated here once (Eigen's EigenSolver<MatrixXd> costs some 17 s of a file's
+// compile, its SelfAdjointEigenSolver<MatrixXd> some 7): a square matrix's eigenvalues (no vectors), and a symmetric
+// one's (its lower triangle read), ascending, with their eigenvectors as columns when asked
+Eigen::VectorXcd dense_eigenvalues(const Eigen::MatrixXd& a);
+Eigen::VectorXd symmetric_eigenvalues(const Eigen::MatrixXd& s, Eigen::MatrixXd* eigenvectors = nullptr);
+
 // a stiffness this large (t_end times the fastest decay rate) holds an explicit method to steps far below what
 // accuracy asks: rk4 is stable for h |lambda| < 2.8, so it needs at least stiffness / 2.8 steps whatever the error
 inline constexpr double stiffness_threshold = 1000;

@@ -9,8 +9,6 @@
 #include "tolerances.hpp"
 #include "wave_modes.hpp"
 
-#include <Eigen/Eigenvalues>
-
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -120,7 +118,7 @@ std::optional<double> predicted_stable_dt(const Method& method, const Eigen::Vec
 Eigen::VectorXcd jacobian_spectrum(const OdeSystem& system, double t, const Eigen::VectorXd& y) {
   Eigen::MatrixXd j(system.size(), system.size());
   jacobian_or_fd(system, t, y, j);
-  return Eigen::EigenSolver<Eigen::MatrixXd>(j, false).eigenvalues();
+  return dense_eigenvalues(j);
 }
 
 std::optional<double> spectrum_stable_dt(std::string_view method, const Eigen::VectorXcd& eigenvalues) {
