@@ -113,9 +113,11 @@ StudyOutput pictures(const StudyContext& ctx) {
   std::sort(scenes.begin(), scenes.end());
   if (scenes.empty()) throw std::runtime_error(fmt::format("{}: no scene files to draw", scenes_dir.string()));
 
-  // without ffmpeg the pictures are the frames alone: said once here rather than by every scene's render
-  const bool animations = on_path("ffmpeg");
-  if (!animations) print_error("report", "ffmpeg is not installed: the pictures are PNG frames without their animations (apt-get install ffmpeg)");
+  // without ffmpeg the pictures are the frames alone: said once here rather than by every scene's render. A quick
+  // report, a preview, shows the stills alone: each scene's animation (ffmpeg's GIF, some 0.6 s a scene, most of
+  // its ffmpeg's start and palette) took two thirds of its pictures' time
+  const bool animations = !ctx.quick && on_path("ffmpeg");
+  if (!ctx.quick && !animations) print_error("report", "ffmpeg is not installed: the pictures are PNG frames without their animations (apt-get install ffmpeg)");
   // each scene's expected cost (report/cost_model.hpp): its run, and its frames by what they show
   std::vector<double> costs;
   // a scene whose model has nothing to draw (a user's equations: a state without a place in space) is left out
@@ -165,7 +167,6 @@ StudyOutput pictures(const StudyContext& ctx) {
     options.size = size;
     options.out = out.string();
     options.animations = animations;
-    options.mp4 = !ctx.quick;  // a preview's animations: the GIFs it shows (the MP4s beside them took a third of its pictures' time)
     if (const QuickChange* change = quick_change(scene, ctx.quick)) options.run.sets = change->sets;
     try {
       if (const RenderedRun drawn = render_scene(options); drawn.status != Status::ok)
@@ -177,7 +178,8 @@ StudyOutput pictures(const StudyContext& ctx) {
     Drawn d{scene, nlohmann::json::parse(in)};
     // the report keeps the frame it shows and the animations; the other frames (54 of a full report's 73 MB) are
     // left to `stepwise render`, which writes them all. Without ffmpeg's animation the frames are the run, and stay
-    if (fs::exists(out / "animation.gif")) {
+    // (a quick report's preview keeps its still alone)
+    if (ctx.quick || fs::exists(out / "animation.gif")) {
       const std::string shown = d.summary["frames"].back()["file"].get<std::string>();
       for (const auto& entry : fs::directory_iterator(out))
         if (const std::string name = entry.path().filename().string(); name.starts_with("frame_") && name.ends_with(".png") && name != shown)
@@ -196,8 +198,9 @@ StudyOutput pictures(const StudyContext& ctx) {
     body += scene_pictures(dir, scenes_dir, scene, j, quick_change(scene, ctx.quick));
   }
   std::string md = fmt::format("Every scene run through its own method and drawn headlessly as `stepwise render` draws it ({} frames at {}, OpenGL on {}; "
-                    "the report keeps the last frame and the animations{}, `stepwise render` every frame).{}\n\n",
-                    frames, size, std::get<std::string>(table.rows.front().back()), ctx.quick ? " as GIFs (the full report's are MP4s too)" : "",
+                    "the report keeps the last frame{}, `stepwise render` every frame).{}\n\n",
+                    frames, size, std::get<std::string>(table.rows.front().back()),
+                    ctx.quick ? " (a quick report draws no animations: the full report's are GIFs and MP4s)" : " and the animations",
                     undrawn.empty() ? std::string()
                                     : fmt::format(" Not drawn, having nothing in space to show (a user's equations): {}.", fmt::join(undrawn, ", ")));
   md += markdown_table(table, {{"scene", "scene"},

@@ -112,30 +112,24 @@ void check_camera(const render::Camera& camera, const Scene& scene) {
     throw InputError(fmt::format("{}: up is along the line of sight from the eye to the target: the picture has no up", scene.where("render.up")));
 }
 
-// ffmpeg's GIF (480 px wide, its own palette) and, with `mp4`, MP4 (H.264, even sides) from the PNGs, in one ffmpeg
-// (the frames read once: 0.66 s where two took 0.80 on 12 small frames), each written to a temporary name and
-// renamed
-void encode_movies(const fs::path& dir, int fps, bool mp4) {
+// ffmpeg's GIF (480 px wide, its own palette) and MP4 (H.264, even sides) from the PNGs, in one ffmpeg (the frames
+// read once: 0.66 s where two took 0.80 on 12 small frames), each written to a temporary name and renamed
+void encode_movies(const fs::path& dir, int fps) {
   if (!on_path("ffmpeg")) {
     print_error("render", "ffmpeg is not installed: wrote the PNG frames only (apt-get install ffmpeg for animation.mp4 and animation.gif)");
     return;
   }
   std::vector<std::pair<fs::path, fs::path>> written;  // temporary, target
   for (const char* name : {"animation.gif", "animation.mp4"}) written.emplace_back(dir / fmt::format(".{}.tmp", name), dir / name);
-  if (!mp4) written.pop_back();
   const std::string gif = "scale=480:-1:flags=lanczos,split[a][b];[a]palettegen[p];[b][p]paletteuse";
   std::vector<std::string> args{"ffmpeg", "-y", "-loglevel", "error", "-framerate", std::to_string(fps), "-i", (dir / "frame_%04d.png").string()};
-  if (mp4)
-    args.insert(args.end(), {"-filter_complex", "[0:v]split[m][g];[m]pad=ceil(iw/2)*2:ceil(ih/2)*2[mp4];[g]" + gif + "[gif]", "-map", "[gif]", "-f", "gif",
-                             written[0].first.string(), "-map", "[mp4]", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-f", "mp4", written[1].first.string()});
-  else
-    args.insert(args.end(), {"-vf", gif, "-f", "gif", written[0].first.string()});
+  args.insert(args.end(), {"-filter_complex", "[0:v]split[m][g];[m]pad=ceil(iw/2)*2:ceil(ih/2)*2[mp4];[g]" + gif + "[gif]", "-map", "[gif]", "-f", "gif",
+                           written[0].first.string(), "-map", "[mp4]", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-f", "mp4", written[1].first.string()});
   std::string why;
   const auto status = run_process(args, &why);
   if (!status || *status != 0) {
     for (const auto& [temporary, target] : written) fs::remove(temporary);
-    throw std::runtime_error(fmt::format("ffmpeg ({}) failed: {}", mp4 ? "animation.gif, animation.mp4" : "animation.gif",
-                                         status ? fmt::format("exit status {}", *status) : why));
+    throw std::runtime_error(fmt::format("ffmpeg (animation.gif, animation.mp4) failed: {}", status ? fmt::format("exit status {}", *status) : why));
   }
   for (const auto& [temporary, target] : written) fs::rename(temporary, target);
 }
@@ -388,7 +382,7 @@ RenderedRun render_scene(const RenderOptions& options) {
     }
     const double span = samples.t[frames.samples.back()];
     const int fps = span > 0 ? std::clamp(static_cast<int>(std::lround((shapes.size() - 1) / span)), 1, 60) : 1;
-    if (shapes.size() > 1 && movies && options.animations) encode_movies(out, fps, options.mp4);
+    if (shapes.size() > 1 && movies && options.animations) encode_movies(out, fps);
     std::lock_guard lock(summary_mutex);
     summary["draw_seconds"] = draw_seconds;
     summary["fps"] = fps;

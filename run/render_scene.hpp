@@ -16,7 +16,6 @@ struct RenderOptions {
   std::string backend = "osmesa";  // osmesa | egl
   std::string out;
   bool animations = true;          // the MP4 and GIF too, where ffmpeg is installed (else said on stderr)
-  bool mp4 = true;                 // the MP4 beside the GIF (a quick report's preview: the GIF it shows alone)
 };
 
 // how the drawn run ended: ok, or diverged or failed at t_last with the message (the frames up to then drawn)
