@@ -45,15 +45,6 @@ void add_springs_at_node(std::span<const Spring> springs, std::span<const int> w
   out.jacobian -= block.full();  // the force's derivative by the node's place: -dF/dr
 }
 
-std::vector<std::vector<int>> springs_by_node(std::span<const Spring> springs, int nodes) {
-  std::vector<std::vector<int>> by(static_cast<size_t>(nodes));
-  for (size_t k = 0; k < springs.size(); ++k) {
-    by[static_cast<size_t>(springs[k].b)].push_back(static_cast<int>(k));
-    if (springs[k].a >= 0) by[static_cast<size_t>(springs[k].a)].push_back(static_cast<int>(k));
-  }
-  return by;
-}
-
 void add_spring_forces(std::span<const Spring> springs, const double* x, const double* v, double* f, int dimension) {
   for (const Spring& s : springs) {
     const Eigen::Vector3d force = spring_force(span_of(s, x, dimension), closing_of(s, v, dimension), s.rest, s.stiffness, s.damping);

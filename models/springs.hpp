@@ -40,8 +40,6 @@ double spring_energy(std::span<const Spring> springs, const double* x, int dimen
 // the semidefinite approximation of add_spring_force_jacobians)
 void add_springs_at_node(std::span<const Spring> springs, std::span<const int> which, int node, const double* x, bool definite, bool derivatives,
                          VertexElastic& out, int dimension = 3);
-// each node's springs (indices into springs), for add_springs_at_node
-std::vector<std::vector<int>> springs_by_node(std::span<const Spring> springs, int nodes);
 
 // the fixed sparsity of a network's dn x dn force Jacobians (d = dimension): a d x d block on the diagonal of every node
 // and at (i, j) and (j, i) for every pair of nodes a force couples (a spring's ends, a triangle's corners).

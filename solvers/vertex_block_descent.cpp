@@ -44,11 +44,7 @@ void VbdNodes::refresh() {
   const int dim = springs_->dimension;
   if (value_at_.size() != static_cast<size_t>(d0.nonZeros())) {
     // the layout, once: each node's springs seen from it, and its blocks of D0 (its own first), in sweep order
-    std::vector<std::vector<int>> by_node(static_cast<size_t>(springs_->nodes));
-    for (size_t k = 0; k < springs_->springs.size(); ++k) {
-      by_node[static_cast<size_t>(springs_->springs[k].b)].push_back(static_cast<int>(k));
-      if (springs_->springs[k].a >= 0) by_node[static_cast<size_t>(springs_->springs[k].a)].push_back(static_cast<int>(k));
-    }
+    const std::vector<std::vector<int>> by_node = springs_by_node(springs_->springs, springs_->nodes);
     spring_end_.clear();
     block_end_.clear();
     springs_at_.clear();

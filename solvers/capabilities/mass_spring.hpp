@@ -69,6 +69,17 @@ inline Eigen::VectorXd coordinate_masses(const MassSpringView& view) {
   return m;
 }
 
+// each node's springs (indices into springs, a node's in spring order), for a per-node view of them (vbd's sweep,
+// the models' vertex_elastic)
+inline std::vector<std::vector<int>> springs_by_node(const std::vector<Spring>& springs, int nodes) {
+  std::vector<std::vector<int>> by(static_cast<size_t>(nodes));
+  for (size_t k = 0; k < springs.size(); ++k) {
+    by[static_cast<size_t>(springs[k].b)].push_back(static_cast<int>(k));
+    if (springs[k].a >= 0) by[static_cast<size_t>(springs[k].a)].push_back(static_cast<int>(k));
+  }
+  return by;
+}
+
 inline const Requirement needs_mass_spring =
     needs<MassSpringView>("a mass-spring system: the scenes flag, flag-on-pole, hanging-cloth, cloth-on-sphere and hanging-chain, or "
                           "pendulum-cartesian with a compliant rod (--set compliance=1e-6)");
