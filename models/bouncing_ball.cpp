@@ -7,7 +7,7 @@
 namespace stepwise {
 namespace {
 
-constexpr std::array params{
+constexpr std::array bouncing_ball_specs{
     ParamSpec{"height", 1.0, "m", "drop height above the ground plane", Bound::positive},
     ParamSpec{"restitution", 0.8, "", "coefficient of restitution eps: rebound speed / impact speed", Bound::unit_interval},
     ParamSpec{"g", 9.81, "m/s^2", "gravitational acceleration", Bound::positive},
@@ -92,7 +92,7 @@ class BouncingBall final : public Model, public DenseJacobian, public EventSourc
 
 }  // namespace
 
-std::span<const ParamSpec> bouncing_ball_params() { return params; }
+std::span<const ParamSpec> bouncing_ball_params() { return bouncing_ball_specs; }
 
 std::unique_ptr<Model> make_bouncing_ball(const Params& p) { return std::make_unique<BouncingBall>(p); }
 

@@ -12,7 +12,7 @@
 namespace stepwise {
 namespace {
 
-constexpr std::array params{
+constexpr std::array chain_specs{
     ParamSpec{"links", 20, "", "rigid links from the pin", Bound::positive},
     ParamSpec{"length", 1.0, "m", "the chain's length", Bound::positive},
     ParamSpec{"mass", 1.0, "kg", "the chain's mass", Bound::positive},
@@ -113,7 +113,7 @@ class Chain final : public Model {
 
 }  // namespace
 
-std::span<const ParamSpec> chain_params() { return params; }
+std::span<const ParamSpec> chain_params() { return chain_specs; }
 
 std::unique_ptr<Model> make_chain(const Params& p) { return std::make_unique<Chain>(p); }
 

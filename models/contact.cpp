@@ -78,7 +78,13 @@ Eigen::Matrix<double, Eigen::Dynamic, 3> vertices_in(const ContactBody& body, co
 // edge's overlap is clearly smaller, so that face-face contact keeps the face's normal
 std::pair<Eigen::Vector3d, double> least_overlap(const ContactBody& a, const Pose& pa, const ContactBody& b, const Pose& pb) {
   const auto va = vertices_in(a, pa), vb = vertices_in(b, pb);
-  const auto overlap = [&](const Eigen::Vector3d& n) { return (va * n).maxCoeff() - (vb * n).minCoeff(); };
+  // the vertices' extents along n, into vectors kept across the axes (no temporary a product per call)
+  Eigen::VectorXd along_a(va.rows()), along_b(vb.rows());
+  const auto overlap = [&](const Eigen::Vector3d& n) {
+    along_a.noalias() = va * n;
+    along_b.noalias() = vb * n;
+    return along_a.maxCoeff() - along_b.minCoeff();
+  };
   Eigen::Vector3d best_axis = Eigen::Vector3d::UnitZ();
   double best = std::numeric_limits<double>::infinity();
   const auto consider = [&](const Eigen::Vector3d& n, double preference) {

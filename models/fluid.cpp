@@ -22,7 +22,7 @@ constexpr double two_pi = 2 * std::numbers::pi;
 
 // per grid point: u, v, rho in up to 32 copies (CVODE Adams keeps about 25 vectors) and the right-hand
 // side's scratch (8 grid fields and 7 mode arrays)
-constexpr double bytes_per_point = 32 * 3 * 8 + 8 * 8 + 7 * 16;
+constexpr double fluid_bytes_per_point = 32 * 3 * 8 + 8 * 8 + 7 * 16;
 
 std::vector<ParamSpec> with_fluid_params(double viscosity, double size, std::initializer_list<ParamSpec> own) {
   std::vector<ParamSpec> specs{
@@ -35,7 +35,7 @@ std::vector<ParamSpec> with_fluid_params(double viscosity, double size, std::ini
 
 // the parameter "size": a whole number of points per side whose run fits in memory, at least 8
 int fluid_points(const Params& p) {
-  const int n = particle_count(p, "size", p.at("size") * bytes_per_point, "grid points per side");
+  const int n = particle_count(p, "size", p.at("size") * fluid_bytes_per_point, "grid points per side");
   if (n < 8) throw BadParameter("size", fmt::format("parameter 'size' must be at least 8 grid points per side, got {}", n));
   return n;
 }

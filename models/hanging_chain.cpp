@@ -12,7 +12,7 @@ namespace stepwise {
 
 namespace {
 
-const ParamSpec params[] = {
+const ParamSpec hanging_chain_specs[] = {
     {"nodes", 10, "", "free masses below the pin", Bound::positive},
     {"mass", 0.1, "kg", "mass of each node", Bound::positive},
     {"stiffness", 100.0, "N/m", "spring constant c", Bound::positive},
@@ -115,7 +115,7 @@ class HangingChain final : public Model, public SparseJacobian {
 
 }  // namespace
 
-std::span<const ParamSpec> hanging_chain_params() { return params; }
+std::span<const ParamSpec> hanging_chain_params() { return hanging_chain_specs; }
 double hanging_chain_columns(const Params& p) { return 6.0 * node_count(p) + 2; }
 
 std::unique_ptr<Model> make_hanging_chain(const Params& p) { return std::make_unique<HangingChain>(p); }

@@ -84,7 +84,7 @@ std::vector<ParamSpec> with_wave_params(std::initializer_list<ParamSpec> own) {
 }
 
 // per grid point: z and v in up to 32 copies (CVODE Adams keeps about 25 vectors)
-constexpr double bytes_per_point = 32 * 2 * 8;
+constexpr double height_field_bytes_per_point = 32 * 2 * 8;
 
 struct Drop {
   double t = 0;          // when it falls (s)
@@ -97,7 +97,7 @@ class HeightField final : public Model, public SparseJacobian, public EventSourc
 
   HeightField(Scene scene, const Params& p)
       : scene_(scene),
-        n_(particle_count(p, "size", p.at("size") * bytes_per_point, "grid points per side")),
+        n_(particle_count(p, "size", p.at("size") * height_field_bytes_per_point, "grid points per side")),
         cells_(static_cast<Eigen::Index>(n_) * n_),
         grid_{n_, p.at("spacing"), p.at("c"), p.at("mu")} {
     check_water_grid(p, n_, grid_.spacing, scene == Scene::drop);

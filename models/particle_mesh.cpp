@@ -13,7 +13,7 @@
 namespace stepwise {
 namespace {
 
-constexpr std::array params{
+constexpr std::array particle_mesh_specs{
     ParamSpec{"count", 40, "", "number of particles N", Bound::positive},
     ParamSpec{"seed", 1, "", "random seed of the initial positions", Bound::nonnegative},
     ParamSpec{"spread", 0.6, "m", "particles start in [-spread, spread]^2 horizontally", Bound::positive},
@@ -29,7 +29,7 @@ constexpr std::array params{
 };
 
 // per particle: the state in the integrators' copies and two events
-constexpr double bytes_per_particle = 32 * 6 * 8 + 2 * 256;
+constexpr double particle_mesh_bytes_per_particle = 32 * 6 * 8 + 2 * 256;
 
 // a particle within this of a surface (m), moving along it slower than this (m/s), is resting on it: far
 // above the round-off of sliding along a tilted face (1e-16 m per step) and above an adaptive code's error
@@ -40,7 +40,7 @@ constexpr double contact_tolerance = 1e-7;
 class ParticleMesh final : public Model, public EventSource {
  public:
   ParticleMesh(const Params& p, TriangleMesh mesh, std::vector<Plane> faces)
-      : n_(particle_count(p, "count", bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
+      : n_(particle_count(p, "count", particle_mesh_bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
         drop_(p.at("drop")), eps_(p.at("restitution")), mu_(p.at("friction")), g_(p.at("g")),
         rest_speed_(p.at("rest_speed")), mesh_(std::move(mesh)), faces_(std::move(faces)) {
     const Eigen::Vector3d normal(p.at("plane_nx"), p.at("plane_ny"), p.at("plane_nz"));
@@ -142,7 +142,7 @@ class ParticleMesh final : public Model, public EventSource {
 
 }  // namespace
 
-std::span<const ParamSpec> particle_mesh_params() { return params; }
+std::span<const ParamSpec> particle_mesh_params() { return particle_mesh_specs; }
 
 TriangleMesh default_obstacle() {
   TriangleMesh mesh;

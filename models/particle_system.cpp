@@ -13,7 +13,7 @@
 namespace stepwise {
 namespace {
 
-constexpr std::array params{
+constexpr std::array particle_system_specs{
     ParamSpec{"count", 100000, "", "number of particles N", Bound::positive},
     ParamSpec{"seed", 1, "", "random seed of the initial state", Bound::nonnegative},
     ParamSpec{"spread", 1.0, "m", "initial positions are uniform in [-spread, spread]^3", Bound::positive},
@@ -26,13 +26,13 @@ constexpr std::array params{
 };
 
 // per particle: six state entries in up to 32 copies (CVODE Adams keeps about 25 vectors, rk4 seven)
-constexpr double bytes_per_particle = 32 * 6 * 8;
+constexpr double particle_system_bytes_per_particle = 32 * 6 * 8;
 constexpr double max_pairs = 1e8;
 
 class ParticleSystem final : public Model, public SparseJacobian {
  public:
   explicit ParticleSystem(const Params& p)
-      : n_(particle_count(p, "count", bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
+      : n_(particle_count(p, "count", particle_system_bytes_per_particle)), seed_(particle_seed(p)), spread_(p.at("spread")),
         speed_(p.at("speed")), k_(p.at("stiffness")), gamma_(p.at("drag")), g_(p.at("g")), s_(p.at("repulsion")),
         rc_(p.at("radius")) {
     // the pairs within the cut-off, each evaluation of f: at the start, uniform in the cube of side 2 spread,
@@ -194,7 +194,7 @@ class ParticleSystem final : public Model, public SparseJacobian {
 
 }  // namespace
 
-std::span<const ParamSpec> particle_system_params() { return params; }
+std::span<const ParamSpec> particle_system_params() { return particle_system_specs; }
 
 std::unique_ptr<Model> make_particle_system(const Params& p) { return std::make_unique<ParticleSystem>(p); }
 

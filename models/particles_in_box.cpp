@@ -12,7 +12,7 @@
 namespace stepwise {
 namespace {
 
-constexpr std::array params{
+constexpr std::array particles_in_box_specs{
     ParamSpec{"count", 100, "", "number of particles N", Bound::positive},
     ParamSpec{"size", 1.0, "m", "edge length L of the cubic box [0, L]^3", Bound::positive},
     ParamSpec{"restitution", 0.8, "", "coefficient of restitution eps of the walls", Bound::unit_interval},
@@ -25,12 +25,12 @@ constexpr std::array params{
 
 // per particle: its six state entries in the integrators' copies (CVODE Adams keeps up to ~25 vectors), and
 // six events, each a name and two closures
-constexpr double bytes_per_particle = 32 * 6 * 8 + 6 * 256;
+constexpr double particles_in_box_bytes_per_particle = 32 * 6 * 8 + 6 * 256;
 
 class ParticlesInBox final : public Model, public DenseJacobian, public EventSource {
  public:
   explicit ParticlesInBox(const Params& p)
-      : n_(particle_count(p, "count", bytes_per_particle)), size_(p.at("size")), eps_(p.at("restitution")), mu_(p.at("friction")),
+      : n_(particle_count(p, "count", particles_in_box_bytes_per_particle)), size_(p.at("size")), eps_(p.at("restitution")), mu_(p.at("friction")),
         g_(p.at("g")), speed_(p.at("speed")), seed_(particle_seed(p)), rest_speed_(p.at("rest_speed")) {
     const Eigen::Vector3d o = Eigen::Vector3d::Zero(), l = Eigen::Vector3d::Constant(size_);
     walls_ = {make_plane(o, Eigen::Vector3d::UnitX()), make_plane(l, -Eigen::Vector3d::UnitX()),
@@ -104,7 +104,7 @@ class ParticlesInBox final : public Model, public DenseJacobian, public EventSou
 
 }  // namespace
 
-std::span<const ParamSpec> particles_in_box_params() { return params; }
+std::span<const ParamSpec> particles_in_box_params() { return particles_in_box_specs; }
 
 std::unique_ptr<Model> make_particles_in_box(const Params& p) { return std::make_unique<ParticlesInBox>(p); }
 

@@ -17,7 +17,7 @@ namespace {
 // GSL's default error handler aborts the process on a domain error: report through return values instead
 const bool gsl_abort_handler_off = (gsl_set_error_handler_off(), true);
 
-constexpr std::array params{
+constexpr std::array pendulum_specs{
     ParamSpec{"theta0", 1.0, "rad", "initial angle from the downward vertical", Bound::finite},
     ParamSpec{"omega0", 0.0, "rad/s", "initial angular velocity", Bound::finite},
     ParamSpec{"g", 9.81, "m/s^2", "gravitational acceleration", Bound::positive},
@@ -99,7 +99,7 @@ class Pendulum final : public Model, public DenseJacobian {
 
 }  // namespace
 
-std::span<const ParamSpec> pendulum_params() { return params; }
+std::span<const ParamSpec> pendulum_params() { return pendulum_specs; }
 
 std::unique_ptr<Model> make_pendulum(const Params& p, bool small_angle) { return std::make_unique<Pendulum>(p, small_angle); }
 

@@ -11,7 +11,7 @@
 namespace stepwise {
 namespace {
 
-constexpr std::array params{
+constexpr std::array pendulum_cartesian_specs{
     ParamSpec{"theta0", 1.0, "rad", "initial angle from the downward vertical", Bound::finite},
     ParamSpec{"omega0", 0.0, "rad/s", "initial angular velocity", Bound::finite},
     ParamSpec{"g", 9.81, "m/s^2", "gravitational acceleration", Bound::positive},
@@ -100,7 +100,7 @@ class PendulumCartesian final : public Model {
 
 }  // namespace
 
-std::span<const ParamSpec> pendulum_cartesian_params() { return params; }
+std::span<const ParamSpec> pendulum_cartesian_params() { return pendulum_cartesian_specs; }
 
 std::unique_ptr<Model> make_pendulum_cartesian(const Params& p) { return std::make_unique<PendulumCartesian>(p); }
 

@@ -8,7 +8,7 @@
 namespace stepwise {
 namespace {
 
-constexpr std::array params{
+constexpr std::array projectile_specs{
     ParamSpec{"x0", 0.0, "m", "initial x", Bound::finite},
     ParamSpec{"y0", 0.0, "m", "initial height", Bound::finite},
     ParamSpec{"vx0", 10.0, "m/s", "initial horizontal velocity", Bound::finite},
@@ -82,7 +82,7 @@ class Projectile final : public Model, public DenseJacobian {
 
 }  // namespace
 
-std::span<const ParamSpec> projectile_params() { return params; }
+std::span<const ParamSpec> projectile_params() { return projectile_specs; }
 std::unique_ptr<Model> make_projectile(const Params& p) { return std::make_unique<Projectile>(p); }
 
 }  // namespace stepwise

@@ -20,7 +20,7 @@
 namespace stepwise {
 namespace {
 
-const ParamSpec params[] = {
+const ParamSpec rigid_body_specs[] = {
     {"mass", 1.0, "kg", "mass", Bound::positive},
     {"I1", 1.0, "kg m^2", "principal moment about the body x axis", Bound::positive},
     {"I2", 2.0, "kg m^2", "principal moment about the body y axis", Bound::positive},
@@ -140,7 +140,7 @@ double elliptic_f(double phi, double k, double K) {
 
 }  // namespace
 
-std::span<const ParamSpec> rigid_body_params() { return params; }
+std::span<const ParamSpec> rigid_body_params() { return rigid_body_specs; }
 
 Eigen::Quaterniond initial_orientation(const Params& p) {
   const Eigen::Vector4d q(p.at("qw0"), p.at("qx0"), p.at("qy0"), p.at("qz0"));
@@ -169,7 +169,7 @@ void free_rotation_rates(const Eigen::Vector3d& inertia, const Eigen::Ref<const 
 std::unique_ptr<Model> make_rigid_body(const Params& p) { return std::make_unique<RigidBody>(p); }
 
 std::unique_ptr<Model> make_rigid_body(const Params& p, const TriangleMesh& mesh) {
-  for (const ParamSpec& spec : params)
+  for (const ParamSpec& spec : rigid_body_specs)
     if ((spec.key == "mass" || spec.key.starts_with("I")) && p.at(std::string(spec.key)) != spec.default_value)
       throw BadParameter(std::string(spec.key), fmt::format("parameter '{}' follows from the [mesh] and its density: give one or the other", spec.key));
   Params with = p;

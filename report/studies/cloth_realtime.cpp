@@ -22,7 +22,7 @@ struct Point {
 // the methods and settings: the implicit ones at frame-sized steps and below, the explicit ones below their
 // stability limit (~1.5e-3 s for symplectic Euler here), the adaptive ones at loose tolerances (an animation's
 // accuracy)
-std::vector<Point> plan(bool quick) {
+std::vector<Point> realtime_plan(bool quick) {
   std::vector<Point> points;
   const auto fixed = [&](const char* method, std::initializer_list<double> dts) {
     for (const double dt : dts) points.push_back({method, StepControl::fixed(dt), fmt::format("dt {:.3g}", dt)});
@@ -88,7 +88,7 @@ StudyOutput cloth_realtime(const StudyContext& ctx) {
   const auto flag = make_model("cloth", {});  // the model's defaults are the seeds' flag (scenes/flag.toml)
   const Eigen::Index positions = flag->as<SecondOrderView>()->positions;
   const double half_pixel = 0.5 * flag_frame_extent / frame_pixels;
-  const std::vector<Point> points = plan(ctx.quick);
+  const std::vector<Point> points = realtime_plan(ctx.quick);
 
   // the two reference runs, then every point
   std::vector<std::string> labels{"reference rk4", "reference rk4 (half step)"};

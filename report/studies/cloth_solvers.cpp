@@ -19,7 +19,7 @@ namespace {
 
 constexpr double frame = 1.0 / 60;
 
-struct Row {
+struct SolverRow {
   std::string model;   // springs, continuum, continuum-stiff (E x 100), springs-scrambled (every node at random)
   std::string method;
   double dt = frame;
@@ -38,12 +38,12 @@ Params model_params(const std::string& model) {
 constexpr double true_motion_dt = 1.0 / 3000;
 
 // the rows: the iteration budgets and substeps at 1/60 s, then the stability rows at 1/30 s and the scrambled start
-std::vector<Row> plan(bool quick) {
+std::vector<SolverRow> solver_plan(bool quick) {
   const std::vector<int> sweeps = quick ? std::vector<int>{1, 5, 20} : std::vector<int>{1, 2, 5, 10, 20};
   const std::vector<int> continuum_sweeps = quick ? std::vector<int>{5} : sweeps;  // the continuum's sweeps cost 8 times the springs
   const std::vector<int> substeps = quick ? std::vector<int>{20} : std::vector<int>{5, 20, 80};
   const std::vector<int> accelerated = quick ? std::vector<int>{20} : std::vector<int>{5, 10, 20};  // Chebyshev's from sweep 2
-  std::vector<Row> rows;
+  std::vector<SolverRow> rows;
   for (const char* model : {"springs", "continuum"}) {
     rows.push_back({model, "implicit-euler-newton"});
     rows.push_back({model, "implicit-euler"});
@@ -106,7 +106,7 @@ std::string recovery_text(const Trajectory& run, const Trajectory& reference) {
 }
 
 // the findings, first: each method's rows at 1/60 s, the paper's claim read off G, and the stability rows
-std::string findings(const Table& table, const std::vector<Row>& rows, double t_end, const std::string& recovery) {
+std::string findings(const Table& table, const std::vector<SolverRow>& rows, double t_end, const std::string& recovery) {
   // the findings: each method's rows at 1/60 s, cheapest first, as "N px at C CPU s/s (setting)"
   const auto cell = [&](size_t k, const char* column) { return std::get<double>(cell_of(table, table.rows[k], column)); };
   const auto said = [&](const std::string& model, const std::string& method, const std::string& start = "inertial") {
@@ -201,11 +201,11 @@ FigureSpec gap_figure() {
 
 StudyOutput cloth_solvers(const StudyContext& ctx) {
   const double t_end = ctx.quick ? 0.25 : 1.0;
-  const std::vector<Row> rows = plan(ctx.quick);
+  const std::vector<SolverRow> rows = solver_plan(ctx.quick);
   std::vector<std::string> labels;
-  for (const Row& r : rows)
+  for (const SolverRow& r : rows)
     labels.push_back(fmt::format("cloth-solvers {} {} dt {:.3g} iterations {} substeps {} start {}", r.model, r.method, r.dt, r.iterations, r.substeps, r.start));
-  const auto control_of = [](const Row& r) {
+  const auto control_of = [](const SolverRow& r) {
     StepControl c = StepControl::fixed(r.dt);
     if (const Method* m = find_method(r.method); m->option("iterations")) {
       c.settings["iterations"] = r.iterations;
@@ -216,7 +216,7 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
     return c;
   };
   const auto runs = ctx.sweep<Measured>(labels, [&](size_t i) {
-    const Row& r = rows[i];
+    const SolverRow& r = rows[i];
     const auto model = make_model("cloth", model_params(r.model == "springs-scrambled" ? "springs" : r.model));
     // a frame each step at 1/30 s (a fixed step ends at each output time: frames of 1/60 s would halve it)
     if (r.model != "springs-scrambled") return run_and_measure(*model, r.method, control_of(r), t_end, std::max(frame, r.dt));
@@ -228,13 +228,13 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
 
   const std::vector<Measured> truths = true_motions(ctx, t_end);
   const std::vector<std::string> truth_models = true_motion_models(ctx.quick);
-  const auto truth_of = [&](const Row& r) {
+  const auto truth_of = [&](const SolverRow& r) {
     const auto at = std::find(truth_models.begin(), truth_models.end(), r.model);
     return at == truth_models.end() ? nullptr : &truths[static_cast<size_t>(at - truth_models.begin())];
   };
 
   // converged backward Euler's run at each model and step: the reference of its rows
-  const auto reference_of = [&](const Row& r) -> const Measured* {
+  const auto reference_of = [&](const SolverRow& r) -> const Measured* {
     const std::string model = r.model == "springs-scrambled" ? "springs" : r.model;
     for (size_t k = 0; k < rows.size(); ++k)
       if (rows[k].model == model && rows[k].method == "implicit-euler-newton" && rows[k].dt == r.dt) return &runs[k];
@@ -255,7 +255,7 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
     return largest / pixel;
   };
   // one step of each method from the flag in motion (the reference's state halfway), and G there
-  const auto potential_gap = [&](const Row& r, const Measured& reference) {
+  const auto potential_gap = [&](const SolverRow& r, const Measured& reference) {
     if (r.model == "springs-scrambled" || reference.result.status != Status::ok) return std::numeric_limits<double>::quiet_NaN();
     const auto model = make_model("cloth", model_params(r.model));
     const size_t middle = reference.result.trajectory.y.size() / 2;
@@ -278,7 +278,7 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
   Table table{{"model", "method", "dt", "iterations", "substeps", "start", "threads", "cpu_per_simulated_second", "potential_gap", "pixels_off", "pixels_off_true_motion",
                "status"}, {}};
   for (size_t k = 0; k < rows.size(); ++k) {
-    const Row& r = rows[k];
+    const SolverRow& r = rows[k];
     const Measured& m = runs[k];
     const Measured* reference = reference_of(r);
     const bool ok = m.result.status == Status::ok && reference && reference->result.status == Status::ok;

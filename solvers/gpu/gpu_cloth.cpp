@@ -17,7 +17,7 @@ namespace {
 // cloth_grid.hpp's step in GLSL: the same operations in the same order, every one `precise`. Texel (x, y)
 // is node (row y, column x); the tables are cloth_grid.hpp's with (row, column) offsets written (x, y)
 // how a pass reaches the grid: its size, a node's position (w = 1 where pinned) and velocity, and its outputs
-const char* const fragment_access = R"(#version 450
+const char* const cloth_fragment_access = R"(#version 450
 layout(binding = 0) uniform sampler2D positions;
 layout(binding = 1) uniform sampler2D velocities;
 layout(location = 0) out vec4 x_next;
@@ -27,7 +27,7 @@ vec4 position_at(ivec2 q) { return texelFetch(positions, q, 0); }
 vec3 v_at(ivec2 q) { return texelFetch(velocities, q, 0).xyz; }
 )";
 
-const char* const compute_access = R"(
+const char* const cloth_compute_access = R"(
 layout(std430, binding = 0) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = 1) readonly buffer Velocities { vec4 velocities[]; };
 layout(std430, binding = 4) writeonly buffer NextPositions { vec4 x_next[]; };
@@ -36,14 +36,14 @@ vec4 position_at(ivec2 q) { return positions[q.y * size.x + q.x]; }
 vec3 v_at(ivec2 q) { return velocities[q.y * size.x + q.x].xyz; }
 )";
 
-const char* const fragment_main = R"(
+const char* const cloth_fragment_main = R"(
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   step_node(p, x_next, v_next);
 }
 )";
 
-const char* const compute_main = R"(
+const char* const cloth_compute_main = R"(
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (p.x >= size.x || p.y >= size.y) return;
@@ -166,7 +166,7 @@ void step_node(ivec2 p, out vec4 x_out, out vec4 v_out) {
 namespace {
 
 std::string cloth_source(Pass pass) {
-  return pass == Pass::fragment ? std::string(fragment_access) + cloth_node + fragment_main : compute_prelude() + compute_access + cloth_node + compute_main;
+  return pass == Pass::fragment ? std::string(cloth_fragment_access) + cloth_node + cloth_fragment_main : compute_prelude() + cloth_compute_access + cloth_node + cloth_compute_main;
 }
 
 }  // namespace

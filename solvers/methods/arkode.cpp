@@ -94,7 +94,7 @@ SUNLinearSolver embedded_solver(EmbeddedSolve* content, SUNContext context) {
   return s;
 }
 
-std::string flag_name(long flag) { return return_flag_name(ARKStepGetReturnFlagName, flag); }
+std::string arkode_flag_name(long flag) { return return_flag_name(ARKStepGetReturnFlagName, flag); }
 
 class ArkodeIntegrator final : public Integrator {
  public:
@@ -110,7 +110,7 @@ class ArkodeIntegrator final : public Integrator {
     const int n = system.size();
     const std::string_view name = method_.name;
     auto setup_failed = [&](std::string_view call, long code) {
-      mark_failed(result, t0, fmt::format("{}: {} returned {} ({})", name, call, code, flag_name(code)));
+      mark_failed(result, t0, fmt::format("{}: {} returned {} ({})", name, call, code, arkode_flag_name(code)));
       return result;
     };
 
@@ -207,7 +207,7 @@ class ArkodeIntegrator final : public Integrator {
         .reinit = [&](double t, N_Vector v) { return ARKStepReInit(m, fe, fi, t, v); },
         .state_at = [&](double t, N_Vector v) { return ARKStepGetDky(m, t, 0, v); },
         .add_counters = add_counters,
-        .flag_name = flag_name,
+        .flag_name = arkode_flag_name,
     };
     output_loop(driver, callbacks, y.get(), t0, t_out, control_, result);
     return result;

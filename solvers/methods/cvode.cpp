@@ -30,7 +30,7 @@ using namespace sundials;
 struct CvodeFree { void operator()(void* mem) const { CVodeFree(&mem); } };
 using CvodePtr = std::unique_ptr<void, CvodeFree>;
 
-std::string flag_name(long flag) { return return_flag_name(CVodeGetReturnFlagName, flag); }
+std::string cvode_flag_name(long flag) { return return_flag_name(CVodeGetReturnFlagName, flag); }
 
 // CVODE's projection: corr takes ycur onto the system's manifold (the error estimate is not projected)
 int cvode_projection(sunrealtype, N_Vector ycur, N_Vector corr, sunrealtype, N_Vector, void* user_data) {
@@ -58,7 +58,7 @@ class CvodeIntegrator final : public Integrator {
 
     // a failing setup call ends the run with its name and code
     auto setup_failed = [&](std::string_view call, long code) {
-      mark_failed(result, t0, fmt::format("{}: {} returned {} ({})", method_, call, code, flag_name(code)));
+      mark_failed(result, t0, fmt::format("{}: {} returned {} ({})", method_, call, code, cvode_flag_name(code)));
       return result;
     };
 
@@ -148,7 +148,7 @@ class CvodeIntegrator final : public Integrator {
         .reinit = [&](double t, N_Vector v) { return CVodeReInit(mem.get(), t, v); },
         .state_at = [&](double t, N_Vector v) { return CVodeGetDky(mem.get(), t, 0, v); },
         .add_counters = add_counters,
-        .flag_name = flag_name,
+        .flag_name = cvode_flag_name,
     };
     output_loop(driver, callbacks, y.get(), t0, t_out, control_, result);
     return result;

@@ -39,7 +39,7 @@ constexpr double multiplier_atol = 1.0;  // see IDASVtolerances below
 struct IdaFree { void operator()(void* mem) const { IDAFree(&mem); } };
 using IdaPtr = std::unique_ptr<void, IdaFree>;
 
-std::string flag_name(long flag) { return return_flag_name(IDAGetReturnFlagName, flag); }
+std::string ida_flag_name(long flag) { return return_flag_name(IDAGetReturnFlagName, flag); }
 
 // the DAE's pieces, reached through IDA's user_data: the unknowns laid out as (x, v, lambda, mu)
 struct Dae {
@@ -138,7 +138,7 @@ class IdaIntegrator final : public Integrator {
     const Eigen::Index n = dae.n, m = dae.m, size = 2 * (n + m);
 
     auto setup_failed = [&](std::string_view call, long code) {
-      mark_failed(result, t0, fmt::format("ida: {} returned {} ({})", call, code, flag_name(code)));
+      mark_failed(result, t0, fmt::format("ida: {} returned {} ({})", call, code, ida_flag_name(code)));
       return result;
     };
 
@@ -219,7 +219,7 @@ class IdaIntegrator final : public Integrator {
           return code != 0 ? code : IDAGetDky(mem.get(), t, 1, yp.get());
         },
         .add_counters = add_counters,
-        .flag_name = flag_name,
+        .flag_name = ida_flag_name,
     };
     output_loop(driver, callbacks, yy.get(), t0, t_out, control_, result);
     return result;
