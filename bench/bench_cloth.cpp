@@ -16,7 +16,10 @@
 //  - one 1/60 s frame (one step from the same state) of backward Euler by Newton on the incremental potential
 //    (implicit-euler-newton) against the linearised step (implicit-euler, refactorising), springs and continuum, with
 //    the Newton iterations a frame, and its parts: the potential's gradient and its Hessian's assembly (the
-//    factorisation and the solve are the refactor and solve rows above).
+//    factorisation and the solve are the refactor and solve rows above);
+//  - a run's 1/60 s frames (the flag's first second from rest, the steppers' factors kept from frame to frame, as
+//    the report runs them): the continuum's and the springs' converged frame (implicit-euler-newton) against the
+//    springs' linearised one (implicit-euler), the ratio the aim is stated in.
 // One core: CHOLMOD's BLAS is kept on the calling thread (sparse_cholesky.cpp). The BLAS is Debian's
 // alternative (OpenBLAS when installed); LD_LIBRARY_PATH=/usr/lib/x86_64-linux-gnu/blas runs the reference
 // BLAS instead. The program prints the library its dgemm_ comes from.
@@ -259,6 +262,49 @@ void one_frame(benchmark::State& state, bool newton, bool continuum) {
   }
   state.counters["newton_iterations"] = static_cast<double>(f.stats.newton_iterations - iterations) / static_cast<double>(std::max(1L, frames));
 }
+// a run's frames: the flag's first second from rest in 1/60 s steps, each stepper as the method table makes it
+// (implicit-euler: the kept factor preconditioning CG; implicit-euler-newton: that step, then Newton from it) and kept
+// from frame to frame as a run keeps it: the mean frame, what a frame costs a user's run (the frame above is one step
+// from a state the linearised step left, far from backward Euler's own motion: 75 Newton iterations on the continuum
+// at 32^2 where a run averages 4 to 5)
+void run_frames(benchmark::State& state, const stepwise::FixedStepperFactory& make, bool continuum) {
+  Flag& f = flag(static_cast<int>(state.range(0)), {}, continuum);
+  constexpr int frames = 60;
+  stepwise::Stats stats;
+  stepwise::CountedSystem counted(*f.model, stats);
+  Eigen::VectorXd y, next;
+  std::string failure;
+  long runs = 0;
+  for (auto _ : state) {
+    const auto stepper = make(counted);
+    y = f.model->initial_state();
+    for (int k = 0; k < frames; ++k) {
+      if (!stepper->step(k * frame, frame, y, next, failure)) state.SkipWithError(failure.c_str());
+      y.swap(next);
+    }
+    ++runs;
+  }
+  const double taken = static_cast<double>(runs * frames);
+  state.counters["ms/frame"] = benchmark::Counter(taken / 1e3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["newton/frame"] = static_cast<double>(stats.newton_iterations) / taken;
+  state.counters["factors/frame"] = static_cast<double>(stats.factorizations) / taken;
+  state.counters["solves/frame"] = static_cast<double>(stats.linear_solves) / taken;
+}
+std::unique_ptr<stepwise::FixedStepper> converged(const stepwise::CountedSystem& s) {
+  stepwise::MassSpringImplicitOptions options;
+  options.newton = true;
+  return stepwise::make_mass_spring_implicit(s, options);
+}
+void BM_run_frame_linearised(benchmark::State& state) { run_frames(state, stepwise::make_implicit_euler, false); }
+void BM_run_frame_newton(benchmark::State& state) { run_frames(state, converged, false); }
+void BM_continuum_run_frame_newton(benchmark::State& state) { run_frames(state, converged, true); }
+// Newton with every direction from a fresh factor: the inexact Newton's gain, in the same run
+std::unique_ptr<stepwise::FixedStepper> exactly_converged(const stepwise::CountedSystem& s) {
+  stepwise::MassSpringImplicitOptions options;
+  options.newton = options.exact_newton = true;
+  return stepwise::make_mass_spring_implicit(s, options);
+}
+void BM_continuum_run_frame_exact_newton(benchmark::State& state) { run_frames(state, exactly_converged, true); }
 void BM_frame_linearised(benchmark::State& state) { one_frame(state, false, false); }
 void BM_frame_newton(benchmark::State& state) { one_frame(state, true, false); }
 void BM_continuum_frame_linearised(benchmark::State& state) { one_frame(state, false, true); }
@@ -336,6 +382,11 @@ BENCHMARK(BM_frame_linearised) CONTINUUM_SIZES;
 BENCHMARK(BM_frame_newton) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_frame_linearised) CONTINUUM_SIZES;
 BENCHMARK(BM_continuum_frame_newton) CONTINUUM_SIZES;
+// a run's second at 32^2 only (at 64^2 the continuum's takes 45 s)
+BENCHMARK(BM_run_frame_linearised)->Arg(32)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_run_frame_newton)->Arg(32)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_continuum_run_frame_newton)->Arg(32)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_continuum_run_frame_exact_newton)->Arg(32)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_frame_vbd) CONTINUUM_SIZES->UseRealTime();
 BENCHMARK(BM_frame_vbd_2_threads) CONTINUUM_SIZES->UseRealTime();
 BENCHMARK(BM_frame_vbd_chebyshev) CONTINUUM_SIZES->UseRealTime();
@@ -375,13 +426,16 @@ int main(int argc, char** argv) {
     pairs.emplace_back("BM_step_kept_factor" + arg, "BM_step_fast_mass_spring" + arg);
     pairs.emplace_back("BM_hanging_step_refactor" + arg, "BM_hanging_step_kept_factor" + arg);
   }
+  // the aim: the continuum's converged frame within 3x the springs' linearised one, over a run's frames
+  pairs.emplace_back("BM_continuum_run_frame_newton/32", "BM_run_frame_linearised/32");
+  pairs.emplace_back("BM_run_frame_newton/32", "BM_run_frame_linearised/32");
+  pairs.emplace_back("BM_continuum_run_frame_exact_newton/32", "BM_continuum_run_frame_newton/32");
   for (const char* n : {"32", "64"}) {
     const std::string arg = std::string("/") + n;
     pairs.emplace_back("BM_continuum_assemble" + arg, "BM_assemble" + arg);
     pairs.emplace_back("BM_continuum_assemble" + arg, "BM_continuum_assemble_exact" + arg);
     pairs.emplace_back("BM_continuum_cholmod_refactor" + arg, "BM_cholmod_refactor" + arg);
     pairs.emplace_back("BM_continuum_step_kept_factor" + arg, "BM_step_kept_factor" + arg);
-    // the aim: the continuum's converged frame within 3x the springs' linearised one
     pairs.emplace_back("BM_continuum_frame_newton" + arg, "BM_frame_linearised" + arg);
     pairs.emplace_back("BM_frame_newton" + arg, "BM_frame_linearised" + arg);
     pairs.emplace_back("BM_continuum_frame_newton" + arg, "BM_continuum_frame_linearised" + arg);

@@ -16,6 +16,10 @@
 
 namespace stepwise {
 
+// an engine's frame step (s): the studies of animation's solvers run at it, the position-based ones dividing it
+// into substeps
+inline constexpr double engine_frame = 1.0 / 60;
+
 // a figure declared, not drawn: which columns of which of the study's tables it plots against which, and how.
 // report/plot.py draws every figure from its spec with one function (the PNG), report/interactive.py with
 // another (index.html's plotly figure), both from the same lines as report/figure_spec.py reads them.

@@ -19,13 +19,7 @@ namespace stepwise {
 
 namespace {
 
-using sundials::ContextPtr, sundials::VectorPtr, sundials::LinSolPtr, sundials::NonlinSolPtr;
-struct CvodeFree {
-  void operator()(void* mem) const { CVodeFree(&mem); }
-};
-struct ArkodeFree {
-  void operator()(void* mem) const { ARKStepFree(&mem); }
-};
+using sundials::ContextPtr, sundials::VectorPtr, sundials::LinSolPtr, sundials::NonlinSolPtr, sundials::CvodePtr, sundials::ArkodePtr;
 
 // what f reaches through user_data: the grid, this rank's block and the halo it exchanges
 struct Lines {
@@ -87,7 +81,7 @@ DistributedLinesRun lines_distributed(const Method& method, const WaveGridView& 
     // as cvode-adams and cvode-bdf set it up (solvers/methods/cvode.cpp): Adams with fixed-point iteration,
     // BDF with Newton
     const bool bdf = method.on_ranks == OnRanks::cvode_bdf;
-    std::unique_ptr<void, CvodeFree> mem(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, context.get()));
+    CvodePtr mem(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, context.get()));
     if (!mem) return failed("CVodeCreate", 0);
     if (const int code = CVodeInit(mem.get(), rhs<true, true>, 0.0, y.get())) return failed("CVodeInit", code);
     if (const int code = CVodeSetUserData(mem.get(), &lines)) return failed("CVodeSetUserData", code);
@@ -112,7 +106,7 @@ DistributedLinesRun lines_distributed(const Method& method, const WaveGridView& 
     const bool explicit_only = tables->dirk == ARKODE_DIRK_NONE, implicit_only = tables->erk == ARKODE_ERK_NONE;
     const ARKRhsFn fe = explicit_only ? rhs<true, true> : implicit_only ? nullptr : rhs<false, true>;
     const ARKRhsFn fi = explicit_only ? nullptr : implicit_only ? rhs<true, true> : rhs<true, false>;
-    std::unique_ptr<void, ArkodeFree> mem(ARKStepCreate(fe, fi, 0.0, y.get(), context.get()));
+    ArkodePtr mem(ARKStepCreate(fe, fi, 0.0, y.get(), context.get()));
     if (!mem) return failed("ARKStepCreate", 0);
     if (const int code = ARKStepSetUserData(mem.get(), &lines)) return failed("ARKStepSetUserData", code);
     if (const int code = ARKStepSetTableNum(mem.get(), tables->dirk, tables->erk)) return failed("ARKStepSetTableNum", code);

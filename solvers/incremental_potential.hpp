@@ -17,6 +17,7 @@
 #include <stepwise/solvers/run_support.hpp>
 #include <stepwise/solvers/sparse_cholesky.hpp>
 
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCore>
 
 #include <functional>
@@ -82,11 +83,18 @@ class IncrementalPotential {
   mutable Eigen::SparseMatrix<double> k_;
 };
 
-// Newton on G, from `x` (a first guess) to the minimiser, in x. Each direction comes from the sparse Cholesky factor
-// (its analysis kept across steps) of G's exact Hessian where it is positive definite, else of that Hessian with its
-// mass term raised (A + tau M, tau grown fourfold until the factor exists), else of the one made semidefinite element
-// by element. (Projecting every element, as IPC does, drops the negative curvature of compressed springs that the
-// mass term would carry: Newton then converges linearly, 0.88 an iteration on the flag's first step at 1/30 s.)
+// Newton on G, from `x` (a first guess) to the minimiser, in x: an inexact Newton (Dembo, Eisenstat & Steihaug 1982).
+// The first direction comes from the sparse Cholesky factor (its analysis kept across steps) of G's exact Hessian at
+// the first guess where it is positive definite, else of that Hessian with its mass term raised (A + tau M, tau grown
+// fourfold until the factor exists), else of the one made semidefinite element by element. (Projecting every element,
+// as IPC does, drops the negative curvature of compressed springs that the mass term would carry: Newton then
+// converges linearly, 0.88 an iteration on the flag's first step at 1/30 s.) The later directions solve
+// A dx = -h^2 grad G (A = h^2 G's exact Hessian there) by conjugate gradients preconditioned by that factor, to a
+// relative residual of Eisenstat & Walker's forcing term (loose far from the minimiser, quadratic convergence at the
+// end); where CG needs more than max_cg_iterations, or ends on a direction along which A's curvature is not positive
+// or G does not descend, A is factored afresh the same way. (A factor kept from an earlier step, as Gast et al. 2015
+// keep one, needs four times the CG iterations on the gusting continuum flag, and its directions lead Newton, on
+// that buckling sheet, to another of backward Euler's solutions within seconds: 18 px away at 3 s.)
 // Each step is halved until G falls by Armijo's fraction of the decrease the gradient predicts (a descent direction
 // of a positive definite model always finds one). Converged when the step moves no node faster than
 // `velocity_tolerance` (|dx|inf / h, as IPC judges it), or when the decrease it predicts is G's round-off
@@ -96,6 +104,12 @@ struct NewtonOnPotential {
   // flag's frame (1.5 m in 720 px: 2e-4 m) over its 5 s allows 4e-5 m/s, and 1e-5 keeps a factor of four
   double velocity_tolerance = 1e-5;
   Ordering ordering = Ordering::cheaper;
+  // false: every direction from a fresh factor (exact Newton)
+  bool inexact = true;
+  double max_forcing = 0.1;
+  // past this, CG has cost more than the factorisation it saves (one costs ~17 factor-preconditioned CG iterations on
+  // the 32^2 flag: mass_spring_implicit.cpp)
+  int max_cg_iterations = 20;
   // called at each iteration with G there and how fast Newton's step from there moves a node (m/s): the tests' view
   std::function<void(int iteration, double value, double moved)> observe;
 };
@@ -109,10 +123,14 @@ class PotentialNewton {
  private:
   // the factor of a_ (the exact scaled Hessian at x) or of a positive definite modification of it
   std::string factor_positive_definite(const IncrementalPotential& potential, const Eigen::VectorXd& x, Stats& stats);
+  // dx_ from CG on a_ dx = rhs_ preconditioned by the kept factor, to relative residual `forcing`; false where it
+  // did not converge or its direction is no descent direction of positive curvature
+  bool preconditioned_direction(double forcing, Stats& stats);
   NewtonOnPotential options_;
   double shift_ = 0;  // the last mass term raise that gave a factor
   SparseCholesky factor_;
   bool analysed_ = false;
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, FactorPreconditioner> cg_;
   Eigen::SparseMatrix<double> a_;
   Eigen::VectorXd g_, trial_;
   Eigen::MatrixXd rhs_, dx_;

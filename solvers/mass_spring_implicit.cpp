@@ -71,7 +71,7 @@ class MassSpringImplicit final : public FixedStepper {
  public:
   MassSpringImplicit(const CountedSystem& s, const MassSpringImplicitOptions& options)
       : system_(s), options_(options), bw_(s, options.definite), n_(s.size() / 2), potential_(s, mass_spring_of(s)),
-        newton_(NewtonOnPotential{.ordering = options.ordering}) {
+        newton_(NewtonOnPotential{.ordering = options.ordering, .inexact = !options.exact_newton}) {
     cg_.setTolerance(options.cg_residual);
     cg_.setMaxIterations(options.cg_max_iterations);
   }

@@ -38,6 +38,7 @@ enum class LinearSolve { refactor, kept_factor };
 
 struct MassSpringImplicitOptions {
   bool newton = false;
+  bool exact_newton = false;      // every Newton direction from a fresh factor (incremental_potential.hpp), not CG on one
   LinearSolve solve = LinearSolve::kept_factor;
   Ordering ordering = Ordering::cheaper;
   bool definite = true;           // the definite approximation of K; false: the exact one, which a compressed

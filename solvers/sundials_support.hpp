@@ -7,8 +7,10 @@
 #include <stepwise/solvers/capabilities/imex_split.hpp>
 #include <stepwise/solvers/run_support.hpp>
 
+#include <arkode/arkode_arkstep.h>
 #include <arkode/arkode_butcher_dirk.h>
 #include <arkode/arkode_butcher_erk.h>
+#include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
@@ -33,6 +35,11 @@ using VectorPtr = std::unique_ptr<_generic_N_Vector, VectorFree>;
 using MatrixPtr = std::unique_ptr<_generic_SUNMatrix, MatrixFree>;
 using LinSolPtr = std::unique_ptr<_generic_SUNLinearSolver, LinSolFree>;
 using NonlinSolPtr = std::unique_ptr<_generic_SUNNonlinearSolver, NonlinSolFree>;
+// an integrator's memory (CVODE's, ARKStep's)
+struct CvodeFree { void operator()(void* mem) const { CVodeFree(&mem); } };
+struct ArkodeFree { void operator()(void* mem) const { ARKStepFree(&mem); } };
+using CvodePtr = std::unique_ptr<void, CvodeFree>;
+using ArkodePtr = std::unique_ptr<void, ArkodeFree>;
 
 // an arkode-* method's Butcher tables, by its name in the table (ARKODE_ERK_NONE or ARKODE_DIRK_NONE for the
 // part it lacks): for a driver of ARKODE beside the table's adapter (solvers/distributed_lines); empty for

@@ -655,6 +655,11 @@ inline double event_time_linear_motion(double t) { return 200 * std::numeric_lim
 // over the last few steps, and fails a Newton with a wrong Hessian (linear: order 1, as the projected one's 0.88 an
 // iteration on the flag's first step)
 inline constexpr double newton_quadratic_order = 1.5;
+// two Newton solutions of one backward Euler step, each stopped where its last step (or the error Newton's contraction
+// predicts after it) moved no node faster than the velocity tolerance v: each within about v h of the minimiser (the
+// exact one's error after its last step is that step's square, the inexact one's the forcing term times it, <= 0.1),
+// so within 2 v h of each other
+inline constexpr double newton_stopping_gap = 2;
 
 // linear triangles (membrane) and the vertex-form bending on them converge at order 1 in the mesh size at least in a
 // displacement; 0.8 leaves room for the pre-asymptotic meshes and fails a refinement that does not converge (the

@@ -17,12 +17,11 @@
 namespace stepwise {
 namespace {
 
-constexpr double frame = 1.0 / 60;
 
 struct SolverRow {
   std::string model;   // springs, continuum, continuum-stiff (E x 100), springs-scrambled (every node at random)
   std::string method;
-  double dt = frame;
+  double dt = engine_frame;
   int iterations = 1;  // vbd's sweeps a step; xpbd's a substep
   int substeps = 1;
   std::string start = "inertial";  // vbd's (--start): the inertial position, or the paper's adaptive guess
@@ -47,17 +46,17 @@ std::vector<SolverRow> solver_plan(bool quick) {
   for (const char* model : {"springs", "continuum"}) {
     rows.push_back({model, "implicit-euler-newton"});
     rows.push_back({model, "implicit-euler"});
-    for (const int k : std::string(model) == "springs" ? sweeps : continuum_sweeps) rows.push_back({model, "vbd", frame, k});
-    for (const int k : std::string(model) == "springs" ? accelerated : continuum_sweeps) rows.push_back({model, "vbd-chebyshev", frame, k});
+    for (const int k : std::string(model) == "springs" ? sweeps : continuum_sweeps) rows.push_back({model, "vbd", engine_frame, k});
+    for (const int k : std::string(model) == "springs" ? accelerated : continuum_sweeps) rows.push_back({model, "vbd-chebyshev", engine_frame, k});
   }
-  for (const int k : quick ? std::vector<int>{5} : std::vector<int>{1, 5, 20}) rows.push_back({"springs", "vbd", frame, k, 1, "adaptive"});
+  for (const int k : quick ? std::vector<int>{5} : std::vector<int>{1, 5, 20}) rows.push_back({"springs", "vbd", engine_frame, k, 1, "adaptive"});
   rows.push_back({"springs", "fast-mass-spring"});
-  for (const int s : substeps) rows.push_back({"springs", "xpbd", frame, 1, s});
+  for (const int s : substeps) rows.push_back({"springs", "xpbd", engine_frame, 1, s});
   for (const char* model : quick ? std::vector<const char*>{"springs"} : std::vector<const char*>{"springs", "continuum-stiff"}) {
     rows.push_back({model, "implicit-euler-newton", 1.0 / 30});
     rows.push_back({model, "vbd", 1.0 / 30, 10});
   }
-  rows.push_back({"springs-scrambled", "vbd", frame, 10});
+  rows.push_back({"springs-scrambled", "vbd", engine_frame, 10});
   return rows;
 }
 
@@ -74,7 +73,7 @@ std::vector<Measured> true_motions(const StudyContext& ctx, double t_end) {
     const auto model = make_model("cloth", model_params(models[i]));
     StepControl c = StepControl::fixed(true_motion_dt);
     c.observe = [](const Eigen::VectorXd& y) { return y; };
-    return run_and_measure(*model, "rk4", c, t_end, frame);
+    return run_and_measure(*model, "rk4", c, t_end, engine_frame);
   }, std::vector<double>(models.size(), t_end / true_motion_dt * 5e5));  // an rk4 step ~0.25 ms (springs), 0.5 ms (continuum)
   for (size_t i = 0; i < truths.size(); ++i)
     if (truths[i].result.status != Status::ok)
@@ -112,7 +111,7 @@ std::string findings(const Table& table, const std::vector<SolverRow>& rows, dou
   const auto said = [&](const std::string& model, const std::string& method, const std::string& start = "inertial") {
     std::vector<std::string> parts;
     for (size_t k = 0; k < rows.size(); ++k)
-      if (rows[k].model == model && rows[k].method == method && rows[k].dt == frame && rows[k].start == start)
+      if (rows[k].model == model && rows[k].method == method && rows[k].dt == engine_frame && rows[k].start == start)
         parts.push_back(fmt::format("{:.0f} px{} at {:.2g} CPU s/s{}", cell(k, "pixels_off"),
                                     std::isnan(cell(k, "pixels_off_true_motion")) ? std::string() : fmt::format(" ({:.0f} from the true motion)", cell(k, "pixels_off_true_motion")),
                                     cell(k, "cpu_per_simulated_second"),
@@ -124,17 +123,17 @@ std::string findings(const Table& table, const std::vector<SolverRow>& rows, dou
   // backward Euler's own offset from the true motion: what no solver of its step can do better than
   std::string own;
   for (size_t k = 0; k < rows.size(); ++k)
-    if (rows[k].method == "implicit-euler-newton" && rows[k].dt == frame && !std::isnan(cell(k, "pixels_off_true_motion")))
+    if (rows[k].method == "implicit-euler-newton" && rows[k].dt == engine_frame && !std::isnan(cell(k, "pixels_off_true_motion")))
       own += fmt::format("{}{:.0f} px ({})", own.empty() ? "" : ", ", cell(k, "pixels_off_true_motion"), rows[k].model);
   std::string stability;
   for (size_t k = 0; k < rows.size(); ++k)
-    if (rows[k].dt != frame || rows[k].model == "springs-scrambled")
+    if (rows[k].dt != engine_frame || rows[k].model == "springs-scrambled")
       stability += fmt::format("{}{} {} at {}: {}", stability.empty() ? "" : "; ", rows[k].model, rows[k].method,
-                               rows[k].dt == frame ? std::string("1/60 s") : std::string("1/30 s"), std::get<std::string>(cell_of(table, table.rows[k], "status")));
+                               rows[k].dt == engine_frame ? std::string("1/60 s") : std::string("1/30 s"), std::get<std::string>(cell_of(table, table.rows[k], "status")));
   // the paper's claim read off G: vbd's most sweeps against the linearised step's one solve, on the springs
   std::optional<size_t> most_sweeps, linearised;
   for (size_t k = 0; k < rows.size(); ++k) {
-    if (rows[k].model != "springs" || rows[k].dt != frame) continue;
+    if (rows[k].model != "springs" || rows[k].dt != engine_frame) continue;
     if (rows[k].method == "vbd" && rows[k].start == "inertial" && (!most_sweeps || rows[k].iterations > rows[*most_sweeps].iterations)) most_sweeps = k;
     if (rows[k].method == "implicit-euler") linearised = k;
   }
@@ -151,8 +150,8 @@ std::string findings(const Table& table, const std::vector<SolverRow>& rows, dou
   std::string acceleration;
   for (size_t a = 0; a < rows.size(); ++a)
     for (size_t p = 0; p < rows.size(); ++p)
-      if (rows[a].model == "springs" && rows[a].dt == frame && rows[a].method == "vbd-chebyshev" && rows[p].model == "springs" &&
-          rows[p].dt == frame && rows[p].method == "vbd" && rows[p].start == "inertial" && rows[p].iterations == rows[a].iterations)
+      if (rows[a].model == "springs" && rows[a].dt == engine_frame && rows[a].method == "vbd-chebyshev" && rows[p].model == "springs" &&
+          rows[p].dt == engine_frame && rows[p].method == "vbd" && rows[p].start == "inertial" && rows[p].iterations == rows[a].iterations)
         acceleration = fmt::format(
             "Chebyshev's acceleration of the sweeps (ρ {:g}) leaves G {:.3g} times closer to its minimum after {} sweeps, and the run {:.3g} times "
             "closer to converged backward Euler's, for {:.2g} times the CPU. ",
@@ -177,7 +176,7 @@ std::string findings(const Table& table, const std::vector<SolverRow>& rows, dou
 
 // G - G* against the sweeps (vbd, plain and accelerated) and against the CPU (every method's one step, the springs)
 FigureSpec gap_figure() {
-  const std::string at_frame = fmt::format("{}", frame);
+  const std::string at_frame = fmt::format("{}", engine_frame);
   return {
       .title = "The 32 x 32 flag at 1/60 s: how far one step leaves the incremental potential above its minimum",
       .panels = {{.title = "against vbd's sweeps",
@@ -219,9 +218,9 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
     const SolverRow& r = rows[i];
     const auto model = make_model("cloth", model_params(r.model == "springs-scrambled" ? "springs" : r.model));
     // a frame each step at 1/30 s (a fixed step ends at each output time: frames of 1/60 s would halve it)
-    if (r.model != "springs-scrambled") return run_and_measure(*model, r.method, control_of(r), t_end, std::max(frame, r.dt));
+    if (r.model != "springs-scrambled") return run_and_measure(*model, r.method, control_of(r), t_end, std::max(engine_frame, r.dt));
     Measured m;
-    m.t_out = output_times(t_end, frame);
+    m.t_out = output_times(t_end, engine_frame);
     m.result = make_integrator(r.method, control_of(r))->integrate(*model, 0.0, scrambled(*model), m.t_out);
     return m;
   });
@@ -248,8 +247,8 @@ StudyOutput cloth_solvers(const StudyContext& ctx) {
     double largest = 0;
     size_t k = 0;
     for (size_t f = last_only ? run.y.size() - 1 : 0; f < run.y.size(); ++f) {
-      while (k + 1 < reference.t.size() && reference.t[k] < run.t[f] - frame / 4) ++k;
-      if (k >= reference.t.size() || std::abs(reference.t[k] - run.t[f]) > frame / 4) continue;
+      while (k + 1 < reference.t.size() && reference.t[k] < run.t[f] - engine_frame / 4) ++k;
+      if (k >= reference.t.size() || std::abs(reference.t[k] - run.t[f]) > engine_frame / 4) continue;
       for (Eigen::Index i = 0; i < positions; i += 3) largest = std::max(largest, (run.y[f].segment<3>(i) - reference.y[k].segment<3>(i)).norm());
     }
     return largest / pixel;

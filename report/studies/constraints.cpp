@@ -27,7 +27,6 @@
 namespace stepwise {
 namespace {
 
-constexpr double frame = 1.0 / 60;  // an engine's frame step (s), which position-based methods divide into substeps
 // the stiffness table's rod (m/N), and Hooke's stretch of a 1 kg mass hanging on it (m)
 constexpr double rod_compliance = 1e-3, hooke_stretch = 9.81 * rod_compliance;
 
@@ -112,8 +111,8 @@ std::vector<Setting> work_precision_settings(size_t scene, double dt0, bool quic
     out.push_back({scene, "ida", "", c});
     out.push_back({scene, "cvode-bdf", "", c});
   }
-  for (int s = 1; s <= (quick ? 64 : 512); s *= 2) out.push_back({scene, "xpbd", "small steps", position_based(frame, s, 1)});
-  for (int i = 1; i <= (quick ? 16 : 64); i *= 4) out.push_back({scene, "xpbd", "iterations", position_based(frame, 1, i)});
+  for (int s = 1; s <= (quick ? 64 : 512); s *= 2) out.push_back({scene, "xpbd", "small steps", position_based(engine_frame, s, 1)});
+  for (int i = 1; i <= (quick ? 16 : 64); i *= 4) out.push_back({scene, "xpbd", "iterations", position_based(engine_frame, 1, i)});
   return out;
 }
 
@@ -188,9 +187,9 @@ Table damping_table(const StudyContext& ctx, bool quick) {
   const int periods = 10;
   std::vector<Setting> settings;
   for (int s = 1; s <= (quick ? 32 : 128); s *= 2) {
-    settings.push_back({0, "xpbd", "small steps", position_based(frame, s, 1)});
-    settings.push_back({0, "implicit-euler", "projection", StepControl::fixed(frame / s)});
-    settings.push_back({0, "rattle", "", StepControl::fixed(frame / s)});
+    settings.push_back({0, "xpbd", "small steps", position_based(engine_frame, s, 1)});
+    settings.push_back({0, "implicit-euler", "projection", StepControl::fixed(engine_frame / s)});
+    settings.push_back({0, "rattle", "", StepControl::fixed(engine_frame / s)});
   }
   std::vector<std::string> labels;
   for (const auto& s : settings) labels.push_back(s.method);
@@ -226,7 +225,7 @@ constexpr int flag_reference = 320;
 SubstepSubject flag_subject(bool quick) {
   ConstrainedScene flag{"flag", "cloth", {}, quick ? 0.25 : 1.0, 0};
   const auto model = make_model("cloth", {});
-  const Measured reference = run_and_measure(*model, "xpbd", position_based(frame, flag_reference, 1), flag.t_end, flag.t_end);
+  const Measured reference = run_and_measure(*model, "xpbd", position_based(engine_frame, flag_reference, 1), flag.t_end, flag.t_end);
   if (reference.result.status != Status::ok) throw std::runtime_error("constraints: the flag's reference run failed: " + reference.result.message);
   return {flag, reference.result.y_stop, {16}};
 }
@@ -237,7 +236,7 @@ Table substeps_table(const StudyContext& ctx, const std::vector<SubstepSubject>&
   for (size_t k = 0; k < subjects.size(); ++k)
     for (const int budget : subjects[k].budgets)
       for (int s = 1; s <= budget; s *= 2) {
-        settings.push_back({k, "xpbd", "", position_based(frame, s, budget / s)});
+        settings.push_back({k, "xpbd", "", position_based(engine_frame, s, budget / s)});
         budgets.push_back(budget);
       }
   std::vector<std::string> labels;
@@ -257,12 +256,12 @@ Table stiffness_table(const StudyContext& ctx) {
   const double alpha = rod_compliance, hooke = hooke_stretch;
   std::vector<Setting> settings;
   for (int i = 1; i <= 64; i *= 2)
-    for (const char* method : {"pbd", "xpbd"}) settings.push_back({0, method, "", position_based(frame, 1, i)});
+    for (const char* method : {"pbd", "xpbd"}) settings.push_back({0, method, "", position_based(engine_frame, 1, i)});
   std::vector<std::string> labels;
   for (const auto& s : settings) labels.push_back(fmt::format("{} {} iterations", s.method, knob(s.control, "iterations")));
   const auto runs = ctx.sweep<RunResult>(labels, [&](size_t i) {
     const auto model = make_model("pendulum-cartesian", {{"theta0", 0.0}, {"compliance", alpha}});
-    return run_and_measure(*model, settings[i].method, taken_by(settings[i].method, settings[i].control), 1.0, frame).result;
+    return run_and_measure(*model, settings[i].method, taken_by(settings[i].method, settings[i].control), 1.0, engine_frame).result;
   });
   Table t{{"method", "iterations", "stretch", "hooke"}, {}};
   for (size_t i = 0; i < settings.size(); ++i) {
@@ -283,7 +282,7 @@ Table stiffness_table(const StudyContext& ctx) {
 constexpr std::array rod_compliances{1e-3, 1e-6};  // m/N
 constexpr double rod_mass = 1.0;                    // kg: the pendulum's default bob
 // the rod's omega h at a frame: h / sqrt(m alpha) (0.53 and 17 for the compliances above)
-double rod_omega_h(double alpha) { return frame / std::sqrt(rod_mass * alpha); }
+double rod_omega_h(double alpha) { return engine_frame / std::sqrt(rod_mass * alpha); }
 constexpr double rod_t_end = 2.0;                   // s
 
 struct RodOutcome {
@@ -299,7 +298,7 @@ Table compliant_rod_table(const StudyContext& ctx, std::vector<double>& backward
   std::vector<Eigen::Vector2d> backward_euler, reference;
   std::vector<Stats> newton;
   for (const double alpha : rod_compliances)
-    for (const auto& [method, control, into] : {std::tuple{"implicit-euler-newton", StepControl::fixed(frame), &backward_euler},
+    for (const auto& [method, control, into] : {std::tuple{"implicit-euler-newton", StepControl::fixed(engine_frame), &backward_euler},
                                                 std::tuple{"verner98", StepControl::adaptive(1e-10, 1e-12), &reference}}) {
       const Measured m = run_and_measure(*rod(alpha), method, control, rod_t_end, rod_t_end);
       if (m.result.status != Status::ok) throw std::runtime_error(fmt::format("constraints: the compliant rod's {} run failed: {}", method, m.result.message));
@@ -311,10 +310,10 @@ Table compliant_rod_table(const StudyContext& ctx, std::vector<double>& backward
   std::vector<Setting> settings;
   for (size_t k = 0; k < rod_compliances.size(); ++k) {
     for (const int i : {1, 2, 5, 10})
-      for (const char* method : {"xpbd", "vbd"}) settings.push_back({k, method, "", position_based(frame, 1, i)});
-    settings.push_back({k, "implicit-euler", "", position_based(frame, 1, 1)});
-    settings.push_back({k, "fast-mass-spring", "", position_based(frame, 1, fast_mass_spring_iterations)});
-    settings.push_back({k, "symplectic-euler", "", position_based(frame, 1, 1)});
+      for (const char* method : {"xpbd", "vbd"}) settings.push_back({k, method, "", position_based(engine_frame, 1, i)});
+    settings.push_back({k, "implicit-euler", "", position_based(engine_frame, 1, 1)});
+    settings.push_back({k, "fast-mass-spring", "", position_based(engine_frame, 1, fast_mass_spring_iterations)});
+    settings.push_back({k, "symplectic-euler", "", position_based(engine_frame, 1, 1)});
   }
   std::vector<std::string> labels;
   for (const auto& s : settings) labels.push_back(fmt::format("rod {:g} m/N {} {}", rod_compliances[s.scene], s.method, knob(s.control, "iterations")));
@@ -349,7 +348,7 @@ const Params hanging_cloth{{"rows", 24}, {"columns", 24}, {"mass", 0.4}, {"stiff
 Table sag_table(const StudyContext& ctx, bool quick, double& spring_sag) {
   std::vector<Setting> settings{{0, "implicit-euler", "", StepControl::fixed(0.01)}};
   for (int i = 1; i <= (quick ? 8 : 64); i *= 2)
-    for (const char* method : {"pbd", "xpbd"}) settings.push_back({0, method, "", position_based(frame, 1, i)});
+    for (const char* method : {"pbd", "xpbd"}) settings.push_back({0, method, "", position_based(engine_frame, 1, i)});
   std::vector<std::string> labels;
   for (const auto& s : settings) labels.push_back(fmt::format("hanging cloth {} {}", s.method, s.method == "implicit-euler" ? "at rest" : fmt::format("{} iterations", knob(s.control, "iterations"))));
   const auto model = make_model("cloth", hanging_cloth);
@@ -360,7 +359,7 @@ Table sag_table(const StudyContext& ctx, bool quick, double& spring_sag) {
   const auto sags = ctx.sweep<double>(labels, [&](size_t i) {
     const auto cloth = make_model("cloth", hanging_cloth);
     const bool spring = i == 0;
-    const RunResult r = run_and_measure(*cloth, settings[i].method, taken_by(settings[i].method, settings[i].control), spring ? 5.0 : 3.0, spring ? 5.0 : frame).result;
+    const RunResult r = run_and_measure(*cloth, settings[i].method, taken_by(settings[i].method, settings[i].control), spring ? 5.0 : 3.0, spring ? 5.0 : engine_frame).result;
     if (r.status != Status::ok) return std::numeric_limits<double>::quiet_NaN();
     if (spring) return rest - y_mean(r.y_stop);
     double sum = 0;
@@ -572,7 +571,7 @@ std::vector<std::string> findings_of(const Measurements& t, bool quick) {
   };
   findings.push_back(fmt::format("**XPBD damps what it steps**: the Cartesian pendulum loses {} of its energy a period under xpbd at one 1/60 s "
                                  "substep, {} at 32 substeps, and {} under implicit Euler at 1/60 s; RATTLE loses {}.",
-                                 sci(damping_at("xpbd", frame)), sci(damping_at("xpbd", frame / 32)), sci(damping_at("implicit-euler", frame)), sci(damping_at("rattle", frame))));
+                                 sci(damping_at("xpbd", engine_frame)), sci(damping_at("xpbd", engine_frame / 32)), sci(damping_at("implicit-euler", engine_frame)), sci(damping_at("rattle", engine_frame))));
   const auto stretch_at = [&](const char* method, long iterations) {
     const auto* row = row_where(t.stiffness, {{"method", std::string(method)}, {"iterations", iterations}});
     return row ? number(t.stiffness, *row, "stretch") : std::numeric_limits<double>::quiet_NaN();

@@ -63,7 +63,6 @@ constexpr Table tables[] = {
 constexpr double fixed_newton_rtol = 1e-10, fixed_newton_atol = 1e-12;
 constexpr int fixed_newton_iterations = 10;
 
-struct ArkodeFree { void operator()(void* mem) const { ARKStepFree(&mem); } };
 
 // An IMEX run's Newton systems (1 - gamma df_I/dy) x = b solved by the model's own direct solve
 // (ImexSplit::implicit_solve): a SUNDIALS "matrix-embedded" linear solver, gamma read from ARKStep at each solve
@@ -125,7 +124,7 @@ class ArkodeIntegrator final : public Integrator {
     const bool imex = table_.kind == Kind::imex, implicit = table_.kind != Kind::erk;
     ARKRhsFn fe = imex ? sundials::explicit_part : implicit ? nullptr : sundials::rhs;
     ARKRhsFn fi = imex ? sundials::implicit_part : implicit ? sundials::rhs : nullptr;
-    std::unique_ptr<void, ArkodeFree> mem(ARKStepCreate(fe, fi, t0, y.get(), context.get()));
+    ArkodePtr mem(ARKStepCreate(fe, fi, t0, y.get(), context.get()));
     if (!mem) return setup_failed("ARKStepCreate", ARK_MEM_NULL);
     void* m = mem.get();
     if (const int code = ARKStepSetErrHandlerFn(m, error_handler, &callbacks)) return setup_failed("ARKStepSetErrHandlerFn", code);

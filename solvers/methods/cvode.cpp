@@ -27,9 +27,6 @@ namespace {
 
 using namespace sundials;
 
-struct CvodeFree { void operator()(void* mem) const { CVodeFree(&mem); } };
-using CvodePtr = std::unique_ptr<void, CvodeFree>;
-
 std::string cvode_flag_name(long flag) { return return_flag_name(CVodeGetReturnFlagName, flag); }
 
 // CVODE's projection: corr takes ycur onto the system's manifold (the error estimate is not projected)

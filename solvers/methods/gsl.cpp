@@ -27,7 +27,7 @@ void switch_off_abort_handler() {
 }
 
 // what GSL's C callbacks reach through their void* parameter
-struct Callbacks {
+struct GslCallbacks {
   const CountedSystem* system;
   int n;                       // system->size(), read once: the RHS callback is the hot path
   Eigen::MatrixXd jac;         // df/dy (n x n), column-major scratch, allocated by the first Jacobian call:
@@ -36,7 +36,7 @@ struct Callbacks {
 };
 
 int gsl_rhs(double t, const double y[], double dydt[], void* params) {
-  const auto& c = *static_cast<Callbacks*>(params);
+  const auto& c = *static_cast<GslCallbacks*>(params);
   const int n = c.n;
   Eigen::Map<Eigen::VectorXd> out(dydt, n);
   // counted here and the inner system called directly: one virtual call per evaluation, not two
@@ -48,7 +48,7 @@ int gsl_rhs(double t, const double y[], double dydt[], void* params) {
 
 // dfdy is row-major n x n; dfdt by central differences in t unless the system is autonomous
 int gsl_jacobian(double t, const double y[], double* dfdy, double dfdt[], void* params) {
-  auto& c = *static_cast<Callbacks*>(params);
+  auto& c = *static_cast<GslCallbacks*>(params);
   const int n = c.system->size();
   Eigen::Map<const Eigen::VectorXd> ym(y, n);
   c.jac.resize(n, n);
@@ -87,7 +87,7 @@ class GslSession {
   double* yerr() { return yerr_.data(); }
 
  private:
-  Callbacks callbacks_;
+  GslCallbacks callbacks_;
   gsl_odeiv2_system sys_;
   gsl_odeiv2_driver* driver_;
   Eigen::VectorXd yerr_;
