@@ -54,7 +54,7 @@ StudyOutput scaling(const StudyContext& ctx) {
       "t_cell = {:.3f} ns ({}² grid, past the caches, the least of three runs of {} steps), and NVIDIA's figures for "
       "ConnectX-6 HDR InfiniBand, α = {:.1f} µs and 1/β = {:.0f} GB/s (a lower bound on an MPI message's cost). "
       "Measured scaling on this machine's two cores, the shared-memory α and β and the model's check against them: "
-      "`mpirun -np 2 bench/bench_mpi_wave` (docs/performance.md).\n\n",
+      "`mpirun -np 2 bench/bench_mpi_wave` (built by `cmake --build --preset release --target benchmarks`; docs/performance.md).\n\n",
       cluster.t_cell * 1e9, n_measured, steps, cluster.alpha * 1e6, 1e-9 / cluster.beta);
   md += markdown_table(model, {{"n", "grid side", shown_as("{:.0f}")},
                                {"ranks", "ranks", shown_as("{:.0f}")},
