@@ -1,5 +1,7 @@
 #include "symbolic.hpp"
 
+#include <cln/number_io.h>
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -75,6 +77,15 @@ GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, 
       what = fmt::format("{} '{}' (a formula may call {})", known ? "wrong number of arguments to" : "unknown function", function, function_list);
     }
     throw BadEquations(fmt::format("{}: {}", f.where(column), what));
+  } catch (const cln::read_number_exception& e) {
+    // a number CLN cannot read ("0.2.", which GiNaC's lexer takes whole): CLN says `Illegal number syntax:
+    // "+0.2.e0_17"`, the number as GiNaC handed it on (a sign before, its precision after)
+    const std::string what = e.what();
+    const auto open = what.find('"'), close = what.rfind('"');
+    std::string number = open != std::string::npos && close > open ? what.substr(open + 1, close - open - 1) : std::string();
+    if (number.starts_with('+')) number.erase(0, 1);
+    if (const auto precision = number.rfind("e0_"); precision != std::string::npos) number.erase(precision);
+    throw BadEquations(fmt::format("{}: '{}' is not a number", f.where(std::max(1, column_of(text, number))), number));
   } catch (const std::invalid_argument& e) {
     // the strict symbol table: `find_or_insert_symbol: symbol "y" not found`
     const std::string what = e.what();
