@@ -25,7 +25,7 @@ std::unique_ptr<Model> model_of(const std::string& toml) {
   return make_equations(*scene.equations, {}, false);
 }
 
-struct EventCase {
+struct MethodEventCase {
   std::string method;
   StepControl control;
   double tolerance;  // on an event's time
@@ -34,8 +34,8 @@ struct EventCase {
 // rk4 at a fixed step (exact on a parabola: its events to round-off), and every adaptive method that takes the
 // model (the gpu passes step no events), at rtol 1e-10, or 1e-7 where the method is of order 2 and 1e-5 where of
 // order 1: a method whose error estimate is of order 1 takes millions of steps on a parabola at 1e-10
-std::vector<EventCase> every_method(const Model& model) {
-  std::vector<EventCase> cases{{"rk4", StepControl::fixed(1e-3), tolerance::event_time_exact_steps}};
+std::vector<MethodEventCase> every_method(const Model& model) {
+  std::vector<MethodEventCase> cases{{"rk4", StepControl::fixed(1e-3), tolerance::event_time_exact_steps}};
   for (const Method& method : methods())
     if (method.adaptive() && method.family != Family::gpu && method_applies(method, model)) {
       const double rtol = method.order.max >= 3 ? 1e-10 : method.order.max == 2 ? 1e-7 : 1e-5;
@@ -47,15 +47,15 @@ std::vector<EventCase> every_method(const Model& model) {
 // each case in both event-location modes (the seeds' linear estimate and the re-step: a scene's own events are
 // refined in either, and SUNDIALS finds its roots itself)
 template <class Check>
-void in_both_locations(const std::vector<EventCase>& cases, Check check) {
+void in_both_locations(const std::vector<MethodEventCase>& cases, Check check) {
   for (const EventLocation location : {EventLocation::linear, EventLocation::restep})
-    for (EventCase c : cases) {
+    for (MethodEventCase c : cases) {
       c.control.event_location = location;
       check(c, location == EventLocation::linear ? "linear" : "restep");
     }
 }
 
-RunResult run(const Model& model, const EventCase& c, std::vector<double> t_out) {
+RunResult run(const Model& model, const MethodEventCase& c, std::vector<double> t_out) {
   return make_integrator(c.method, c.control)->integrate(model, 0, model.initial_state(), t_out);
 }
 
@@ -114,7 +114,7 @@ void expect_closed_form_bounces(const std::vector<Ball>& balls) {
     exact.push_back(bouncing_ball_impacts({{"height", drop}, {"restitution", ball.restitution}, {"g", g}, {"rest_speed", rest_speed}}, 1000));
     t_end = std::max(t_end, exact.back().back().t + 0.25);
   }
-  in_both_locations(every_method(*model), [&](const EventCase& c, const char* location) {
+  in_both_locations(every_method(*model), [&](const MethodEventCase& c, const char* location) {
     const RunResult r = run(*model, c, every(0.01, t_end)), reference = run(*twin, c, every(0.01, t_end));
     ASSERT_EQ(r.status, reference.status) << c.method << " (" << location << "): " << r.message << " / " << reference.message;
     if (r.status != Status::ok) return;  // failing alike, whatever the direction: the method's own (below)
@@ -183,7 +183,7 @@ TEST(EventActions, ABallBetweenTwoWallsEachWatchingNoDirectionStaysBetweenThemFo
   // watching the way the ball comes fails for a reason of its own, whatever the direction (said, not held here)
   const auto model = model_of(walls("", "")), directed = model_of(walls("rising", "falling"));
   const int bounces = 100;
-  in_both_locations(every_method(*model), [&](const EventCase& c, const char* location) {
+  in_both_locations(every_method(*model), [&](const MethodEventCase& c, const char* location) {
     const RunResult r = run(*model, c, every(0.25, bounces));
     if (r.status != Status::ok) {
       const RunResult twin = run(*directed, c, every(0.25, bounces));
@@ -235,7 +235,7 @@ TEST(EventActions, AnActionThatLeavesItsFormulaExactlyZeroOrWhereTheRootPutItFir
   };
   for (const Action& action : actions) {
     const auto model = line_with(action.events);
-    in_both_locations(every_method(*model), [&](const EventCase& c, const char* location) {
+    in_both_locations(every_method(*model), [&](const MethodEventCase& c, const char* location) {
       const RunResult r = run(*model, c, {0.25, 0.75, 1.0});
       ASSERT_EQ(r.status, Status::ok) << c.method << " (" << location << "), " << action.what << ": " << r.message;
       ASSERT_EQ(r.events.size(), 1u) << c.method << " (" << location << "), " << action.what;
@@ -252,9 +252,9 @@ TEST(EventActions, RowsAtAnInstantShowTheStateBeforeItAndAfterAllOfItsActionsNev
   // two identical balls, each with its own floor: both fire at each impact's instant. The sink (trajectory.csv's
   // rows) gets the state before the instant and after both actions, never ball 1 turned and ball 2 not
   const auto model = model_of(balls_scene({{0.8, ""}, {0.8, ""}}));
-  for (const EventCase& c : every_method(*model)) {
+  for (const MethodEventCase& c : every_method(*model)) {
     std::vector<std::pair<double, Eigen::VectorXd>> rows;
-    EventCase sunk = c;
+    MethodEventCase sunk = c;
     sunk.control.sink = [&](double t, const Eigen::VectorXd& y) {
       rows.emplace_back(t, y);
       return std::string();

@@ -13,7 +13,7 @@
 namespace stepwise {
 namespace {
 
-const Params ball{{"height", 1.0}, {"restitution", 0.8}, {"g", 9.81}, {"rest_speed", 0.01}};
+const Params ball_params{{"height", 1.0}, {"restitution", 0.8}, {"g", 9.81}, {"rest_speed", 0.01}};
 
 RunResult run_ball(const Params& params, std::string_view method, StepControl control, std::vector<double> t_out) {
   const auto model = make_model("bouncing-ball", params);
@@ -21,16 +21,16 @@ RunResult run_ball(const Params& params, std::string_view method, StepControl co
 }
 
 TEST(Events, EveryMethodSeesEveryImpactAndTheRest) {
-  const auto exact = bouncing_ball_impacts(ball, 1000);
+  const auto exact = bouncing_ball_impacts(ball_params, 1000);
   const double t_end = exact.back().t + 0.5;
   for (const auto& method : methods()) {
-    if (!method_applies(method, *make_model("bouncing-ball", ball))) continue;
+    if (!method_applies(method, *make_model("bouncing-ball", ball_params))) continue;
     for (const auto location : {EventLocation::linear, EventLocation::restep}) {
       // adaptive where the method can be and is not of low order (rk1imp at rtol 1e-10 takes millions of steps)
       const bool adaptive = method.adaptive() && (!method.fixed_step() || method.order.max > 2);
       StepControl control = adaptive ? StepControl::adaptive(1e-10, 1e-12) : StepControl::fixed(1e-4);
       control.event_location = location;
-      const RunResult r = run_ball(ball, method.name, control, {t_end});
+      const RunResult r = run_ball(ball_params, method.name, control, {t_end});
       ASSERT_EQ(r.status, Status::ok) << method.name << ": " << r.message;
       ASSERT_FALSE(r.events.empty()) << method.name;
       // the first impact, where no earlier event error has accumulated: within the location's error
@@ -48,21 +48,21 @@ TEST(Events, EveryMethodSeesEveryImpactAndTheRest) {
 }
 
 TEST(Events, CvodeFindsImpactTimesAndApexHeightsToItsTolerance) {
-  const auto exact = bouncing_ball_impacts(ball, 1000);
+  const auto exact = bouncing_ball_impacts(ball_params, 1000);
   // outputs at the exact apex times: there the height must be eps^(2n) h0
   std::vector<double> apex_times;
-  const double g = ball.at("g");
+  const double g = ball_params.at("g");
   for (size_t n = 0; n + 1 < exact.size(); ++n) apex_times.push_back(exact[n].t + std::sqrt(2 * exact[n].apex / g));
   std::vector<double> t_out = apex_times;
   t_out.push_back(exact.back().t + 0.1);  // after the impact that ends in rest
   for (const char* method : {"cvode-adams", "cvode-bdf"}) {
-    const RunResult r = run_ball(ball, method, StepControl::adaptive(1e-10, 1e-12), t_out);
+    const RunResult r = run_ball(ball_params, method, StepControl::adaptive(1e-10, 1e-12), t_out);
     ASSERT_EQ(r.status, Status::ok) << r.message;
     ASSERT_GE(r.events.size(), apex_times.size()) << method;
     double worst_time = 0, worst_height = 0;
     for (size_t n = 0; n < apex_times.size(); ++n) {
       worst_time = std::max(worst_time, std::abs(r.events[n].t - exact[n].t));
-      const double expected = std::pow(ball.at("restitution"), 2.0 * static_cast<double>(n + 1)) * ball.at("height");
+      const double expected = std::pow(ball_params.at("restitution"), 2.0 * static_cast<double>(n + 1)) * ball_params.at("height");
       EXPECT_NEAR(exact[n].apex, expected, tolerance::kernel_roundoff);
       worst_height = std::max(worst_height, std::abs(r.trajectory.y[n][0] - expected));
     }
@@ -81,12 +81,12 @@ TEST(Events, TheSegmentMethodsErrorShrinksAtItsOrderAndReSteppingRemovesIt) {
   // rk4 is exact on the parabola, so the first impact's error is the segment method's own: the chord of
   // y(t) over the step meets the plane early by ~g h^2 / (8 v), order 2. Explicit Euler's own O(h) error
   // dominates its event time: order 1. Re-stepping to the root leaves round-off.
-  const double t1 = bouncing_ball_impacts(ball, 1).front().t;
+  const double t1 = bouncing_ball_impacts(ball_params, 1).front().t;
   for (const auto& [method, order] : {std::pair{"rk4", 2.0}, std::pair{"euler", 1.0}}) {
     std::vector<double> dts, errors;
     for (int k = 0; k <= 5; ++k) {
       const double dt = 0.01 / std::pow(2.0, k);
-      const RunResult r = run_ball(ball, method, StepControl::fixed(dt), {0.6});
+      const RunResult r = run_ball(ball_params, method, StepControl::fixed(dt), {0.6});
       ASSERT_FALSE(r.events.empty());
       dts.push_back(dt);
       errors.push_back(std::abs(r.events.front().t - t1));
@@ -98,7 +98,7 @@ TEST(Events, TheSegmentMethodsErrorShrinksAtItsOrderAndReSteppingRemovesIt) {
   }
   StepControl control = StepControl::fixed(0.01);
   control.event_location = EventLocation::restep;
-  const RunResult r = run_ball(ball, "rk4", control, {0.6});
+  const RunResult r = run_ball(ball_params, "rk4", control, {0.6});
   EXPECT_NEAR(r.events.front().t, t1, tolerance::event_time_restep);
 }
 
@@ -131,12 +131,12 @@ TEST(Events, ExplicitEulerNeverLetsTheBallRest) {
   // an impact speed v gains ~g h per flight, and the rebound eps (v + g h) settles at v* = eps g h / (1 - eps),
   // above the rest speed whenever h > rest_speed (1 - eps) / (eps g)
   const double h = 1e-3;
-  const RunResult r = run_ball(ball, "euler", StepControl::fixed(h), {10.0});
+  const RunResult r = run_ball(ball_params, "euler", StepControl::fixed(h), {10.0});
   ASSERT_EQ(r.status, Status::ok);
   EXPECT_EQ(r.events.back().kind, "impact");
-  const double eps = ball.at("restitution"), g = ball.at("g");
+  const double eps = ball_params.at("restitution"), g = ball_params.at("g");
   const double v_star = eps * g * h / (1 - eps);
-  EXPECT_GT(v_star, ball.at("rest_speed"));
+  EXPECT_GT(v_star, ball_params.at("rest_speed"));
   std::cout << "explicit Euler: " << r.events.size() << " impacts in 10 s, predicted limit rebound " << v_star << " m/s\n";
 }
 

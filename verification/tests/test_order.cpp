@@ -11,14 +11,14 @@
 namespace stepwise {
 namespace {
 
-struct Scene {
+struct OrderScene {
   const char* model;
   Params params;
   double t_end;
   double time_scale;  // fastest time scale (s), for the coarsest step
 };
 // how gtest and CTest's listing print a scene: its model and parameters, not its bytes
-void PrintTo(const Scene& s, std::ostream* os) {
+void PrintTo(const OrderScene& s, std::ostream* os) {
   *os << s.model;
   for (const auto& [key, value] : s.params) *os << ' ' << key << '=' << value;
 }
@@ -61,10 +61,10 @@ bool has_long_run(std::string_view method) {
   return std::any_of(std::begin(long_runs), std::end(long_runs), [&](const LongRun& r) { return r.method == method; });
 }
 
-class Order : public ::testing::TestWithParam<Scene> {};
+class Order : public ::testing::TestWithParam<OrderScene> {};
 
 TEST_P(Order, FixedStepMethodsConvergeAtTheirDocumentedOrder) {
-  const Scene& scene = GetParam();
+  const OrderScene& scene = GetParam();
   const auto model = make_model(scene.model, scene.params);
   for (const auto& method : methods()) {
     if (!method.fixed_step() || !method_applies(method, *model)) continue;
@@ -171,9 +171,9 @@ TEST(Order, ImplicitEulerSolvesItsEquationAtTheStepsEnd) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Order,
-                         ::testing::Values(Scene{"pendulum", {{"theta0", 1.0}}, 10.0, 0.25}, Scene{"flow-particle", {}, 1.0, 1.0},
-                                           Scene{"projectile", {{"drag", 0.5}}, 2.0, 1.0},
-                                           Scene{"particle-system", {{"count", 3}, {"repulsion", 0}}, 2.0, 0.5}),
+                         ::testing::Values(OrderScene{"pendulum", {{"theta0", 1.0}}, 10.0, 0.25}, OrderScene{"flow-particle", {}, 1.0, 1.0},
+                                           OrderScene{"projectile", {{"drag", 0.5}}, 2.0, 1.0},
+                                           OrderScene{"particle-system", {{"count", 3}, {"repulsion", 0}}, 2.0, 0.5}),
                          [](const auto& info) {
                            std::string name = info.param.model;
                            std::erase(name, '-');

@@ -27,8 +27,7 @@
 
 #include <unistd.h>
 
-#define STB_IMAGE_IMPLEMENTATION
-#include <stb/stb_image.h>
+#include <stb_image.h>  // libstb's decoder (the library render/image.cpp encodes with)
 
 namespace stepwise {
 namespace {
