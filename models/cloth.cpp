@@ -159,11 +159,8 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
       add_elastic_forces(x.data(), at_rest.data(), f);
     };
     view_.elastic_jacobian = [this](const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx) {
-      const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(3 * free_);
-      Eigen::SparseMatrix<double> dfdv;
       pattern_->zero(dfdx);
-      pattern_->zero(dfdv);
-      add_spring_force_jacobians(view_.springs, spring_slots_, x.data(), at_rest.data(), definite, dfdx, dfdv);
+      add_spring_force_jacobians(view_.springs, spring_slots_, x.data(), nullptr, definite, dfdx, nullptr);
       if (continuum_) add_continuum_force_jacobian(x.data(), definite, dfdx);
     };
     set_up_vertex_terms();
@@ -371,7 +368,7 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
     pattern_->zero(dfdv);
     if (forces != Forces::stiff)
       for (int i = 0; i < free_; ++i) BlockPattern::add(dfdv, diagonal_slots_[i], -view_.mass[i] * drag_ * Eigen::Matrix3d::Identity());
-    add_spring_force_jacobians(view_.springs, spring_slots_, x, v, definite, dfdx, dfdv);
+    add_spring_force_jacobians(view_.springs, spring_slots_, x, v, definite, dfdx, &dfdv);
     if (continuum_) add_continuum_force_jacobian(x, definite, dfdx);
     if (continuum_ && beta_ > 0) add_continuum_damping_jacobians(x, v, definite, dfdx, dfdv);
     if (forces == Forces::stiff || wind_k_ == 0) return;

@@ -129,7 +129,7 @@ std::vector<std::array<BlockPattern::Slot, 4>> spring_slots(std::span<const Spri
 }
 
 void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const std::array<BlockPattern::Slot, 4>> slots, const double* x,
-                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv, int dimension) {
+                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>* dfdv, int dimension) {
   for (size_t k = 0; k < springs.size(); ++k) {
     const Spring& s = springs[k];
     const Eigen::Vector3d r = span_of(s, x, dimension);
@@ -140,22 +140,22 @@ void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const
     if (definite) {
       dr = spring_stiffness<3>(u, length, s.rest, s.stiffness, true);
     } else {
-      const Eigen::Vector3d w = closing_of(s, v, dimension);
+      const Eigen::Vector3d w = dfdv ? closing_of(s, v, dimension) : Eigen::Vector3d::Zero();
       const double tension = s.stiffness * (length - s.rest) + s.damping * u.dot(w);
       dr = s.stiffness * uu + tension / length * across + s.damping / length * u * (across * w).transpose();
     }
     const Eigen::Matrix3d dw = s.damping * uu;
     // F acts on a (+) and b (-); it depends on r and w through x_b, v_b (+) and x_a, v_a (-)
     const auto& slot = slots[k];
-    BlockPattern::add(dfdx, slot[0], -dr);
-    BlockPattern::add(dfdv, slot[0], -dw);
+    const auto add = [&](int block, double sign) {
+      BlockPattern::add(dfdx, slot[block], sign * dr);
+      if (dfdv) BlockPattern::add(*dfdv, slot[block], sign * dw);
+    };
+    add(0, -1);
     if (s.a < 0) continue;
-    BlockPattern::add(dfdx, slot[1], -dr);
-    BlockPattern::add(dfdv, slot[1], -dw);
-    BlockPattern::add(dfdx, slot[2], dr);
-    BlockPattern::add(dfdv, slot[2], dw);
-    BlockPattern::add(dfdx, slot[3], dr);
-    BlockPattern::add(dfdv, slot[3], dw);
+    add(1, -1);
+    add(2, 1);
+    add(3, 1);
   }
 }
 
@@ -191,11 +191,8 @@ SpringNetwork::SpringNetwork(std::vector<double> mass, std::vector<Spring> sprin
     add_spring_forces(view_.springs, x.data(), at_rest.data(), f.data(), view_.dimension);
   };
   view_.elastic_jacobian = [this, n](const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx) {
-    const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(n);
-    Eigen::SparseMatrix<double> dfdv;
     pattern_.zero(dfdx);
-    pattern_.zero(dfdv);
-    add_spring_force_jacobians(view_.springs, slots_, x.data(), at_rest.data(), definite, dfdx, dfdv, view_.dimension);
+    add_spring_force_jacobians(view_.springs, slots_, x.data(), nullptr, definite, dfdx, nullptr, view_.dimension);
   };
   view_.vertex_elastic = [this](int node, const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, bool derivatives, VertexElastic& out) {
     add_springs_at_node(view_.springs, by_node_[static_cast<size_t>(node)], node, x.data(), definite, derivatives, out, view_.dimension);
@@ -208,7 +205,7 @@ void SpringNetwork::force_jacobians(const double* x, const double* v, bool defin
   pattern_.zero(dfdv);
   for (int i = 0; i < view_.nodes; ++i)
     pattern_.add(dfdv, i, i, -view_.mass[static_cast<size_t>(i)] * drag_ * Eigen::Matrix3d::Identity());
-  add_spring_force_jacobians(view_.springs, slots_, x, v, definite, dfdx, dfdv, view_.dimension);
+  add_spring_force_jacobians(view_.springs, slots_, x, v, definite, dfdx, &dfdv, view_.dimension);
 }
 
 }  // namespace stepwise

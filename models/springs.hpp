@@ -80,9 +80,10 @@ std::vector<std::pair<int, int>> spring_pairs(std::span<const Spring> springs);
 std::vector<std::array<BlockPattern::Slot, 4>> spring_slots(std::span<const Spring> springs, const BlockPattern& pattern);
 
 // K += dF/dx and D += dF/dv summed over the springs (node forces by node positions and velocities), exact
-// or definite (above); K and D have the pattern the slots were found in
+// or definite (above); K and D have the pattern the slots were found in. Without D (null) K alone, the springs at
+// rest relative to each other (v unread): the elastic Jacobian
 void add_spring_force_jacobians(std::span<const Spring> springs, std::span<const std::array<BlockPattern::Slot, 4>> slots, const double* x,
-                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>& dfdv,
+                                const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx, Eigen::SparseMatrix<double>* dfdv,
                                 int dimension = 3);
 
 // the Jacobian of y' = (v, M^-1 f) for y = (x, v) from the force Jacobians K = df/dx, D = df/dv and the

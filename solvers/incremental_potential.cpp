@@ -53,19 +53,26 @@ IncrementalPotential::IncrementalPotential(const CountedSystem& system, const Ma
     : system_(system), view_(view), m_(coordinate_masses(view)) {}
 
 void IncrementalPotential::start(double t0, const Eigen::VectorXd& y0, double h) {
+  Eigen::VectorXd force(m_.size());
+  second_order_acceleration(system_, *system_.as<SecondOrderView>(), t0, y0, force, scratch_);
+  force = force.cwiseProduct(m_);
+  force_jacobians(system_, view_, t0, y0, true, k_, d0_);
+  start(t0, y0, h, force, d0_);
+}
+
+void IncrementalPotential::start(double t0, const Eigen::VectorXd& y0, double h, const Eigen::VectorXd& force,
+                                 const Eigen::SparseMatrix<double>& damping) {
   const Eigen::Index n = m_.size();
   t0_ = t0;
   h_ = h;
   x0_ = y0.head(n);
   xb_ = x0_ + h * y0.tail(n);
+  if (&damping != &d0_) d0_ = damping;
   // f0 = f(t0, y0) - f_e(x0): the whole force (M a) less the elastic one
-  f0_.resize(n);
-  second_order_acceleration(system_, *system_.as<SecondOrderView>(), t0, y0, f0_, scratch_);
-  f0_ = f0_.cwiseProduct(m_);
+  f0_ = force;
   Eigen::VectorXd elastic = Eigen::VectorXd::Zero(n);
   view_.elastic_force(x0_, elastic);
   f0_ -= elastic;
-  force_jacobians(system_, view_, t0, y0, true, k_, d0_);
 }
 
 double IncrementalPotential::value(const Eigen::VectorXd& x) const {

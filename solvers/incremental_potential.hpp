@@ -35,6 +35,9 @@ class IncrementalPotential {
   IncrementalPotential(const CountedSystem& system, const MassSpringView& view);
   // the step from (t0, y0 = (x0, v0)) of length h: xb, f0 and D0 (one evaluation of f, one of its Jacobians)
   void start(double t0, const Eigen::VectorXd& y0, double h);
+  // the same from f(t0, y0) (M a) and D0 the caller has evaluated there already (a linearised step's assembly, its D
+  // the definite one): no evaluation of f's Jacobians
+  void start(double t0, const Eigen::VectorXd& y0, double h, const Eigen::VectorXd& force, const Eigen::SparseMatrix<double>& damping);
   // G(x), and its gradient (dimension nodes x 1)
   double value(const Eigen::VectorXd& x) const;
   // G(x + dx) - G(x), its quadratic and linear parts as differences (G's own terms are of order |f0| |x|, and their

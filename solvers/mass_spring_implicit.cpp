@@ -87,7 +87,10 @@ class MassSpringImplicit final : public FixedStepper {
 
     // backward Euler itself: Newton on the incremental potential G (incremental_potential.hpp), from the
     // linearised step's answer, to the step's velocity tolerance
-    potential_.start(t, y, h);
+    if (options_.definite)
+      potential_.start(t, y, h, bw_.force(), bw_.damping());  // the linearised step's f and D at (t, y): D0 is the definite D
+    else
+      potential_.start(t, y, h);
     x_newton_ = y_next.head(n_);
     if (const std::string why = newton_.minimise(potential_, x_newton_, system_.stats()); !why.empty()) {
       ++system_.stats().rejected;

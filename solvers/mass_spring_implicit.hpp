@@ -65,6 +65,7 @@ class BaraffWitkinSystem {
   const Eigen::SparseMatrix<double>& matrix() const { return a_; }
   const Eigen::VectorXd& rhs() const { return b_; }
   const Eigen::VectorXd& force() const { return f_; }  // f at the last assembly
+  const Eigen::SparseMatrix<double>& damping() const { return d_; }  // D = df/dv at the last assemble_matrix
   const Eigen::VectorXd& mass() const { return m_; }   // per coordinate
 
  private:
