@@ -45,6 +45,17 @@ GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, 
     if (deepest > max_formula_depth)
       throw BadEquations(fmt::format("{}: nested more than {} deep", f.where(static_cast<int>(i) + 1), max_formula_depth));
   }
+  // a call without arguments, `exp()`: GiNaC's parser takes an empty list for a variadic call, finds the function's
+  // one-argument reader and reads its missing argument (a null dereference inside libginac)
+  for (size_t open = text.find('('); open != std::string::npos; open = text.find('(', open + 1)) {
+    const size_t inside = text.find_first_not_of(" \t", open + 1), before = text.find_last_not_of(" \t", open == 0 ? 0 : open - 1);
+    const auto in_name = [&](size_t k) { return std::isalnum(static_cast<unsigned char>(text[k])) || text[k] == '_'; };
+    if (open == 0 || before == std::string::npos || !in_name(before) || inside == std::string::npos || text[inside] != ')') continue;
+    size_t start = before;
+    while (start > 0 && in_name(start - 1)) --start;
+    throw BadEquations(fmt::format("{}: {}() has no argument (a formula may call {})", f.where(static_cast<int>(start) + 1),
+                                   text.substr(start, before + 1 - start), function_list));
+  }
   GiNaC::symtab table;
   table["pi"] = GiNaC::Pi;  // a variable or parameter of that name takes its place
   if (allow_variables)
