@@ -107,6 +107,9 @@ GiNaC::ex parse(const Formula& f, const Symbols& symbols, bool allow_variables, 
     const bool variable = std::find(symbols.variable_names.begin(), symbols.variable_names.end(), name) != symbols.variable_names.end();
     throw BadEquations(fmt::format("{}: {} '{}' (defined: {}{})", f.where(std::max(1, column_of(text, name))),
                                    variable ? "this formula cannot use the variable" : "unknown symbol", name, defined, allow_time ? "; and t" : ""));
+  } catch (const std::domain_error& e) {
+    // GiNaC evaluates as it reads: `/0` is its pole_error, "power::eval(): division by zero"
+    throw BadEquations(fmt::format("{}: {}", f.where(), e.what()));
   }
 }
 
