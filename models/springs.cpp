@@ -190,7 +190,7 @@ SpringNetwork::SpringNetwork(std::vector<double> mass, std::vector<Spring> sprin
     const Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(n);
     add_spring_forces(view_.springs, x.data(), at_rest.data(), f.data(), view_.dimension);
   };
-  view_.elastic_jacobian = [this, n](const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx) {
+  view_.elastic_jacobian = [this](const Eigen::Ref<const Eigen::VectorXd>& x, bool definite, Eigen::SparseMatrix<double>& dfdx) {
     pattern_.zero(dfdx);
     add_spring_force_jacobians(view_.springs, slots_, x.data(), nullptr, definite, dfdx, nullptr, view_.dimension);
   };
