@@ -276,14 +276,17 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
             if (both_free(tri[i], tri[j])) slots[3 * i + j] = pattern_->slot(free_index_[tri[i]], free_index_[tri[j]]);
         triangle_slots_.push_back(slots);
       }
-    for (const auto& s : stencils_) {
-      const size_t m = s.node.size();
-      std::vector<BlockPattern::Slot> slots(m * m);
-      for (size_t i = 0; i < m; ++i)
-        for (size_t j = 0; j < m; ++j)
-          if (both_free(s.node[i], s.node[j])) slots[m * i + j] = pattern_->slot(free_index_[s.node[i]], free_index_[s.node[j]]);
-      stencil_slots_.push_back(std::move(slots));
-    }
+    // the bending's force Jacobian, -D Q on each stencil's nodes, is constant: its values on the pattern, once
+    if (stencils_.empty()) return;
+    Eigen::SparseMatrix<double> bending;
+    pattern_->zero(bending);
+    for (const BendingStencil& s : stencils_)
+      for (size_t i = 0; i < s.node.size(); ++i)
+        for (size_t j = 0; j < s.node.size(); ++j)
+          if (both_free(s.node[i], s.node[j]))
+            pattern_->add(bending, free_index_[s.node[i]], free_index_[s.node[j]],
+                          -material_.bending * s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * Eigen::Matrix3d::Identity());
+    bending_jacobian_ = Eigen::Map<const Eigen::VectorXd>(bending.valuePtr(), bending.nonZeros());
   }
 
  public:
@@ -516,36 +519,25 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
     }
   }
 
-  // the continuum's df/dx added on the pattern (definite: each element's Hessian projected to PSD)
+  // an element's 9 x 9 Jacobian added on the pattern, its free corners' blocks
+  void add_element(size_t k, const Matrix9d& J, Eigen::SparseMatrix<double>& to) const {
+    const MembraneElement& e = elements_[k];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (free_index_[e.node[i]] >= 0 && free_index_[e.node[j]] >= 0) BlockPattern::add(to, triangle_slots_[k][3 * i + j], J.block<3, 3>(3 * i, 3 * j));
+  }
+
+  // the continuum's df/dx added on the pattern (definite: each element's semidefinite approximation, membrane.hpp)
   void add_continuum_force_jacobian(const double* x, bool definite, Eigen::SparseMatrix<double>& dfdx) const {
-    for (size_t k = 0; k < elements_.size(); ++k) {
-      const MembraneElement& e = elements_[k];
-      const Matrix9d J = membrane_force_jacobian(material_, e, corners(e.node, x), definite);
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          if (free_index_[e.node[i]] >= 0 && free_index_[e.node[j]] >= 0) BlockPattern::add(dfdx, triangle_slots_[k][3 * i + j], J.block<3, 3>(3 * i, 3 * j));
-    }
-    for (size_t k = 0; k < stencils_.size(); ++k) {
-      const BendingStencil& s = stencils_[k];
-      const size_t m = s.node.size();
-      for (size_t i = 0; i < m; ++i)
-        for (size_t j = 0; j < m; ++j)
-          if (free_index_[s.node[i]] >= 0 && free_index_[s.node[j]] >= 0)
-            BlockPattern::add(dfdx, stencil_slots_[k][m * i + j],
-                              -material_.bending * s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * Eigen::Matrix3d::Identity());
-    }
+    for (size_t k = 0; k < elements_.size(); ++k)
+      add_element(k, membrane_force_jacobian(material_, elements_[k], corners(elements_[k].node, x), definite), dfdx);
+    Eigen::Map<Eigen::VectorXd>(dfdx.valuePtr(), dfdx.nonZeros()) += bending_jacobian_;
   }
 
   // the continuum's damping: df/dv (negative semidefinite) and, exact, df/dx (the viscous stress turning with F). The
   // membrane's alone: the quadratic bending's constant Hessian times v would damp a curved sheet's rigid spin
   void add_continuum_damping_jacobians(const double* x, const double* v, bool definite, Eigen::SparseMatrix<double>& dfdx,
                                        Eigen::SparseMatrix<double>& dfdv) const {
-    const auto add_element = [&](size_t k, const Matrix9d& J, Eigen::SparseMatrix<double>& to) {
-      const MembraneElement& e = elements_[k];
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          if (free_index_[e.node[i]] >= 0 && free_index_[e.node[j]] >= 0) BlockPattern::add(to, triangle_slots_[k][3 * i + j], J.block<3, 3>(3 * i, 3 * j));
-    };
     for (size_t k = 0; k < elements_.size(); ++k) {
       const MembraneElement& e = elements_[k];
       add_element(k, membrane_damping_velocity_jacobian(material_, e, corners(e.node, x), beta_), dfdv);
@@ -673,7 +665,7 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
   std::vector<std::array<BlockPattern::Slot, 4>> spring_slots_;
   std::vector<BlockPattern::Slot> diagonal_slots_;
   std::vector<std::array<BlockPattern::Slot, 9>> triangle_slots_;  // (corner i, corner j) of each triangle
-  std::vector<std::vector<BlockPattern::Slot>> stencil_slots_;  // (node i, node j) of each bending stencil, row-major
+  Eigen::VectorXd bending_jacobian_;  // the bending stencils' df/dx, constant: its values on the pattern
 };
 
 }  // namespace

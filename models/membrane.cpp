@@ -1,6 +1,5 @@
 #include "membrane.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -76,41 +75,70 @@ Vector9d membrane_force(const MembraneMaterial& m, const MembraneElement& e, con
 
 namespace {
 
-// d^2 W / dx dx_(corner j, coordinate c): the Hessian's column for one coordinate, given F and S
-Vector9d hessian_column(const MembraneMaterial& m, const MembraneElement& e, const Eigen::Matrix<double, 3, 2>& F, const Eigen::Matrix2d& S, int j,
-                        int c) {
-  const Eigen::Matrix<double, 3, 2> dF = edge_change(j, c) * e.rest_inverse;
-  const Eigen::Matrix2d dE = symmetric_product(dF, F);
-  const Eigen::Matrix<double, 3, 2> dP = dF * S + F * membrane_stress(m, dE);
-  return corner_gradient(e.area * m.thickness * dP * e.rest_inverse.transpose());
+// the stress's tension alone: S with its negative principal stresses set to zero (a 2 x 2 symmetric's eigensystem
+// in closed form)
+Eigen::Matrix2d tension(const Eigen::Matrix2d& S) {
+  const double mean = (S(0, 0) + S(1, 1)) / 2, half = std::hypot((S(0, 0) - S(1, 1)) / 2, S(0, 1));
+  const double high = mean + half, low = mean - half;
+  if (low >= 0) return S;
+  if (high <= 0) return Eigen::Matrix2d::Zero();
+  // S = high q q^T + low (I - q q^T): its tension high q q^T = high (S - low I) / (high - low)
+  return high / (high - low) * (S - low * Eigen::Matrix2d::Identity());
 }
 
-// a symmetric matrix's negative eigenvalues set to zero
-template <class Matrix>
-Matrix semidefinite(const Matrix& H) {
-  const Eigen::SelfAdjointEigenSolver<Matrix> eigen((H + H.transpose()) / 2);
-  return eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() * eigen.eigenvectors().transpose();
-}
+// d^2 W / dx_i dx_j, the Hessian's 3 x 3 block for corners i and j, in closed form. Corner i moving by d changes F by
+// d w_i^T (w_1, w_2 the rows of Dm^-1, w_0 = -w_1 - w_2), and E by sym(F^T d w_i^T); with u_i = F w_i the second
+// variation dF : dF S' + dE : C : dE gives
+//     A h [ (w_i^T S' w_j) I + mu (w_i . w_j) F F^T + mu u_j u_i^T + lambda u_i u_j^T ],
+// its first term the geometric stiffness, S' the stress S (exact) or its tension alone (definite), the others the
+// material's, semidefinite (C's 2 mu and mu + lambda = Y / (2 (1 - nu)) are positive)
+class HessianBlocks {
+ public:
+  HessianBlocks(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, bool definite)
+      : F_(deformation_gradient(e, x)), S_(membrane_stress(m, green_strain(F_))), scale_(e.area * m.thickness), mu_(m.mu), lambda_(m.lambda) {
+    geometric_ = definite ? tension(S_) : S_;
+    w_.col(1) = e.rest_inverse.row(0).transpose();
+    w_.col(2) = e.rest_inverse.row(1).transpose();
+    w_.col(0) = -w_.col(1) - w_.col(2);
+    u_ = F_ * w_;
+    stretch_ = F_ * F_.transpose();
+  }
+  Eigen::Matrix3d operator()(int i, int j) const {
+    Eigen::Matrix3d b = (mu_ * w_.col(i).dot(w_.col(j))) * stretch_ + mu_ * u_.col(j) * u_.col(i).transpose() + lambda_ * u_.col(i) * u_.col(j).transpose();
+    b.diagonal().array() += w_.col(i).dot(geometric_ * w_.col(j));
+    return scale_ * b;
+  }
+  const Eigen::Matrix<double, 3, 2>& F() const { return F_; }
+  const Eigen::Matrix2d& S() const { return S_; }
+
+ private:
+  Eigen::Matrix<double, 3, 2> F_;
+  Eigen::Matrix2d S_, geometric_;
+  double scale_, mu_, lambda_;
+  Eigen::Matrix<double, 2, 3> w_;
+  Eigen::Matrix3d u_, stretch_;
+};
 
 }  // namespace
 
 Matrix9d membrane_force_jacobian(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, bool definite) {
-  const Eigen::Matrix<double, 3, 2> F = deformation_gradient(e, x);
-  const Eigen::Matrix2d S = membrane_stress(m, green_strain(F));
-  Matrix9d H;  // d^2 W / dx^2, a column per coordinate
-  for (int j = 0; j < 3; ++j)
-    for (int c = 0; c < 3; ++c) H.col(3 * j + c) = hessian_column(m, e, F, S, j, c);
-  return definite ? Matrix9d(-semidefinite(H)) : Matrix9d(-H);
+  const HessianBlocks H(m, e, x, definite);
+  Matrix9d J;
+  for (int i = 0; i < 3; ++i) {
+    J.block<3, 3>(3 * i, 3 * i) = -H(i, i);
+    for (int j = i + 1; j < 3; ++j) {
+      J.block<3, 3>(3 * i, 3 * j) = -H(i, j);
+      J.block<3, 3>(3 * j, 3 * i) = J.block<3, 3>(3 * i, 3 * j).transpose();
+    }
+  }
+  return J;
 }
 
 void membrane_corner(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, int j, bool definite, Eigen::Vector3d& force,
                      Eigen::Matrix3d& jacobian) {
-  const Eigen::Matrix<double, 3, 2> F = deformation_gradient(e, x);
-  const Eigen::Matrix2d S = membrane_stress(m, green_strain(F));
-  force = -corner_gradient(e.area * m.thickness * F * S * e.rest_inverse.transpose()).segment<3>(3 * j);
-  Eigen::Matrix3d H;
-  for (int c = 0; c < 3; ++c) H.col(c) = hessian_column(m, e, F, S, j, c).segment<3>(3 * j);
-  jacobian = definite ? Eigen::Matrix3d(-semidefinite(H)) : Eigen::Matrix3d(-H);
+  const HessianBlocks H(m, e, x, definite);
+  force = -corner_gradient(e.area * m.thickness * H.F() * H.S() * e.rest_inverse.transpose()).segment<3>(3 * j);
+  jacobian = -H(j, j);
 }
 
 Vector9d membrane_damping_force(const MembraneMaterial& m, const MembraneElement& e, const Corners3& x, const Corners3& v, double beta) {

@@ -164,18 +164,41 @@ std::string PotentialNewton::factor_positive_definite(const IncrementalPotential
 }
 
 bool PotentialNewton::preconditioned_direction(double forcing, Stats& stats) {
-  cg_.preconditioner().use(&factor_);
-  cg_.compute(a_);
-  cg_.setTolerance(forcing);
-  cg_.setMaxIterations(options_.max_cg_iterations);
-  dx_ = cg_.solve(rhs_.col(0));
-  stats.linear_solves += cg_.iterations() + 1;  // a preconditioner solve an iteration, and the first
-  if (cg_.info() != Eigen::Success) return false;
-  const Eigen::VectorXd dx = dx_.col(0);
-  return dx.dot(a_ * dx) > 0 && rhs_.col(0).dot(dx) > 0;
+  // Newton-CG (Nocedal & Wright, Algorithm 7.1, preconditioned): CG on a_ dx = b from dx = 0, stopped where
+  // |b - a_ dx| <= forcing |b|, or where a direction p has p^T a_ p <= 0 (a_ indefinite there: the iterate so far is
+  // returned, a descent direction of G; at the first, the preconditioned residual P^-1 b, descent as P is definite)
+  const auto precondition = [&](const Eigen::VectorXd& r) {
+    ++stats.linear_solves;
+    return factor_.solve(r, z_).empty() && z_.allFinite();
+  };
+  const Eigen::VectorXd& b = rhs_.col(0);
+  dx_.setZero(b.size(), 1);
+  r_ = b;
+  if (!precondition(r_)) return false;
+  p_ = z_.col(0);
+  double rz = r_.dot(p_);
+  const double target = forcing * b.norm();
+  for (int j = 0; j < options_.max_cg_iterations; ++j) {
+    ap_.noalias() = a_ * p_;
+    const double curvature = p_.dot(ap_);
+    if (!(curvature > 0)) {
+      if (j == 0) dx_.col(0) = p_;
+      return true;
+    }
+    const double alpha = rz / curvature;
+    dx_.col(0) += alpha * p_;
+    r_ -= alpha * ap_;
+    if (r_.norm() <= target) return true;
+    if (!precondition(r_)) return false;
+    const double next = r_.dot(z_.col(0));
+    p_ = z_.col(0) + (next / rz) * p_;
+    rz = next;
+  }
+  return false;
 }
 
 std::string PotentialNewton::minimise(const IncrementalPotential& potential, Eigen::VectorXd& x, Stats& stats) {
+  bool factored = false;  // the step's factor, of A at an earlier iterate, is there
   const double h = potential.h();
   double value = potential.value(x);
   const double start_value = value;
@@ -196,8 +219,9 @@ std::string PotentialNewton::minimise(const IncrementalPotential& potential, Eig
                                                                : options_.max_forcing;
     last_gradient = gradient;
     // the step's first direction from a fresh factor (the step has moved the matrix), the others by CG on it
-    if (iteration == 0 || !options_.inexact || !preconditioned_direction(forcing, stats)) {
+    if (!factored || !options_.inexact || !preconditioned_direction(forcing, stats)) {
       if (auto e = factor_positive_definite(potential, x, stats); !e.empty()) return e;
+      factored = true;
       if (auto e = factor_.solve(rhs_, dx_); !e.empty()) return e;
       ++stats.linear_solves;
     }

@@ -17,7 +17,6 @@
 #include <stepwise/solvers/run_support.hpp>
 #include <stepwise/solvers/sparse_cholesky.hpp>
 
-#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCore>
 
 #include <functional>
@@ -94,8 +93,11 @@ class IncrementalPotential {
 // converges linearly, 0.88 an iteration on the flag's first step at 1/30 s.) The later directions solve
 // A dx = -h^2 grad G (A = h^2 G's exact Hessian there) by conjugate gradients preconditioned by that factor, to a
 // relative residual of Eisenstat & Walker's forcing term (loose far from the minimiser, quadratic convergence at the
-// end); where CG needs more than max_cg_iterations, or ends on a direction along which A's curvature is not positive
-// or G does not descend, A is factored afresh the same way. (A factor kept from an earlier step, as Gast et al. 2015
+// end). Where A is indefinite CG meets a direction of curvature p^T A p <= 0 and stops there, its iterate so far taken
+// (Newton-CG's truncation, Nocedal & Wright's Algorithm 7.1: every CG iterate before it is a descent direction of G;
+// at the first, the factor's direction itself); where CG needs more than max_cg_iterations, A is factored afresh the
+// same way. (Factoring afresh at a non-positive curvature too, as this did before, cost the continuum flag's first
+// second 3.5 factorisations a frame, the mass term's raises most of them; truncated, 2.7.) (A factor kept from an earlier step, as Gast et al. 2015
 // keep one, needs four times the CG iterations on the gusting continuum flag, and its directions lead Newton, on
 // that buckling sheet, to another of backward Euler's solutions within seconds: 18 px away at 3 s.)
 // Each step is halved until G falls by Armijo's fraction of the decrease the gradient predicts (a descent direction
@@ -126,16 +128,16 @@ class PotentialNewton {
  private:
   // the factor of a_ (the exact scaled Hessian at x) or of a positive definite modification of it
   std::string factor_positive_definite(const IncrementalPotential& potential, const Eigen::VectorXd& x, Stats& stats);
-  // dx_ from CG on a_ dx = rhs_ preconditioned by the kept factor, to relative residual `forcing`; false where it
-  // did not converge or its direction is no descent direction of positive curvature
+  // dx_ from CG on a_ dx = rhs_ preconditioned by the kept factor, to relative residual `forcing` or to a direction of
+  // non-positive curvature (truncated there); false where it did not converge in max_cg_iterations
   bool preconditioned_direction(double forcing, Stats& stats);
   NewtonOnPotential options_;
   double shift_ = 0;  // the last mass term raise that gave a factor
   SparseCholesky factor_;
   bool analysed_ = false;
-  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, FactorPreconditioner> cg_;
   Eigen::SparseMatrix<double> a_;
-  Eigen::VectorXd g_, trial_;
+  Eigen::VectorXd g_, trial_, r_, p_, ap_;
+  Eigen::MatrixXd z_;
   Eigen::MatrixXd rhs_, dx_;
 };
 

@@ -76,8 +76,8 @@ TEST(Membrane, ForceJacobianIsTheForceDerivative) {
 
 TEST(Membrane, DefiniteJacobianIsSemidefiniteAndExactWhereStretchedBothWays) {
   const MembraneElement e = element();
-  // stretched 1% and 2% along the sheet's two axes: StVK's Hessian is
-  // semidefinite there, the projection a no-op
+  // stretched 1% and 2% along the sheet's two axes: StVK's Hessian is semidefinite there, and the definite one (the
+  // geometric stiffness of the stress's tension alone) the same
   Corners3 stretched{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.101, 0.0102, 0), Eigen::Vector3d(0.0202, 0.0816, 0)};
   const Matrix9d exact = membrane_force_jacobian(material, e, stretched, false);
   EXPECT_LT((membrane_force_jacobian(material, e, stretched, true) - exact).lpNorm<Eigen::Infinity>(),
@@ -90,6 +90,17 @@ TEST(Membrane, DefiniteJacobianIsSemidefiniteAndExactWhereStretchedBothWays) {
   const double scale = exact_compressed.lpNorm<Eigen::Infinity>();
   EXPECT_LT(lowest(exact_compressed), -1e-3 * scale);
   EXPECT_GT(lowest(membrane_force_jacobian(material, e, compressed, true)), -tolerance::element_roundoff * scale);
+  // what the definite Hessian adds to the exact one is the compressive principal stresses' geometric stiffness,
+  // -s_k (w_i . q_k)(w_j . q_k) I: semidefinite, of rank three a compressive stress (compressed 10% both ways; 10%
+  // across and stretched 10% down)
+  Corners3 compressed_across{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.09, 0.011, 0), Eigen::Vector3d(0.018, 0.088, 0)};
+  for (const auto& [x, compressive] : {std::pair{compressed, 2}, std::pair{compressed_across, 1}}) {
+    const Matrix9d added = membrane_force_jacobian(material, e, x, false) - membrane_force_jacobian(material, e, x, true);
+    const Eigen::VectorXd eigenvalues = symmetric_eigenvalues((added + added.transpose()) / 2);
+    EXPECT_GT(eigenvalues.minCoeff(), -tolerance::element_roundoff * scale) << compressive;
+    EXPECT_GT(eigenvalues.maxCoeff(), 1e-3 * scale) << compressive;
+    EXPECT_EQ((eigenvalues.array() > tolerance::element_roundoff * scale).count(), 3 * compressive) << compressive;
+  }
 }
 
 // an n x n grid of spacing 1 / (n - 1) in the x-y plane (node (r, c) is r n + c) and the plate's bending stencils on it
