@@ -16,6 +16,11 @@ constexpr int max_halvings = 30;  // the shortest step tried: 2^-30 of Newton's
 constexpr double min_shift = 1.0 / 64, max_shift = 64;
 // G's round-off: a few dozen ulps of it, the sum of its terms' (inertia, the forces' work, the elements' energies)
 constexpr double round_off_decrease = 64 * std::numeric_limits<double>::epsilon();
+// CG's direction is refined until the correction left moves no node by more than this fraction of what the velocity
+// tolerance allows a step (the correction as the factor predicts it, when the factor is of the exact Hessian at an
+// earlier iterate of the step: of a raised or semidefinite one, it underestimates the correction along the modes it
+// stiffens)
+constexpr double refinement = 0.1;
 
 }  // namespace
 
@@ -143,7 +148,8 @@ double IncrementalPotential::vertex_change(int i, const Eigen::VectorXd& x, cons
 
 std::string PotentialNewton::factor_positive_definite(const IncrementalPotential& potential, const Eigen::VectorXd& x, Stats& stats) {
   ++stats.factorizations;
-  if (factor_.factorize(a_).empty()) {
+  factored_exact_ = factor_.factorize(a_).empty();
+  if (factored_exact_) {
     shift_ = 0;
     return "";
   }
@@ -163,19 +169,25 @@ std::string PotentialNewton::factor_positive_definite(const IncrementalPotential
   return factor_.factorize(a_);
 }
 
-bool PotentialNewton::preconditioned_direction(double forcing, Stats& stats) {
+bool PotentialNewton::preconditioned_direction(double forcing, double enough, Stats& stats) {
   // Newton-CG (Nocedal & Wright, Algorithm 7.1, preconditioned): CG on a_ dx = b from dx = 0, stopped where
   // |b - a_ dx| <= forcing |b|, or where a direction p has p^T a_ p <= 0 (a_ indefinite there: the iterate so far is
-  // returned, a descent direction of G; at the first, the preconditioned residual P^-1 b, descent as P is definite)
+  // returned, a descent direction of G; at the first, the preconditioned residual P^-1 b, descent as P is definite).
+  // Stopped too where the correction the factor predicts, z = P^-1 r, moves no node by more than `enough`: the
+  // direction is then within that of a_^-1 b, and more iterations would refine what the stopping rule cannot see
   const auto precondition = [&](const Eigen::VectorXd& r) {
     ++stats.linear_solves;
     return factor_.solve(r, z_).empty() && z_.allFinite();
   };
   const Eigen::VectorXd& b = rhs_.col(0);
-  dx_.setZero(b.size(), 1);
   r_ = b;
   if (!precondition(r_)) return false;
   p_ = z_.col(0);
+  dx_.setZero(b.size(), 1);
+  if (p_.lpNorm<Eigen::Infinity>() <= enough) {
+    dx_.col(0) = p_;
+    return true;
+  }
   double rz = r_.dot(p_);
   const double target = forcing * b.norm();
   for (int j = 0; j < options_.max_cg_iterations; ++j) {
@@ -190,6 +202,7 @@ bool PotentialNewton::preconditioned_direction(double forcing, Stats& stats) {
     r_ -= alpha * ap_;
     if (r_.norm() <= target) return true;
     if (!precondition(r_)) return false;
+    if (z_.col(0).lpNorm<Eigen::Infinity>() <= enough) return true;
     const double next = r_.dot(z_.col(0));
     p_ = z_.col(0) + (next / rz) * p_;
     rz = next;
@@ -219,7 +232,7 @@ std::string PotentialNewton::minimise(const IncrementalPotential& potential, Eig
                                                                : options_.max_forcing;
     last_gradient = gradient;
     // the step's first direction from a fresh factor (the step has moved the matrix), the others by CG on it
-    if (!factored || !options_.inexact || !preconditioned_direction(forcing, stats)) {
+    if (!factored || !options_.inexact || !preconditioned_direction(forcing, factored_exact_ ? refinement * options_.velocity_tolerance * h : 0.0, stats)) {
       if (auto e = factor_positive_definite(potential, x, stats); !e.empty()) return e;
       factored = true;
       if (auto e = factor_.solve(rhs_, dx_); !e.empty()) return e;

@@ -128,11 +128,13 @@ class PotentialNewton {
  private:
   // the factor of a_ (the exact scaled Hessian at x) or of a positive definite modification of it
   std::string factor_positive_definite(const IncrementalPotential& potential, const Eigen::VectorXd& x, Stats& stats);
-  // dx_ from CG on a_ dx = rhs_ preconditioned by the kept factor, to relative residual `forcing` or to a direction of
-  // non-positive curvature (truncated there); false where it did not converge in max_cg_iterations
-  bool preconditioned_direction(double forcing, Stats& stats);
+  // dx_ from CG on a_ dx = rhs_ preconditioned by the kept factor, to relative residual `forcing`, or to a correction
+  // left that moves no node by more than `enough` (m), or to a direction of non-positive curvature (truncated there);
+  // false where it did not converge in max_cg_iterations
+  bool preconditioned_direction(double forcing, double enough, Stats& stats);
   NewtonOnPotential options_;
   double shift_ = 0;  // the last mass term raise that gave a factor
+  bool factored_exact_ = false;  // the factor is of the exact Hessian (not raised, not semidefinite)
   SparseCholesky factor_;
   bool analysed_ = false;
   Eigen::SparseMatrix<double> a_;
