@@ -96,10 +96,13 @@ class IncrementalPotential {
 // end). Where A is indefinite CG meets a direction of curvature p^T A p <= 0 and stops there, its iterate so far taken
 // (Newton-CG's truncation, Nocedal & Wright's Algorithm 7.1: every CG iterate before it is a descent direction of G;
 // at the first, the factor's direction itself); where CG needs more than max_cg_iterations, A is factored afresh the
-// same way. (Factoring afresh at a non-positive curvature too, as this did before, cost the continuum flag's first
-// second 3.5 factorisations a frame, the mass term's raises most of them; truncated, 2.7.) (A factor kept from an earlier step, as Gast et al. 2015
-// keep one, needs four times the CG iterations on the gusting continuum flag, and its directions lead Newton, on
-// that buckling sheet, to another of backward Euler's solutions within seconds: 18 px away at 3 s.)
+// same way. (Factoring afresh at a non-positive curvature instead costs the continuum flag's first second 3.5
+// factorisations a frame, the mass term's raises most of them; truncated, 2.6.) CG also stops where the correction the
+// factor predicts (P^-1 r, on a factor of the exact Hessian) moves no node by a tenth of what the velocity tolerance
+// allows: the last direction of a step, which only has to show that it is short, then costs a few iterations. (A
+// factor kept from an earlier step, as Gast et al. 2015 keep one, needs four times the CG iterations on the gusting
+// continuum flag, and its directions lead Newton, on that buckling sheet, to another of backward Euler's solutions
+// within seconds: 18 px away at 3 s.)
 // Each step is halved until G falls by Armijo's fraction of the decrease the gradient predicts (a descent direction
 // of a positive definite model always finds one). Converged when the step moves no node faster than
 // `velocity_tolerance` (|dx|inf / h, as IPC judges it), or when the decrease it predicts is G's round-off
