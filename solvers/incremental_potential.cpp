@@ -20,7 +20,7 @@ constexpr double round_off_decrease = 64 * std::numeric_limits<double>::epsilon(
 // tolerance allows a step (the correction as the factor predicts it, when the factor is of the exact Hessian at an
 // earlier iterate of the step: of a raised or semidefinite one, it underestimates the correction along the modes it
 // stiffens)
-constexpr double refinement = 0.1;
+constexpr double refinement = 0.01;
 
 }  // namespace
 
