@@ -4,8 +4,9 @@
 //   (M - h D - h^2 K) dv = h (f0 + h K v0),   v1 = v0 + dv,   x1 = x0 + h v1,
 // the backward Euler step linearised once. With `newton`, backward Euler itself: the step's incremental potential
 // G (incremental_potential.hpp: the elastic forces implicit, the others at the step's start) minimised by Newton
-// from the linearised step's answer, each element's Hessian made semidefinite, a line search on G, to a step that
-// moves no node faster than the velocity tolerance. (A Newton on the residual's norm with GMRES on the exact
+// from the linearised step's answer (inexact Newton on G's exact Hessian, modified where that is not positive
+// definite: incremental_potential.hpp), a line search on G, to a step that moves no node faster than the velocity
+// tolerance. (A Newton on the residual's norm with GMRES on the exact
 // Jacobian was measured before it: it stalls where a buckling sheet makes the energy non-convex, at points that
 // are no root, and failed the flag at every step from 1/120 s up.)
 //
