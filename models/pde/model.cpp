@@ -253,6 +253,7 @@ class Pde final : public Model, public DenseJacobian, public SparseJacobian {
   }
 
   void build(const PdeSpec& spec, const Params& values, bool compile);
+  void check_start(const PdeSpec& s, const Eigen::VectorXd& y0) const;
   void make_grid(const PdeSpec& s);
   PdeSymbols make_symbols(const PdeSpec& s);
   void make_field_tapes(const PdeSpec& s, PdeSymbols& ps, Derived& derived);
@@ -354,12 +355,30 @@ void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
   start_native(compile);
   if (!exact_.empty()) info_.exact = [this](double t) { return on_grid(exact_, t); };
   const Eigen::VectorXd y0 = initial_state();
+  check_start(s, y0);
   for (int f = 0; f < fields(); ++f) {
     const auto u = y0.segment(Eigen::Index{f} * grid_.nodes(), grid_.nodes());
     std::array<double, 2> range{u.minCoeff(), u.maxCoeff()};
     if (!(range[1] > range[0])) range[1] = range[0] + std::max(1.0, std::abs(range[0]));
     drawn_range_.push_back(range);
   }
+}
+
+// each field's equation finite at the initial state (a coefficient the parameters make infinite, 1/(k - 0.06) at
+// k = 0.06, would have every method diverge at t = 0): the formula and the first node where it is not, before any
+// method runs. A start that is itself not finite is the run's to refuse (run/prepare.cpp: the parameters)
+void Pde::check_start(const PdeSpec& s, const Eigen::VectorXd& y0) const {
+  if (!y0.allFinite()) return;
+  Eigen::VectorXd dydt(y0.size());
+  rhs(0, y0, dydt);
+  if (dydt.allFinite()) return;
+  Eigen::Index at = 0;
+  while (std::isfinite(dydt[at])) ++at;
+  const auto field = static_cast<size_t>(at / grid_.nodes());
+  const auto node = static_cast<size_t>(at % grid_.nodes());
+  const auto equations = by_field(s.equations, s.fields, s.file, "equations", true);
+  throw BadEquations(fmt::format("{}: the formula is {} at the initial state (t = 0, x = {:g}{})", equations[field]->where(), dydt[at], info_.x[node],
+                                 s.dimension == 2 ? fmt::format(", y = {:g}", info_.y[node]) : std::string()));
 }
 
 // a 2-D grid's fields as pictures side by side, one colour range over an animation; a 1-D grid's as curves
