@@ -364,9 +364,10 @@ void Pde::build(const PdeSpec& spec, const Params& values, bool compile) {
   }
 }
 
-// each field's equation finite at the initial state (a coefficient the parameters make infinite, 1/(k - 0.06) at
-// k = 0.06, would have every method diverge at t = 0): the formula and the first node where it is not, before any
-// method runs. A start that is itself not finite is the run's to refuse (run/prepare.cpp: the parameters)
+// each field's rate finite at the initial state (a coefficient the parameters make infinite, 1/(k - 0.06) at
+// k = 0.06, or a side's value sqrt(t), would have every method diverge at t = 0): the formula that gives the first
+// node where it is not (the field's equation, or on a Dirichlet side's node that side's value, whose rate in t the
+// state holds), before any method runs. A start that is itself not finite is the run's to refuse (run/prepare.cpp)
 void Pde::check_start(const PdeSpec& s, const Eigen::VectorXd& y0) const {
   if (!y0.allFinite()) return;
   Eigen::VectorXd dydt(y0.size());
@@ -376,8 +377,14 @@ void Pde::check_start(const PdeSpec& s, const Eigen::VectorXd& y0) const {
   while (std::isfinite(dydt[at])) ++at;
   const auto field = static_cast<size_t>(at / grid_.nodes());
   const auto node = static_cast<size_t>(at % grid_.nodes());
-  const auto equations = by_field(s.equations, s.fields, s.file, "equations", true);
-  throw BadEquations(fmt::format("{}: the formula is {} at the initial state (t = 0, x = {:g}{})", equations[field]->where(), dydt[at], info_.x[node],
+  std::string where;
+  if (const int side = boundaries_[field].dirichlet_side[node]; side >= 0) {
+    const auto b = std::find_if(s.boundary.begin(), s.boundary.end(), [&](const auto& entry) { return entry.first == s.fields[field]; });
+    where = b->second.sides[static_cast<size_t>(side)]->formula.where() + " (its rate in t)";
+  } else {
+    where = by_field(s.equations, s.fields, s.file, "equations", true)[field]->where();
+  }
+  throw BadEquations(fmt::format("{}: the formula is {} at the initial state (t = 0, x = {:g}{})", where, dydt[at], info_.x[node],
                                  s.dimension == 2 ? fmt::format(", y = {:g}", info_.y[node]) : std::string()));
 }
 
