@@ -42,6 +42,9 @@ class IncrementalPotential {
   // G(x + dx) - G(x), its quadratic and linear parts as differences (G's own terms are of order |f0| |x|, and their
   // round-off would hide the last Newton steps' decrease), the elastic part as Psi's difference
   double change(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
+  // the same from Psi(x) known, and Psi(x + dx) given back (a line search's accepted trial is its next x)
+  double change(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double elastic_at_x, double& elastic_after) const;
+  double elastic(const Eigen::VectorXd& x) const;  // Psi(x)
   void gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;
   // h^2 times G's Hessian, M - h D0 - h^2 K(x): exact (positive definite near a minimum, where Newton then converges
   // quadratically), or (definite) with each spring's or element's Hessian made semidefinite, positive definite
@@ -87,8 +90,9 @@ class IncrementalPotential {
 
 // Newton on G, from `x` (a first guess) to the minimiser, in x: an inexact Newton (Dembo, Eisenstat & Steihaug 1982).
 // The first direction comes from the sparse Cholesky factor (its analysis kept across steps) of G's exact Hessian at
-// the first guess where it is positive definite, else of that Hessian with its mass term raised (A + tau M, tau grown
-// fourfold until the factor exists), else of the one made semidefinite element by element. (Projecting every element,
+// the first guess where it is positive definite, else of that Hessian with its mass term raised (A + tau M, tau from
+// a quarter of the last raise that served, grown fourfold until the factor exists), else of the one made semidefinite
+// element by element. (Projecting every element,
 // as IPC does, drops the negative curvature of compressed springs that the mass term would carry: Newton then
 // converges linearly, 0.88 an iteration on the flag's first step at 1/30 s.) The later directions solve
 // A dx = -h^2 grad G (A = h^2 G's exact Hessian there) by conjugate gradients preconditioned by that factor, to a
@@ -96,8 +100,9 @@ class IncrementalPotential {
 // end). Where A is indefinite CG meets a direction of curvature p^T A p <= 0 and stops there, its iterate so far taken
 // (Newton-CG's truncation, Nocedal & Wright's Algorithm 7.1: every CG iterate before it is a descent direction of G;
 // at the first, the factor's direction itself); where CG needs more than max_cg_iterations, A is factored afresh the
-// same way. (Factoring afresh at a non-positive curvature instead costs the continuum flag's first second 3.5
-// factorisations a frame, the mass term's raises most of them; truncated, 2.6.) CG also stops where the correction the
+// same way. (Factoring afresh at a non-positive curvature instead cost the continuum flag's first second 3.5
+// factorisations a frame, the mass term's raises most of them, against 2.6 truncated, both from a converged linearised
+// first guess.) CG also stops where the correction the
 // factor predicts (P^-1 r, on a factor of the exact Hessian) moves no node by a hundredth of what the velocity
 // tolerance allows: the last direction of a step, which only has to show that it is short, then costs a few
 // iterations. (A tenth saves a few more, but left the continuum flag's 14th step at 1/60 s 1% short of converged as
@@ -129,6 +134,10 @@ class PotentialNewton {
   // "" when converged, else why not (naming the iteration, G's decrease and the last step); counts its iterations,
   // halvings, factorisations and solves into stats
   std::string minimise(const IncrementalPotential& potential, Eigen::VectorXd& x, Stats& stats);
+  // the last factor (of the exact scaled Hessian at an iterate of the last step, or of its positive definite
+  // modification), or null before the first: a preconditioner for a nearby matrix
+  const SparseCholesky* factor() const { return factor_.factored() ? &factor_ : nullptr; }
+  int max_cg_iterations() const { return options_.max_cg_iterations; }
 
  private:
   // the factor of a_ (the exact scaled Hessian at x) or of a positive definite modification of it
@@ -138,7 +147,7 @@ class PotentialNewton {
   // false where it did not converge in max_cg_iterations
   bool preconditioned_direction(double forcing, double enough, Stats& stats);
   NewtonOnPotential options_;
-  double shift_ = 0;  // the last mass term raise that gave a factor
+  double shift_ = 0;  // the last mass term raise that gave a factor (the largest, where none did)
   bool factored_exact_ = false;  // the factor is of the exact Hessian (not raised, not semidefinite)
   SparseCholesky factor_;
   bool analysed_ = false;

@@ -120,6 +120,7 @@ SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
 SparseCholesky::~SparseCholesky() = default;
 
 const CholeskyAnalysis& SparseCholesky::analysis() const { return impl_->analysis; }
+bool SparseCholesky::factored() const { return impl_->factored; }
 
 std::string SparseCholesky::analyze(const Eigen::SparseMatrix<double>& a, Ordering ordering) {
   const SerialOpenMP serial;

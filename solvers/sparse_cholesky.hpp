@@ -47,6 +47,8 @@ class SparseCholesky {
   // x = A^-1 b for each column of b with the last factor; "" or the failing CHOLMOD call and its status
   std::string solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const;
   const CholeskyAnalysis& analysis() const;
+  // whether a factor is there to solve with (the last factorisation succeeded)
+  bool factored() const;
 
  private:
   struct Impl;
