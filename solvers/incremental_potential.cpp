@@ -160,9 +160,9 @@ std::string PotentialNewton::factor_positive_definite(const IncrementalPotential
   if (factored_exact_) return "";
   // not positive definite here: the exact Hessian with its mass term raised, A + tau M (Nocedal & Wright's Hessian
   // modification, in the mass's metric), tau from a quarter of the last one that served (kept through the exact
-  // factors between, as IPOPT keeps its last regularisation: the sheet buckles again much as it did; from the
-  // smallest each time, the continuum flag's first second takes 1.67 factorisations a frame against 1.52), raised
-  // fourfold until the factor exists; past that, the semidefinite elements' Hessian
+  // factors between, as IPOPT keeps its last regularisation: the sheet buckles again much as it did; measured against
+  // starting from the smallest each time: docs/performance-cloth.md), raised fourfold until the factor exists; past
+  // that, the semidefinite elements' Hessian
   const Eigen::SparseMatrix<double> exact = a_;
   for (shift_ = std::max(shift_ / 4, min_shift); shift_ <= max_shift; shift_ *= 4) {
     a_ = exact;

@@ -108,14 +108,13 @@ class MassSpringImplicit final : public FixedStepper {
   }
 
  private:
-  // with Newton after it (and factors kept), the linearised step is only Newton's first guess (its step from x0 + h v0 on the definite
-  // Hessian at the step's start) and is solved inexactly, as Newton's own later directions are: CG preconditioned by
-  // Newton's last factor (of the exact Hessian at an iterate of the last step, near this step's start: fresher than a
-  // factor the linearised step keeps), from the last step's dv, to a relative residual of guess_residual, or for at
-  // most Newton's CG iterations, the iterate then taken. Newton moves on from wherever it lands; measured on the
-  // continuum flag's first second at 1/60 s (bench_cloth), 1.67 factorisations a frame where a converged linearised
-  // step (its own kept factor refreshed when it stops paying) cost 2.6, for the same Newton iterations.
-  // (Newton's factor preconditions the tight solve no better: about 15 more iterations a frame, a factorisation's cost.)
+  // with Newton after it (and factors kept), the linearised step is only Newton's first guess (its step from
+  // x0 + h v0 on the definite Hessian at the step's start) and is solved inexactly, as Newton's own later directions
+  // are: CG preconditioned by Newton's last factor (of the exact Hessian at an iterate of the last step, near this
+  // step's start: fresher than a factor the linearised step keeps), from the last step's dv, to a relative residual
+  // of guess_residual, or for at most Newton's CG iterations, the iterate then taken. Newton moves on from wherever it
+  // lands: a converged guess saves it no iteration, and costs factorisations (measured against this and against
+  // Newton's factor for the tight solve: docs/performance-cloth.md, backward Euler's Newton)
   bool first_guess(double t, std::string& failure) {
     cg_.preconditioner().use(newton_.factor());
     cg_.compute(bw_.matrix());

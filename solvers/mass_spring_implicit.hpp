@@ -7,9 +7,9 @@
 // from the linearised step's answer (inexact Newton on G's exact Hessian, modified where that is not positive
 // definite: incremental_potential.hpp), a line search on G, to a step that moves no node faster than the velocity
 // tolerance. The linearised step is then only Newton's first guess, solved inexactly (kept_factor): CG preconditioned
-// by Newton's last factor, to a relative residual of 1e-2 (mass_spring_implicit.cpp). (A Newton on the residual's norm with GMRES on the exact
-// Jacobian was measured before it: it stalls where a buckling sheet makes the energy non-convex, at points that
-// are no root, and failed the flag at every step from 1/120 s up.)
+// by Newton's last factor to a loose relative residual (mass_spring_implicit.cpp, guess_residual). (A Newton on the
+// residual's norm with GMRES on the exact Jacobian was measured before it: it stalls where a buckling sheet makes the
+// energy non-convex, at points that are no root, and failed the flag at every step from 1/120 s up.)
 //
 // The matrix is symmetric positive definite and its pattern never changes: CHOLMOD analyses it once (AMD or
 // METIS, whichever factor is cheaper) and factorises it with the analysis kept. How each solve is done:

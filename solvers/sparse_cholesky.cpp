@@ -91,8 +91,8 @@ struct SparseCholesky::Impl {
     common.print = 0;     // failures are reported through the status, in words, by the caller
     // supernodes amalgamated more than CHOLMOD's default (4, 16, 48 columns at most before it takes no explicit
     // zero): each supernode opens Debian's CHOLMOD's OpenMP regions, each region ends with a futex call even with one
-    // thread (about 2 000 a factorisation on the 32^2 flag), and a supernode's dense kernels run faster wide; wider
-    // still (32, 128, 512) is slower again, the explicit zeros' work (measured: docs/performance-cloth.md)
+    // thread, and a supernode's dense kernels run faster wide; wider still (32, 128, 512) is slower again, the
+    // explicit zeros' work (measured: docs/performance-cloth.md)
     common.nrelax[0] = 16;
     common.nrelax[1] = 64;
     common.nrelax[2] = 256;
