@@ -487,6 +487,13 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
         if (free_index_[k] >= 0) view_.mass[free_index_[k]] += density * material_.thickness * elements_.back().area / 3;
     }
     stencils_ = plate_bending_stencils(rows_, columns_, dx, dz, material_.poisson);
+    // the stencils summed over the grid's nodes: the whole bending energy is D / 2 sum_kl B_kl x_k . x_l
+    std::vector<Eigen::Triplet<double>> entries;
+    for (const BendingStencil& s : stencils_)
+      for (size_t i = 0; i < s.node.size(); ++i)
+        for (size_t j = 0; j < s.node.size(); ++j) entries.emplace_back(s.node[i], s.node[j], s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
+    bending_nodes_.resize(rows_ * columns_, rows_ * columns_);
+    bending_nodes_.setFromTriplets(entries.begin(), entries.end());
   }
 
   Corners3 corners(const std::array<int, 3>& node, const double* x) const { return {corner(node[0], x), corner(node[1], x), corner(node[2], x)}; }
@@ -513,10 +520,16 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
       if (beta_ > 0) fe += membrane_damping_force(material_, e, corners(e.node, x), corner_velocities(e.node, v), beta_);
       for (int i = 0; i < 3; ++i) add(e.node[i], fe.segment<3>(3 * i));
     }
-    for (const BendingStencil& s : stencils_) {
-      const auto fb = bending_force(material_.bending, s, corners(s.node, x));
-      for (size_t i = 0; i < s.node.size(); ++i) add(s.node[i], fb[i]);
-    }
+    // the bending force -D (Q x) of every stencil at once: -D X B (X the grid's positions as columns; B symmetric)
+    const Eigen::Matrix3Xd bent = grid_positions(x) * bending_nodes_;
+    for (int k = 0; k < rows_ * columns_; ++k) add(k, -material_.bending * bent.col(k));
+  }
+
+  // every grid node's position (a pinned one's where it is pinned), as the columns of a 3 x nodes matrix
+  Eigen::Matrix3Xd grid_positions(const double* x) const {
+    Eigen::Matrix3Xd at(3, rows_ * columns_);
+    for (int k = 0; k < rows_ * columns_; ++k) at.col(k) = corner(k, x);
+    return at;
   }
 
   // an element's 9 x 9 Jacobian added on the pattern, its free corners' blocks
@@ -588,7 +601,9 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
     if (!continuum_) return spring_energy(view_.springs, x);
     double e = 0;
     for (const MembraneElement& m : elements_) e += membrane_energy(material_, m, corners(m.node, x));
-    for (const BendingStencil& s : stencils_) e += bending_energy(material_.bending, s, corners(s.node, x));
+    if (stencils_.empty()) return e;
+    const Eigen::Matrix3Xd at = grid_positions(x);
+    return e + material_.bending / 2 * at.cwiseProduct(at * bending_nodes_).sum();
     return e;
   }
 
@@ -645,6 +660,7 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
   double beta_;  // the continuum's Rayleigh beta (s): its viscous stress's retardation time
   std::vector<MembraneElement> elements_;  // the continuum's, one a triangle (triangles_'s order)
   std::vector<BendingStencil> stencils_;   // the continuum's bending, one a node and one a cell
+  Eigen::SparseMatrix<double> bending_nodes_;  // their Q summed over the grid's nodes (rows x columns of them)
   // each free node's elastic terms (vbd's view): springs by index; elements and stencils by (index, the node's place)
   std::vector<std::vector<int>> node_springs_;
   std::vector<std::vector<std::pair<int, int>>> node_elements_, node_stencils_;

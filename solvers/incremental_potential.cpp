@@ -21,37 +21,48 @@ constexpr double round_off_decrease = 64 * std::numeric_limits<double>::epsilon(
 // earlier iterate of the step: of a raised or semidefinite one, it underestimates the correction along the modes it
 // stiffens)
 constexpr double refinement = 0.01;
+// CG's first iterations, whose rate predicts whether the factor will serve within max_cg_iterations
+constexpr int cg_probe_iterations = 4;
 
 }  // namespace
 
-void step_matrix(const Eigen::VectorXd& mass, const Eigen::SparseMatrix<double>& d, const Eigen::SparseMatrix<double>& k, double h,
-                 Eigen::SparseMatrix<double>& a) {
-  // D and K on one pattern that holds the diagonal (the models' block patterns): A's values written in place, on the
-  // pattern A keeps from call to call, entry by entry as the sparse expression below computes them
-  const auto same_pattern = [](const Eigen::SparseMatrix<double>& p, const Eigen::SparseMatrix<double>& q) {
-    return p.isCompressed() && q.isCompressed() && p.rows() == q.rows() && p.cols() == q.cols() && p.nonZeros() == q.nonZeros() &&
-           std::equal(p.outerIndexPtr(), p.outerIndexPtr() + p.cols() + 1, q.outerIndexPtr()) &&
-           std::equal(p.innerIndexPtr(), p.innerIndexPtr() + p.nonZeros(), q.innerIndexPtr());
+void StepMatrix::operator()(const Eigen::VectorXd& mass, const Eigen::SparseMatrix<double>& d, const Eigen::SparseMatrix<double>& k, double h,
+                            Eigen::SparseMatrix<double>& a) {
+  const auto same_sizes = [&]() {
+    return d.isCompressed() && k.isCompressed() && a.isCompressed() && d.rows() == k.rows() && d.cols() == k.cols() && a.rows() == k.rows() &&
+           a.cols() == k.cols() && d.nonZeros() == k.nonZeros() && a.nonZeros() == k.nonZeros();
   };
-  if (same_pattern(d, k)) {
-    if (!same_pattern(a, k)) a = k;
-    bool diagonal = true;
-    for (Eigen::Index c = 0; c < k.cols(); ++c) {
-      bool seen = false;
-      for (Eigen::Index at = k.outerIndexPtr()[c]; at < k.outerIndexPtr()[c + 1]; ++at) {
-        const bool on = k.innerIndexPtr()[at] == c;
-        seen = seen || on;
-        a.valuePtr()[at] = ((on ? mass[c] : 0.0) - h * d.valuePtr()[at]) - (h * h) * k.valuePtr()[at];
-      }
-      diagonal = diagonal && seen;
+  if (!shared_ || !same_sizes()) {
+    const auto same_pattern = [](const Eigen::SparseMatrix<double>& p, const Eigen::SparseMatrix<double>& q) {
+      return p.isCompressed() && q.isCompressed() && p.rows() == q.rows() && p.cols() == q.cols() && p.nonZeros() == q.nonZeros() &&
+             std::equal(p.outerIndexPtr(), p.outerIndexPtr() + p.cols() + 1, q.outerIndexPtr()) &&
+             std::equal(p.innerIndexPtr(), p.innerIndexPtr() + p.nonZeros(), q.innerIndexPtr());
+    };
+    shared_ = same_pattern(d, k);
+    diagonal_.assign(static_cast<size_t>(k.cols()), -1);
+    for (Eigen::Index c = 0; shared_ && c < k.cols(); ++c) {
+      for (Eigen::Index at = k.outerIndexPtr()[c]; at < k.outerIndexPtr()[c + 1]; ++at)
+        if (k.innerIndexPtr()[at] == c) diagonal_[static_cast<size_t>(c)] = at;
+      shared_ = diagonal_[static_cast<size_t>(c)] >= 0;
     }
-    if (diagonal) return;
+    if (!shared_) {
+      Eigen::SparseMatrix<double> m(mass.size(), mass.size());
+      m.setIdentity();
+      m.diagonal() = mass;
+      a = m - h * d - (h * h) * k;
+      a.makeCompressed();
+      return;
+    }
+    if (!same_pattern(a, k)) a = k;
   }
-  Eigen::SparseMatrix<double> m(mass.size(), mass.size());
-  m.setIdentity();
-  m.diagonal() = mass;
-  a = m - h * d - (h * h) * k;
-  a.makeCompressed();
+  const double* dv = d.valuePtr();
+  const double* kv = k.valuePtr();
+  double* av = a.valuePtr();
+  for (Eigen::Index at = 0; at < k.nonZeros(); ++at) av[at] = -h * dv[at] - (h * h) * kv[at];
+  for (Eigen::Index c = 0; c < k.cols(); ++c) {
+    const Eigen::Index at = diagonal_[static_cast<size_t>(c)];
+    av[at] = (mass[c] - h * dv[at]) - (h * h) * kv[at];
+  }
 }
 
 IncrementalPotential::IncrementalPotential(const CountedSystem& system, const MassSpringView& view)
@@ -112,7 +123,7 @@ void IncrementalPotential::gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g
 
 void IncrementalPotential::scaled_hessian(const Eigen::VectorXd& x, bool definite, Eigen::SparseMatrix<double>& a) const {
   view_.elastic_jacobian(x, definite, k_);
-  step_matrix(m_, d0_, k_, h_, a);
+  step_matrix_(m_, d0_, k_, h_, a);
 }
 
 IncrementalPotential::Vertex IncrementalPotential::vertex(int i, const Eigen::VectorXd& x, bool definite, bool derivatives) const {
@@ -197,7 +208,21 @@ bool PotentialNewton::preconditioned_direction(double forcing, double enough, St
   }
   double rz = r_.dot(p_);
   const double target = forcing * b.norm();
+  const double start_residual = b.norm(), start_correction = p_.lpNorm<Eigen::Infinity>();
   for (int j = 0; j < options_.max_cg_iterations; ++j) {
+    // the first iterations' rate predicts the rest (preconditioned CG converges about geometrically here): where
+    // neither the forcing term nor `enough` would be met within max_cg_iterations, the factor is given up after them,
+    // not after all max_cg_iterations (measured: docs/performance-cloth.md, backward Euler's Newton)
+    if (j == cg_probe_iterations) {
+      constexpr double never = std::numeric_limits<double>::infinity();
+      const auto needed = [&](double now, double start, double goal) {
+        const double rate = std::pow(now / start, 1.0 / j);
+        return rate < 1 ? j + std::log(goal / now) / std::log(rate) : never;
+      };
+      const double by_residual = needed(r_.norm(), start_residual, target);
+      const double by_correction = enough > 0 ? needed(z_.col(0).lpNorm<Eigen::Infinity>(), start_correction, enough) : never;
+      if (std::min(by_residual, by_correction) > options_.max_cg_iterations) return false;
+    }
     ap_.noalias() = a_ * p_;
     const double curvature = p_.dot(ap_);
     if (!(curvature > 0)) {

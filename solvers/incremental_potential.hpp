@@ -21,13 +21,24 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace stepwise {
 
 // a = M - h D - h^2 K (M diagonal, `mass` a coordinate each): the matrix of every implicit step on a mass-spring
-// system (Baraff & Witkin's, backward Euler's Newton, h^2 times the incremental potential's Hessian)
-void step_matrix(const Eigen::VectorXd& mass, const Eigen::SparseMatrix<double>& d, const Eigen::SparseMatrix<double>& k, double h,
-                 Eigen::SparseMatrix<double>& a);
+// system (Baraff & Witkin's, backward Euler's Newton, h^2 times the incremental potential's Hessian). The models give
+// D and K on one pattern that holds the diagonal, the same at every call (MassSpringView): once a call has seen them
+// so, later calls write a's values on that pattern entry by entry, looking only at the sizes (the pattern compared
+// at every call was a fifth of the continuum's Hessian assembly); otherwise a sparse expression
+class StepMatrix {
+ public:
+  void operator()(const Eigen::VectorXd& mass, const Eigen::SparseMatrix<double>& d, const Eigen::SparseMatrix<double>& k, double h,
+                  Eigen::SparseMatrix<double>& a);
+
+ private:
+  bool shared_ = false;                 // D, K and a were seen on one pattern
+  std::vector<Eigen::Index> diagonal_;  // where each column's diagonal entry is in it
+};
 
 class IncrementalPotential {
  public:
@@ -86,6 +97,7 @@ class IncrementalPotential {
   Eigen::SparseMatrix<double> d0_;     // df/dv at the step's start (definite)
   mutable Eigen::VectorXd scratch_;
   mutable Eigen::SparseMatrix<double> k_;
+  mutable StepMatrix step_matrix_;
 };
 
 // Newton on G, from `x` (a first guess) to the minimiser, in x: an inexact Newton (Dembo, Eisenstat & Steihaug 1982).
@@ -99,8 +111,8 @@ class IncrementalPotential {
 // relative residual of Eisenstat & Walker's forcing term (loose far from the minimiser, quadratic convergence at the
 // end). Where A is indefinite CG meets a direction of curvature p^T A p <= 0 and stops there, its iterate so far taken
 // (Newton-CG's truncation, Nocedal & Wright's Algorithm 7.1: every CG iterate before it is a descent direction of G;
-// at the first, the factor's direction itself); where CG needs more than max_cg_iterations, A is factored afresh the
-// same way. (Factoring afresh at a non-positive curvature instead cost the continuum flag's first second 3.5
+// at the first, the factor's direction itself); where CG needs more than max_cg_iterations, or its first four
+// iterations' rate predicts that it would, A is factored afresh the same way. (Factoring afresh at a non-positive curvature instead cost the continuum flag's first second 3.5
 // factorisations a frame, the mass term's raises most of them, against 2.6 truncated, both from a converged linearised
 // first guess.) CG also stops where the correction the
 // factor predicts (P^-1 r, on a factor of the exact Hessian) moves no node by a hundredth of what the velocity

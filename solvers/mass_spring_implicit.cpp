@@ -29,21 +29,7 @@ BaraffWitkinSystem::BaraffWitkinSystem(const CountedSystem& system, bool definit
 
 void BaraffWitkinSystem::assemble_matrix(double t, const Eigen::VectorXd& y, double h) {
   force_jacobians(system_, view_, t, y, definite_, k_, d_);
-  // force_jacobians keeps its pattern from call to call: whether K, D and A share one is found at the first
-  // call, and then A's values come straight from theirs
-  if (shared_pattern_) {
-    const double* k = k_.valuePtr();
-    const double* d = d_.valuePtr();
-    double* a = a_.valuePtr();
-    for (Eigen::Index s = 0; s < a_.nonZeros(); ++s) a[s] = -h * d[s] - h * h * k[s];
-    a_.diagonal() += m_;
-  } else {
-    const bool first = a_.nonZeros() == 0;
-    step_matrix(m_, d_, k_, h, a_);
-    shared_pattern_ = first && k_.nonZeros() == d_.nonZeros() && k_.nonZeros() == a_.nonZeros() &&
-                      std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), d_.innerIndexPtr()) &&
-                      std::equal(k_.innerIndexPtr(), k_.innerIndexPtr() + k_.nonZeros(), a_.innerIndexPtr());
-  }
+  step_matrix_(m_, d_, k_, h, a_);
   assemble_force(t, y);
 }
 
@@ -54,7 +40,7 @@ void BaraffWitkinSystem::assemble_force(double t, const Eigen::VectorXd& y) {
 
 void BaraffWitkinSystem::assemble_exact(double t, const Eigen::VectorXd& y, double h) {
   force_jacobians(system_, view_, t, y, false, exact_k_, exact_d_);
-  step_matrix(m_, exact_d_, exact_k_, h, j_);
+  exact_step_matrix_(m_, exact_d_, exact_k_, h, j_);
 }
 
 void BaraffWitkinSystem::assemble_rhs(const Eigen::VectorXd& y, double h) {

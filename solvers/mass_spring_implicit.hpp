@@ -27,6 +27,7 @@
 #pragma once
 
 #include <stepwise/solvers/fixed_step.hpp>
+#include <stepwise/solvers/incremental_potential.hpp>
 #include <stepwise/solvers/run_support.hpp>
 #include <stepwise/solvers/sparse_cholesky.hpp>
 
@@ -77,7 +78,7 @@ class BaraffWitkinSystem {
   Eigen::VectorXd m_, f_, b_;
   Eigen::VectorXd scratch_;  // f where the model has no acceleration of its own
   Eigen::SparseMatrix<double> k_, d_, a_, exact_k_, exact_d_, j_;
-  bool shared_pattern_ = false;  // K, D and A have one pattern (found at the first assembly)
+  StepMatrix step_matrix_, exact_step_matrix_;
 };
 
 std::unique_ptr<FixedStepper> make_mass_spring_implicit(const CountedSystem& system, const MassSpringImplicitOptions& options);
