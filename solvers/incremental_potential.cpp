@@ -21,8 +21,6 @@ constexpr double round_off_decrease = 64 * std::numeric_limits<double>::epsilon(
 // earlier iterate of the step: of a raised or semidefinite one, it underestimates the correction along the modes it
 // stiffens)
 constexpr double refinement = 0.01;
-// CG's first iterations, whose rate predicts whether the factor will serve within max_cg_iterations
-constexpr int cg_probe_iterations = 4;
 
 }  // namespace
 
@@ -213,7 +211,7 @@ bool PotentialNewton::preconditioned_direction(double forcing, double enough, St
     // the first iterations' rate predicts the rest (preconditioned CG converges about geometrically here): where
     // neither the forcing term nor `enough` would be met within max_cg_iterations, the factor is given up after them,
     // not after all max_cg_iterations (measured: docs/performance-cloth.md, backward Euler's Newton)
-    if (j == cg_probe_iterations) {
+    if (j > 0 && j == options_.cg_probe_iterations) {
       constexpr double never = std::numeric_limits<double>::infinity();
       const auto needed = [&](double now, double start, double goal) {
         const double rate = std::pow(now / start, 1.0 / j);

@@ -137,6 +137,9 @@ struct NewtonOnPotential {
   // past this, CG has cost more than the factorisation it saves (one costs ~17 factor-preconditioned CG iterations on
   // the 32^2 flag: mass_spring_implicit.cpp)
   int max_cg_iterations = 20;
+  // CG's first iterations, whose rate predicts whether the factor will serve within max_cg_iterations (0: none, CG
+  // runs to max_cg_iterations before the factor is given up)
+  int cg_probe_iterations = 4;
   // called at each iteration with G there and how fast Newton's step from there moves a node (m/s): the tests' view
   std::function<void(int iteration, double value, double moved)> observe;
 };
