@@ -276,16 +276,15 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
             if (both_free(tri[i], tri[j])) slots[3 * i + j] = pattern_->slot(free_index_[tri[i]], free_index_[tri[j]]);
         triangle_slots_.push_back(slots);
       }
-    // the bending's force Jacobian, -D Q on each stencil's nodes, is constant: its values on the pattern, once
+    // the bending's force Jacobian, -D B between free nodes (B the stencils summed over the grid), is constant: its
+    // values on the pattern, once
     if (stencils_.empty()) return;
     Eigen::SparseMatrix<double> bending;
     pattern_->zero(bending);
-    for (const BendingStencil& s : stencils_)
-      for (size_t i = 0; i < s.node.size(); ++i)
-        for (size_t j = 0; j < s.node.size(); ++j)
-          if (both_free(s.node[i], s.node[j]))
-            pattern_->add(bending, free_index_[s.node[i]], free_index_[s.node[j]],
-                          -material_.bending * s.Q(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * Eigen::Matrix3d::Identity());
+    for (Eigen::Index k = 0; k < bending_nodes_.outerSize(); ++k)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(bending_nodes_, k); it; ++it)
+        if (both_free(static_cast<int>(it.row()), static_cast<int>(it.col())))
+          pattern_->add(bending, free_index_[it.row()], free_index_[it.col()], -material_.bending * it.value() * Eigen::Matrix3d::Identity());
     bending_jacobian_ = Eigen::Map<const Eigen::VectorXd>(bending.valuePtr(), bending.nonZeros());
   }
 
@@ -604,7 +603,6 @@ class Cloth final : public Model, public SparseJacobian, public Projection {
     if (stencils_.empty()) return e;
     const Eigen::Matrix3Xd at = grid_positions(x);
     return e + material_.bending / 2 * at.cwiseProduct(at * bending_nodes_).sum();
-    return e;
   }
 
   // the springs read as compliant distance constraints (alpha = 1 / stiffness: the same material), which the

@@ -244,10 +244,4 @@ Eigen::Vector3d bending_force_on(double D, const BendingStencil& s, std::span<co
   return -D * f;
 }
 
-std::vector<Eigen::Vector3d> bending_force(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x) {
-  std::vector<Eigen::Vector3d> f(s.node.size());
-  for (size_t i = 0; i < s.node.size(); ++i) f[i] = bending_force_on(D, s, x, i);
-  return f;
-}
-
 }  // namespace stepwise

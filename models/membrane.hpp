@@ -103,7 +103,5 @@ std::vector<BendingStencil> plate_bending_stencils(int rows, int columns, double
 double bending_energy(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x);
 // the force on the stencil's node i alone, -D (Q x)_i (its derivative by x_i is -D Q_ii times the identity)
 Eigen::Vector3d bending_force_on(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x, size_t i);
-// the force on each of the stencil's nodes, -D (Q x)_i
-std::vector<Eigen::Vector3d> bending_force(double D, const BendingStencil& s, std::span<const Eigen::Vector3d> x);
 
 }  // namespace stepwise

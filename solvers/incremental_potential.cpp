@@ -205,20 +205,16 @@ bool PotentialNewton::preconditioned_direction(double forcing, double enough, St
     return true;
   }
   double rz = r_.dot(p_);
-  const double target = forcing * b.norm();
   const double start_residual = b.norm(), start_correction = p_.lpNorm<Eigen::Infinity>();
+  const double target = forcing * start_residual;
   for (int j = 0; j < options_.max_cg_iterations; ++j) {
     // the first iterations' rate predicts the rest (preconditioned CG converges about geometrically here): where
     // neither the forcing term nor `enough` would be met within max_cg_iterations, the factor is given up after them,
     // not after all max_cg_iterations (measured: docs/performance-cloth.md, backward Euler's Newton)
     if (j > 0 && j == options_.cg_probe_iterations) {
-      constexpr double never = std::numeric_limits<double>::infinity();
-      const auto needed = [&](double now, double start, double goal) {
-        const double rate = std::pow(now / start, 1.0 / j);
-        return rate < 1 ? j + std::log(goal / now) / std::log(rate) : never;
-      };
-      const double by_residual = needed(r_.norm(), start_residual, target);
-      const double by_correction = enough > 0 ? needed(z_.col(0).lpNorm<Eigen::Infinity>(), start_correction, enough) : never;
+      const double by_residual = predicted_iterations(start_residual, r_.norm(), j, target);
+      const double by_correction = enough > 0 ? predicted_iterations(start_correction, z_.col(0).lpNorm<Eigen::Infinity>(), j, enough)
+                                              : std::numeric_limits<double>::infinity();
       if (std::min(by_residual, by_correction) > options_.max_cg_iterations) return false;
     }
     ap_.noalias() = a_ * p_;

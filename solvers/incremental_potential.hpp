@@ -111,12 +111,12 @@ class IncrementalPotential {
 // relative residual of Eisenstat & Walker's forcing term (loose far from the minimiser, quadratic convergence at the
 // end). Where A is indefinite CG meets a direction of curvature p^T A p <= 0 and stops there, its iterate so far taken
 // (Newton-CG's truncation, Nocedal & Wright's Algorithm 7.1: every CG iterate before it is a descent direction of G;
-// at the first, the factor's direction itself); where CG needs more than max_cg_iterations, or its first four
-// iterations' rate predicts that it would, A is factored afresh the same way. (Factoring afresh at a non-positive curvature instead cost the continuum flag's first second 3.5
-// factorisations a frame, the mass term's raises most of them, against 2.6 truncated, both from a converged linearised
-// first guess.) CG also stops where the correction the
-// factor predicts (P^-1 r, on a factor of the exact Hessian) moves no node by a hundredth of what the velocity
-// tolerance allows: the last direction of a step, which only has to show that it is short, then costs a few
+// at the first, the factor's direction itself); where CG needs more than max_cg_iterations, or its first
+// cg_probe_iterations' rate predicts that it would, A is factored afresh the same way. (Factoring afresh at a
+// non-positive curvature instead cost the continuum flag's first second 3.5 factorisations a frame, the mass term's
+// raises most of them, against 2.6 truncated, both from a converged linearised first guess.) CG also stops where the
+// correction the factor predicts (P^-1 r, on a factor of the exact Hessian) moves no node by a hundredth of what the
+// velocity tolerance allows: the last direction of a step, which only has to show that it is short, then costs a few
 // iterations. (A tenth saves a few more, but left the continuum flag's 14th step at 1/60 s 1% short of converged as
 // exact Newton judges it: Cloth.NewtonsAnswerIsConvergedWhereConjugateGradientsMeetNegativeCurvature.) (A
 // factor kept from an earlier step, as Gast et al. 2015 keep one, needs four times the CG iterations on the gusting

@@ -178,9 +178,8 @@ class MassSpringImplicit final : public FixedStepper {
     dv_ = cg_.solveWithGuess(b, guess);
     long solves = cg_.iterations() + 1;  // Eigen counts the iterations after the first
     if (cg_.info() != Eigen::Success && budget > first_run) {
-      const double rate = std::pow(cg_.error() / start_error, 1.0 / std::max<Eigen::Index>(cg_.iterations(), 1));
-      const double needed = static_cast<double>(cg_.iterations()) + std::log(options_.cg_residual / cg_.error()) / std::log(rate);
-      if (rate < 1 && needed <= budget) {
+      const int done = std::max(static_cast<int>(cg_.iterations()), 1);
+      if (predicted_iterations(start_error, cg_.error(), done, options_.cg_residual) <= budget) {
         cg_.setMaxIterations(budget - cg_.iterations());
         dv_ = cg_.solveWithGuess(b, Eigen::VectorXd(dv_));
         solves += cg_.iterations() + 1;

@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <string>
@@ -57,6 +58,14 @@ class SparseCholesky {
 
 // a factor of an earlier matrix as the preconditioner of Eigen's iterative solvers (their preconditioner
 // interface; the factor is kept by its owner, so analysing and computing do nothing here)
+// the iterations CG needs to bring a residual (or correction) from `start` to `goal`, predicted from `done` iterations
+// that brought it to `now` at their geometric rate (preconditioned by a nearby matrix's factor, CG converges about
+// geometrically); infinity where it did not fall
+inline double predicted_iterations(double start, double now, int done, double goal) {
+  const double rate = std::pow(now / start, 1.0 / done);
+  return rate < 1 ? done + std::log(goal / now) / std::log(rate) : std::numeric_limits<double>::infinity();
+}
+
 class FactorPreconditioner {
  public:
   FactorPreconditioner() = default;
